@@ -1,0 +1,53 @@
+"""Nearest-neighbour queries shared by the methods (k nearest, fixed radius)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["knn", "build_tree"]
+
+
+def build_tree(points: np.ndarray) -> cKDTree:
+    """A k-d tree over ``points`` ((N, d) float array)."""
+    return cKDTree(points, balanced_tree=False, compact_nodes=False)
+
+
+def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1):
+    """The ``k`` nearest neighbours of every point, the point itself excluded.
+
+    Parameters
+    ----------
+    points : (N, d) ndarray
+        The points.
+    k : int
+        Number of neighbours; clipped to ``N - 1``.
+    tree : cKDTree, optional
+        A tree over ``points`` to reuse.
+    workers : int
+        Threads for the query (-1: all cores).
+
+    Returns
+    -------
+    dist : (N, k) ndarray of float
+        Distances, ascending in each row.
+    idx : (N, k) ndarray of int64
+        Neighbour indices. Ties are broken by index, so the result does not depend on the
+        order of the input points up to that relabelling.
+    """
+    n = len(points)
+    k = int(min(k, max(n - 1, 0)))
+    if k == 0:
+        return np.zeros((n, 0)), np.zeros((n, 0), dtype=np.int64)
+    tree = tree if tree is not None else build_tree(points)
+    dist, idx = tree.query(points, k=k + 1, workers=workers)
+    dist = np.atleast_2d(dist)
+    idx = np.atleast_2d(idx).astype(np.int64)
+    # drop the point itself (it may not be in column 0 when duplicates exist)
+    self_mask = idx == np.arange(n)[:, None]
+    has_self = self_mask.any(axis=1)
+    drop = np.where(has_self[:, None], self_mask, np.arange(k + 1)[None, :] == k)
+    keep = ~drop
+    dist = dist[keep].reshape(n, k)
+    idx = idx[keep].reshape(n, k)
+    return dist, idx
