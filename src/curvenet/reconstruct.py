@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import inspect
 import time
 from typing import Any
 
@@ -51,9 +52,12 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     name = DEFAULT_METHOD if method == "auto" else method
     if name not in METHODS:
         raise InputError(f"unknown method {method!r}; expected one of: auto, {', '.join(sorted(METHODS))}")
-    pts = as_points(points)
+    pts = as_points(points, min_points=3)
+    if not np.ptp(pts, axis=0).any():
+        raise InputError(f"all {len(pts)} points are identical; nothing to reconstruct")
     module, func = METHODS[name]
     fn = getattr(importlib.import_module(module), func)
+    _check_params(name, fn, params)
     t0 = time.perf_counter()
     net = fn(pts, **params)
     net.parameters.setdefault("method", name)
@@ -65,3 +69,16 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     stats.setdefault("time", {})
     stats["time"]["total"] = time.perf_counter() - t0
     return net
+
+
+def _check_params(name: str, fn, params: dict) -> None:
+    """Raise InputError for a parameter the method does not take."""
+    sig = inspect.signature(fn)
+    if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
+        return
+    known = [p for p in list(sig.parameters)[1:]]
+    for key in params:
+        if key not in known:
+            raise InputError(
+                f"method {name!r} has no parameter {key!r}; its parameters: {', '.join(known) or 'none'}"
+            )

@@ -1,0 +1,76 @@
+"""The ``curvenet`` command-line tool: a thin front over the library.
+
+Each command lives in ``cmd_<name>.py`` with ``register(subparsers)`` and ``run(args) -> int``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from .._version import __version__
+
+__all__ = ["main", "COMMANDS"]
+
+#: Command modules, in the order ``--help`` lists them.
+COMMANDS = (
+    "reconstruct",
+    "info",
+    "formats",
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="curvenet",
+        description="Reconstruct curve networks (nodes and curve segments) from unorganized 2D/3D points.",
+    )
+    parser.add_argument("--version", action="version", version=f"curvenet {__version__}")
+    sub = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        importlib.import_module(f"{__name__}.cmd_{name}").register(sub)
+    return parser
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    """The options every command has: ``--quiet`` and ``--verbose``."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    g.add_argument("-v", "--verbose", action="store_true", help="print more, and tracebacks on errors")
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit code (0 ok, 1 method failure, 2 bad usage or input)."""
+    from ..errors import CurvenetError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    verbose = getattr(args, "verbose", False)
+    try:
+        return int(args.func(args) or 0)
+    except CurvenetError as exc:
+        if verbose:
+            import traceback
+
+            traceback.print_exc()
+        print(f"curvenet: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("curvenet: interrupted", file=sys.stderr)
+        return 130
+    except MemoryError:
+        print("curvenet: error: out of memory", file=sys.stderr)
+        return 1
+    except Exception as exc:  # a bug: say so in one line unless --verbose
+        if verbose:
+            raise
+        print(f"curvenet: internal error: {type(exc).__name__}: {exc} (run with --verbose for details)", file=sys.stderr)
+        return 1
+
+
+def console() -> None:
+    sys.exit(main())

@@ -1,0 +1,23 @@
+"""``curvenet formats``: list readable and writable file formats."""
+
+from __future__ import annotations
+
+from . import add_common
+
+
+def register(sub) -> None:
+    p = sub.add_parser("formats", help="list readable point formats and writable network formats")
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..io import READERS, WRITERS
+
+    print("Readable point files (by extension):")
+    for ext, (_, desc) in sorted(READERS.items()):
+        print(f"  {ext:<9} {desc}")
+    print("Writable network files (by extension):")
+    for ext, (_, desc) in sorted(WRITERS.items()):
+        print(f"  {ext:<9} {desc}")
+    return 0

@@ -1,0 +1,105 @@
+"""File formats: one registry of readers (points) and writers (networks), keyed by extension.
+
+``READERS`` maps an extension to a function ``f(path, *, columns=None, drop_nonfinite=False)``
+returning an (N, d) float array. ``WRITERS`` maps an extension to a pure function
+``f(network, **options)`` returning ``str`` or ``bytes``; :func:`write_network` writes its result
+atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import FormatError
+from ..network import CurveNetwork
+from .atomic import atomic_write, check_output_path
+from .network_io import network_to_json, network_to_obj, network_to_ply, read_network
+from .points import read_las, read_npy, read_obj, read_ply, read_text
+
+__all__ = [
+    "READERS",
+    "WRITERS",
+    "read_points",
+    "write_network",
+    "read_network",
+    "atomic_write",
+    "check_output_path",
+    "extension",
+]
+
+#: extension -> (reader, description)
+READERS: dict[str, tuple[Callable[..., np.ndarray], str]] = {
+    ".xyz": (read_text, "text, x y [z] per line"),
+    ".txt": (read_text, "text, x y [z] per line"),
+    ".pts": (read_text, "text, x y [z] per line"),
+    ".csv": (read_text, "comma-separated values, optional header"),
+    ".npy": (read_npy, "NumPy array (N, 2|3)"),
+    ".ply": (read_ply, "PLY vertices, ASCII or binary (extra io)"),
+    ".obj": (read_obj, "Wavefront OBJ vertices"),
+    ".las": (read_las, "LAS point cloud (extra io)"),
+    ".laz": (read_las, "LAZ point cloud (extra io)"),
+}
+
+#: extension -> (writer, description)
+WRITERS: dict[str, tuple[Callable[..., Any], str]] = {
+    ".json": (network_to_json, "curvenet JSON network"),
+    ".obj": (network_to_obj, "Wavefront OBJ polylines (l lines)"),
+    ".ply": (network_to_ply, "PLY vertices and edges"),
+}
+
+
+def extension(path) -> str:
+    """Lower-case extension of ``path`` (e.g. ``".xyz"``)."""
+    return Path(path).suffix.lower()
+
+
+def read_points(path, *, columns=None, drop_nonfinite: bool = False) -> np.ndarray:
+    """Read points from a file, choosing the reader by extension.
+
+    Parameters
+    ----------
+    path : str or Path
+        A point file with an extension listed in :data:`READERS`.
+    columns : sequence of int or str, optional
+        Coordinate columns to use (text and array formats).
+    drop_nonfinite : bool
+        Drop points with NaN or infinite coordinates instead of raising.
+
+    Returns
+    -------
+    (N, d) ndarray of float64
+
+    Raises
+    ------
+    InputError, FormatError
+        With a one-line message naming the file and the problem.
+    """
+    ext = extension(path)
+    if ext not in READERS:
+        known = ", ".join(sorted(READERS))
+        raise FormatError(f"{path}: unknown point file extension {ext or '(none)'!r}; readable: {known}")
+    return READERS[ext][0](path, columns=columns, drop_nonfinite=drop_nonfinite)
+
+
+def write_network(net: CurveNetwork, path, *, inputs=(), **options) -> Path:
+    """Write a network to ``path`` in the format given by its extension, atomically.
+
+    Parameters
+    ----------
+    net : CurveNetwork
+    path : str or Path
+    inputs : iterable of paths
+        Input files of the run, which must not be overwritten.
+    **options
+        Passed to the writer.
+    """
+    ext = extension(path)
+    if ext not in WRITERS:
+        known = ", ".join(sorted(WRITERS))
+        raise FormatError(f"{path}: unknown output extension {ext or '(none)'!r}; writable: {known}")
+    check_output_path(path, inputs=inputs)
+    data = WRITERS[ext][0](net, **options)
+    return atomic_write(path, data, inputs=inputs)

@@ -1,0 +1,256 @@
+"""Readers of point files. Each reader returns an (N, d) float64 array, d = 2 or 3.
+
+Readers raise :class:`~curvenet.errors.FormatError` (or :class:`~curvenet.errors.InputError`)
+with a one-line message that names the file and the problem.
+"""
+
+from __future__ import annotations
+
+import io as _io
+import re
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import FormatError, InputError, require
+
+__all__ = ["read_text", "read_npy", "read_ply", "read_obj", "read_las", "check_readable"]
+
+Columns = Sequence["int | str"] | None
+
+_AXES = ("x", "y", "z")
+
+
+def check_readable(path) -> Path:
+    """Check that ``path`` is an existing, readable, non-empty regular file.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the problem.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such file")
+    if p.is_dir():
+        raise InputError(f"{p}: is a folder, not a file")
+    try:
+        with open(p, "rb") as f:
+            head = f.read(1)
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read file ({exc.strerror or exc})") from None
+    if not head:
+        raise FormatError(f"{p}: empty file")
+    return p
+
+
+def _select(path, names: list[str] | None, ncols: int, columns: Columns) -> list[int]:
+    """Column indices of the coordinates, from an explicit choice, a header or the count."""
+    if columns is not None:
+        cols = []
+        for c in columns:
+            if isinstance(c, str) and not c.lstrip("-").isdigit():
+                if names is None or c.lower() not in names:
+                    raise InputError(f"{path}: no column named {c!r} (the file has no such header name)")
+                cols.append(names.index(c.lower()))
+            else:
+                i = int(c)
+                if not -ncols <= i < ncols:
+                    raise InputError(f"{path}: column {i} does not exist (the file has {ncols} columns)")
+                cols.append(i % ncols)
+        if len(cols) not in (2, 3):
+            raise InputError(f"{path}: choose 2 or 3 coordinate columns, got {len(cols)}")
+        return cols
+    if names is not None and "x" in names and "y" in names:
+        cols = [names.index("x"), names.index("y")]
+        if "z" in names:
+            cols.append(names.index("z"))
+        return cols
+    if ncols in (2, 3):
+        return list(range(ncols))
+    if ncols == 1:
+        raise InputError(f"{path}: only one column per row; points need 2 or 3 coordinates")
+    raise InputError(
+        f"{path}: {ncols} columns per row; choose the coordinate columns (e.g. --columns 0,1,2)"
+    )
+
+
+def _is_number(tok: str) -> bool:
+    try:
+        float(tok)
+        return True
+    except ValueError:
+        return False
+
+
+def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
+    """Read points from a delimited text file (``.xyz``, ``.txt``, ``.pts``, ``.csv``).
+
+    Values are separated by commas, semicolons, tabs or spaces; lines starting with ``#`` are
+    comments; an optional header line names the columns. Without a column choice, a file with
+    2 or 3 columns is read whole, a header naming ``x``, ``y`` (and ``z``) picks those columns,
+    and any other column count is an error.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    columns : sequence of int or str, optional
+        The 2 or 3 coordinate columns, by 0-based index or header name.
+    drop_nonfinite : bool
+        Drop rows with NaN or infinite values instead of raising.
+
+    Returns
+    -------
+    (N, d) ndarray of float64
+    """
+    p = check_readable(path)
+    with open(p, "rb") as f:
+        head = f.read(1 << 16)
+    if b"\x00" in head:
+        raise FormatError(f"{p}: binary data in a text point file")
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 4:  # not just a character cut at the end of the block
+            raise FormatError(f"{p}: not a text file (undecodable bytes near offset {exc.start})") from None
+    # the first non-comment line decides header and delimiter
+    skip = 0
+    first = None
+    lines = head.decode("utf-8", errors="replace").splitlines()
+    for line in lines[:-1] if len(head) == 1 << 16 else lines:
+        s = line.strip()
+        if not s or s.startswith("#"):
+            skip += 1
+            continue
+        first = s
+        break
+    if first is None:
+        raise FormatError(f"{p}: no data (only blank or comment lines)")
+    delim = "," if "," in first else (";" if ";" in first else None)
+    toks = [t.strip() for t in (first.split(delim) if delim else first.split())]
+    names = None
+    if not all(_is_number(t) for t in toks):
+        names = [t.strip().strip('"').strip("'").lower() for t in toks]
+        skip += 1
+    ncols = len(toks)
+    cols = _select(p, names, ncols, columns)
+    try:
+        arr = np.loadtxt(p, delimiter=delim, skiprows=skip, comments="#", ndmin=2, dtype=np.float64, encoding="utf-8")
+    except ValueError as exc:
+        msg = str(exc).split("\n")[0]
+        msg = re.sub(r"; use `usecols`.*$", "", msg)
+        m = re.search(r"at row (\d+)", msg)
+        if m:  # numpy counts rows after skiprows, from 0 or 1 depending on the message
+            msg = msg[: m.start()] + f"in data row {m.group(1)}" + msg[m.end():]
+        raise FormatError(f"{p}: {msg.rstrip('.')}") from None
+    except UnicodeDecodeError as exc:
+        raise FormatError(f"{p}: not a text file (undecodable bytes at offset {exc.start})") from None
+    if arr.size == 0:
+        raise FormatError(f"{p}: a header but no data rows" if names else f"{p}: no data rows")
+    if arr.shape[1] != ncols:
+        raise FormatError(f"{p}: rows have {arr.shape[1]} values, the first has {ncols}")
+    return _finite(p, arr[:, cols], drop_nonfinite)
+
+
+def _finite(path, arr: np.ndarray, drop: bool) -> np.ndarray:
+    bad = ~np.isfinite(arr).all(axis=1)
+    if bad.any():
+        if drop:
+            arr = arr[~bad]
+            if len(arr) == 0:
+                raise InputError(f"{path}: every row has NaN or infinite values")
+        else:
+            rows = np.flatnonzero(bad)
+            where = ", ".join(str(r + 1) for r in rows[:5]) + (", ..." if len(rows) > 5 else "")
+            raise InputError(
+                f"{path}: {len(rows)} point(s) with NaN or infinite values (data rows {where}); "
+                "use --drop-nonfinite to drop them"
+            )
+    return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+def _from_array(path, arr: np.ndarray, columns: Columns, drop_nonfinite: bool) -> np.ndarray:
+    if arr.dtype.names:
+        names = [n.lower() for n in arr.dtype.names]
+        cols = _select(path, names, len(names), columns)
+        arr = np.stack([arr[arr.dtype.names[c]].astype(np.float64) for c in cols], axis=1)
+        return _finite(path, arr.reshape(-1, len(cols)), drop_nonfinite)
+    if arr.ndim != 2:
+        raise FormatError(f"{path}: expected an (N, 2) or (N, 3) array, got shape {arr.shape}")
+    if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
+        raise FormatError(f"{path}: expected a real numeric array, got dtype {arr.dtype}")
+    if arr.shape[0] == 0:
+        raise FormatError(f"{path}: no points (array of shape {arr.shape})")
+    cols = _select(path, None, arr.shape[1], columns)
+    return _finite(path, arr[:, cols].astype(np.float64), drop_nonfinite)
+
+
+def read_npy(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
+    """Read points from a NumPy ``.npy`` file: an (N, 2) or (N, 3) array, or a structured array
+    with fields ``x``, ``y`` (``z``). Pickled objects are refused.
+    """
+    p = check_readable(path)
+    try:
+        arr = np.load(p, allow_pickle=False, mmap_mode=None)
+    except (ValueError, EOFError, OSError) as exc:
+        msg = str(exc).split("\n")[0] or type(exc).__name__
+        raise FormatError(f"{p}: not a valid .npy file ({msg})") from None
+    if not isinstance(arr, np.ndarray):
+        raise FormatError(f"{p}: not a .npy array file")
+    return _from_array(p, arr, columns, drop_nonfinite)
+
+
+def read_ply(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
+    """Read the ``vertex`` element (``x``, ``y``, optional ``z``) of an ASCII or binary PLY file."""
+    p = check_readable(path)
+    plyfile = require("plyfile", "reading PLY files", "io")
+    try:
+        ply = plyfile.PlyData.read(str(p))
+        vert = ply["vertex"].data
+    except KeyError:
+        raise FormatError(f"{p}: PLY file has no 'vertex' element") from None
+    except Exception as exc:  # plyfile raises many types on malformed files
+        msg = str(exc).split("\n")[0] or type(exc).__name__
+        raise FormatError(f"{p}: not a valid PLY file ({msg})") from None
+    if vert.dtype.names is None or "x" not in vert.dtype.names or "y" not in vert.dtype.names:
+        raise FormatError(f"{p}: PLY vertex element has no x and y properties")
+    if len(vert) == 0:
+        raise FormatError(f"{p}: PLY file has no vertices")
+    return _from_array(p, np.asarray(vert), columns, drop_nonfinite)
+
+
+def read_obj(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
+    """Read the vertices (``v x y z`` lines) of a Wavefront OBJ file; other lines are ignored."""
+    p = check_readable(path)
+    with open(p, "rb") as f:
+        data = f.read()
+    if b"\x00" in data[:65536]:
+        raise FormatError(f"{p}: binary data in an OBJ file")
+    text = data.decode("utf-8", errors="replace")
+    rows = re.findall(r"^[ \t]*v[ \t]+([^\n\r#]*)", text, flags=re.MULTILINE)
+    if not rows:
+        raise FormatError(f"{p}: no vertex ('v') lines in OBJ file")
+    try:
+        arr = np.loadtxt(_io.StringIO("\n".join(r.strip() for r in rows)), ndmin=2, usecols=(0, 1, 2))
+    except ValueError as exc:
+        raise FormatError(f"{p}: malformed OBJ vertex line ({str(exc).splitlines()[0]})") from None
+    cols = _select(p, None, 3, columns)
+    return _finite(p, arr[:, cols], drop_nonfinite)
+
+
+def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
+    """Read the x, y, z coordinates of a LAS or LAZ point cloud (needs laspy, extra ``io``)."""
+    p = check_readable(path)
+    laspy = require("laspy", "reading LAS/LAZ files", "io")
+    try:
+        las = laspy.read(str(p))
+        arr = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)])
+    except Exception as exc:  # laspy raises many types on malformed files
+        msg = str(exc).split("\n")[0] or type(exc).__name__
+        raise FormatError(f"{p}: not a valid LAS/LAZ file ({msg})") from None
+    if len(arr) == 0:
+        raise FormatError(f"{p}: LAS file has no points")
+    cols = _select(p, ["x", "y", "z"], 3, columns)
+    return _finite(p, arr[:, cols], drop_nonfinite)
