@@ -17,7 +17,7 @@ from ..errors import FormatError
 from ..network import CurveNetwork
 from .atomic import atomic_write, check_output_path
 from .network_io import network_to_json, network_to_obj, network_to_ply, read_network
-from .points import read_las, read_npy, read_obj, read_ply, read_text
+from .points import check_readable, read_las, read_npy, read_obj, read_ply, read_text
 
 __all__ = [
     "READERS",
@@ -77,6 +77,7 @@ def read_points(path, *, columns=None, drop_nonfinite: bool = False) -> np.ndarr
     InputError, FormatError
         With a one-line message naming the file and the problem.
     """
+    check_readable(path)
     ext = extension(path)
     if ext not in READERS:
         known = ", ".join(sorted(READERS))

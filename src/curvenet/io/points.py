@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io as _io
 import re
+import warnings
 from pathlib import Path
 from typing import Sequence
 
@@ -137,7 +138,9 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
     ncols = len(toks)
     cols = _select(p, names, ncols, columns)
     try:
-        arr = np.loadtxt(p, delimiter=delim, skiprows=skip, comments="#", ndmin=2, dtype=np.float64, encoding="utf-8")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": handled below
+            arr = np.loadtxt(p, delimiter=delim, skiprows=skip, comments="#", ndmin=2, dtype=np.float64, encoding="utf-8")
     except ValueError as exc:
         msg = str(exc).split("\n")[0]
         msg = re.sub(r"; use `usecols`.*$", "", msg)

@@ -1,0 +1,47 @@
+"""The command line through a subprocess: help, version, formats, info, bad input."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import curvenet
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "curvenet.cli", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def test_help_lists_every_command():
+    from curvenet.cli import COMMANDS
+
+    r = cli("--help")
+    assert r.returncode == 0
+    for name in COMMANDS:
+        assert name in r.stdout
+
+
+def test_version():
+    r = cli("--version")
+    assert r.returncode == 0 and curvenet.__version__ in r.stdout
+
+
+def test_formats_lists_registry():
+    r = cli("formats")
+    assert r.returncode == 0
+    for ext in (".xyz", ".csv", ".ply", ".npy", ".json", ".obj"):
+        assert ext in r.stdout
+
+
+def test_info_points(tmp_path):
+    f = tmp_path / "a.xyz"
+    np.savetxt(f, np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)]))
+    r = cli("info", f)
+    assert r.returncode == 0, r.stderr
+    assert "10 points, dimension 3" in r.stdout and "median 1" in r.stdout
+
+
+def test_no_command_is_usage_error():
+    assert cli().returncode == 2
+    assert cli("reconstruct").returncode == 2  # missing INPUT
