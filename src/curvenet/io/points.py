@@ -197,7 +197,7 @@ def read_npy(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     p = check_readable(path)
     try:
         arr = np.load(p, allow_pickle=False, mmap_mode=None)
-    except (ValueError, EOFError, OSError) as exc:
+    except Exception as exc:  # numpy raises ValueError, EOFError, SyntaxError, TokenError... on bad headers
         msg = str(exc).split("\n")[0] or type(exc).__name__
         raise FormatError(f"{p}: not a valid .npy file ({msg})") from None
     if not isinstance(arr, np.ndarray):
