@@ -1,0 +1,117 @@
+"""Ground-truth models and the sampler."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from curvenet import synth
+from curvenet.errors import InputError
+from curvenet.metrics import densify
+
+NAMES = synth.model_names()
+
+
+@pytest.fixture(scope="module")
+def models():
+    return {n: synth.model(n) for n in NAMES}
+
+
+def test_enough_models_and_features(models):
+    assert len(models) >= 12
+    valences = set()
+    for m in models.values():
+        valences |= set(m.valence.tolist())
+    assert {1, 3, 4, 5, 6} <= valences and max(valences) >= 8
+    assert any(m.dimension == 2 for m in models.values())
+    assert any(c.start is None for m in models.values() for c in m.curves)  # free loops
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_model_is_a_clean_network(models, name):
+    m = models[name]
+    h = synth.h_of(m)
+    assert h > 0 and m.parameters["model"] == name
+    assert 2 not in set(m.valence.tolist())  # corners are not nodes
+    for c in m.curves:
+        if c.start is not None:
+            assert np.array_equal(c.points[0], m.nodes[c.start])
+            assert np.array_equal(c.points[-1], m.nodes[c.end])
+        else:
+            assert c.closed
+        step = np.linalg.norm(np.diff(c.points, axis=0), axis=1)
+        assert step.max() <= h / 10 + 1e-9  # densely sampled
+    b0, b1 = m.betti
+    assert b0 >= 1 and b1 >= 0
+
+
+def test_eye_curves_are_2_5h_apart(models):
+    m = models["eye"]
+    h = synth.h_of(m)
+    between = [c for c in m.curves if c.start is not None and {c.start, c.end} == {0, 1}]
+    assert len(between) == 3
+    mids = np.array([c.points[len(c.points) // 2] for c in between])
+    d = sorted(np.linalg.norm(mids[:, None] - mids[None], axis=2)[np.triu_indices(3, 1)])
+    assert d[0] == pytest.approx(2.5 * h, rel=0.01) and d[2] == pytest.approx(5 * h, rel=0.01)
+
+
+def test_sample_clean_lies_on_curves_with_spacing_h(models):
+    m = models["torus"]
+    h = synth.h_of(m)
+    P, L = synth.sample(m)
+    total = sum(c.length for c in m.curves)
+    assert abs(len(P) - total / h) < 0.02 * total / h
+    nn = cKDTree(P).query(P, k=2)[0][:, 1]
+    assert np.allclose(np.median(nn), h, rtol=0.02)
+    for cid in (0, 7, 30):
+        q = P[L == cid]
+        d = cKDTree(densify(m.curves[cid].points, h / 50)).query(q)[0]
+        assert d.max() < h / 100
+    # every node is sampled exactly
+    assert cKDTree(P).query(m.nodes)[0].max() < 1e-12
+
+
+def test_sample_reproducible_and_shuffled(models):
+    m = models["cube"]
+    a = synth.sample(m, noise=0.2, density_ratio=3, outliers=0.05, rng=3)
+    b = synth.sample(m, noise=0.2, density_ratio=3, outliers=0.05, rng=3)
+    c = synth.sample(m, noise=0.2, density_ratio=3, outliers=0.05, rng=4)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    assert not np.array_equal(a[0], c[0])
+    assert np.any(np.diff(a[1]) < 0)  # not grouped by curve
+
+
+def test_sample_noise_level(models):
+    m = models["window"]
+    h = synth.h_of(m)
+    P, L = synth.sample(m, noise=0.3, rng=1)
+    dense = np.vstack([densify(c.points, h / 20) for c in m.curves])
+    d = cKDTree(dense).query(P)[0]
+    # in 3D the offset from a curve has 2 normal components: E[d^2] = 2 sigma^2
+    assert np.sqrt(np.mean(d**2)) == pytest.approx(np.sqrt(2) * 0.3 * h, rel=0.15)
+
+
+def test_sample_density_ratio(models):
+    m = models["torus"]
+    h = synth.h_of(m)
+    P, _ = synth.sample(m, density_ratio=3, rng=2)
+    nn = cKDTree(P).query(P, k=2)[0][:, 1] / h
+    lo, hi = np.percentile(nn, [1, 99])
+    assert lo == pytest.approx(2 / 3, abs=0.05) and hi == pytest.approx(2.0, abs=0.15)
+    total = sum(c.length for c in m.curves)
+    assert abs(len(P) - total / h) < 0.1 * total / h
+
+
+def test_sample_outliers(models):
+    m = models["fan"]
+    P, L = synth.sample(m, outliers=0.1, rng=5)
+    n_curve = (L >= 0).sum()
+    assert (L == -1).sum() == round(0.1 * n_curve)
+    assert P.shape[1] == 2
+
+
+def test_bad_arguments(models):
+    with pytest.raises(InputError):
+        synth.model("nope")
+    for kw in ({"h": -1.0}, {"noise": -0.1}, {"density_ratio": 0.5}, {"outliers": -1}):
+        with pytest.raises(InputError):
+            synth.sample(models["cube"], **kw)
