@@ -1,0 +1,489 @@
+"""Patch boundaries of a curve network: candidate cycles chosen globally by an integer program.
+
+The surfacing step of the paper (Section 3.1, Figure 3(e)) used the cycle discovery of Zhuang et
+al. (2013). Local rules (turning to the next curve by angle around a node) fail at concave nodes,
+so the cycles here are chosen globally:
+
+1. *Candidates*: the faces of the rotation system given by ordering the curves around each node in
+   its estimated tangent plane, the shortest cycle through every corner (pair of curves at a
+   node, the rest of the cycle being a shortest path that avoids the node), and every loop.
+2. *Scores*: each candidate is spanned by a minimal-area triangulation of a coarse copy of its
+   polygon (Barequet and Sharir 1995; Liepa 2003); the area is its cost and the triangulation gives
+   the side from which the patch meets each of its curves.
+3. *Selection*: a 0-1 integer program (``scipy.optimize.milp``) maximises the number of
+   (curve, patch) incidences with every curve bordering at most two patches, then minimises the
+   total area. Two candidates that meet a common curve from the same side (folded onto each other,
+   e.g. the outer boundary of an open sheet against the sheet's own cells) may not both be chosen;
+   this is what keeps an open network open while a closed network gets every curve used twice.
+4. *Orientation*: the chosen cycles are oriented so that two patches run through a shared curve in
+   opposite directions.
+
+References
+----------
+.. [1] T. Zhuang, M. Zou, N. Carr, T. Ju, "A general and efficient method for finding cycles in 3D
+   curve networks", ACM Trans. Graph. 32(6), 2013.
+.. [2] G. Barequet, M. Sharir, "Filling gaps in the boundary of a polyhedron", CAGD 12(2), 1995.
+.. [3] P. Liepa, "Filling holes in meshes", Eurographics Symposium on Geometry Processing, 2003.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from .patches import min_area_triangulation
+
+__all__ = ["CycleSet", "find_cycles", "prune_dangling"]
+
+
+@dataclass
+class CycleSet:
+    """The chosen patch boundaries.
+
+    Attributes
+    ----------
+    cycles : list of list of int
+        Curve ids of each cycle in traversal order.
+    directions : list of list of int
+        ``+1`` where the cycle runs along a curve from its start to its end, ``-1`` against it.
+    n_candidates : int
+        Number of distinct candidate cycles scored.
+    costs : list of float
+        Area of the coarse minimal triangulation of each chosen cycle.
+    """
+
+    cycles: list
+    directions: list
+    n_candidates: int = 0
+    costs: list | None = None
+
+
+def prune_dangling(edges: np.ndarray, n_nodes: int) -> np.ndarray:
+    """Curves left after removing, repeatedly, the curves that end at a node of valence 1.
+
+    Parameters
+    ----------
+    edges : (c, 2) ndarray of int
+        End nodes of each curve, ``-1`` for a loop without node.
+    n_nodes : int
+
+    Returns
+    -------
+    (c,) ndarray of bool
+        True for the curves that can border a patch (loops without nodes included).
+    """
+    keep = np.ones(len(edges), dtype=bool)
+    with_node = edges[:, 0] >= 0
+    while True:
+        deg = np.zeros(n_nodes, dtype=np.int64)
+        e = edges[keep & with_node]
+        np.add.at(deg, e.ravel(), 1)
+        bad = keep & with_node & ((deg[np.maximum(edges[:, 0], 0)] == 1) | (deg[np.maximum(edges[:, 1], 0)] == 1))
+        if not bad.any():
+            return keep
+        keep &= ~bad
+
+
+def _resample(chain: np.ndarray, k: int) -> np.ndarray:
+    """``k`` points (ends included) of a polyline, evenly spaced in arc length."""
+    if len(chain) <= k:
+        return chain
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(chain, axis=0), axis=1))])
+    if s[-1] <= 0:
+        return chain[[0, -1]]
+    t = np.linspace(0.0, s[-1], k)
+    out = np.empty((k, chain.shape[1]))
+    for j in range(chain.shape[1]):
+        out[:, j] = np.interp(t, s, chain[:, j])
+    return out
+
+
+def _point_at(chain: np.ndarray, dist: float) -> np.ndarray:
+    """The point at arc length ``dist`` from the start of a polyline."""
+    seg = np.linalg.norm(np.diff(chain, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    dist = min(dist, s[-1])
+    return np.array([np.interp(dist, s, chain[:, j]) for j in range(chain.shape[1])])
+
+
+class _Graph:
+    """Darts of the core network: dart ``2c`` runs along curve ``c``, dart ``2c + 1`` against it."""
+
+    def __init__(self, chains, edges, keep, nodes):
+        self.chains = chains
+        self.edges = edges
+        self.nodes = nodes
+        self.core = [c for c in range(len(edges)) if keep[c] and edges[c, 0] >= 0 and edges[c, 0] != edges[c, 1]]
+        self.loops = [c for c in range(len(edges)) if keep[c] and (edges[c, 0] < 0 or edges[c, 0] == edges[c, 1])]
+        self.lengths = np.array([np.linalg.norm(np.diff(ch, axis=0), axis=1).sum() for ch in chains])
+        self.out = {}  # node -> list of darts leaving it
+        for c in self.core:
+            self.out.setdefault(int(edges[c, 0]), []).append(2 * c)
+            self.out.setdefault(int(edges[c, 1]), []).append(2 * c + 1)
+
+    def tail(self, d):
+        return int(self.edges[d // 2, d % 2])
+
+    def head(self, d):
+        return int(self.edges[d // 2, 1 - d % 2])
+
+    def chain(self, d):
+        ch = self.chains[d // 2]
+        return ch if d % 2 == 0 else ch[::-1]
+
+
+def _node_frames(g: _Graph):
+    """Unit normal at each node of the core, consistently signed along the graph."""
+    normals = {}
+    for v, darts in g.out.items():
+        if len(darts) < 3:
+            continue
+        r = min(g.lengths[d // 2] for d in darts) * 0.25
+        t = []
+        for d in darts:
+            u = _point_at(g.chain(d), r) - g.nodes[v]
+            nrm = np.linalg.norm(u)
+            if nrm > 0:
+                t.append(u / nrm)
+        t = np.array(t)
+        if len(t) < 2:
+            continue
+        w, vec = np.linalg.eigh(t.T @ t)
+        normals[v] = vec[:, 0]
+    # sign propagation: breadth-first over the graph, from the lowest node (by coordinates)
+    order = sorted(normals, key=lambda v: tuple(np.round(g.nodes[v], 9)))
+    seen = set()
+    for root in order:
+        if root in seen:
+            continue
+        seen.add(root)
+        queue = deque([(root, normals[root])])
+        while queue:
+            v, ref = queue.popleft()
+            for d in g.out.get(v, []):
+                w = g.head(d)
+                if w in seen:
+                    continue
+                seen.add(w)
+                if w in normals:
+                    if normals[w] @ ref < 0:
+                        normals[w] = -normals[w]
+                    queue.append((w, normals[w]))
+                else:
+                    queue.append((w, ref))
+    return normals
+
+
+def _rotation_faces(g: _Graph, normals) -> list[list[int]]:
+    """Faces of the rotation system given by the angular order of the curves around each node."""
+    nxt = {}
+    for v, darts in g.out.items():
+        if len(darts) == 1:
+            nxt[darts[0]] = darts[0]
+            continue
+        n = normals.get(v)
+        if n is None or len(darts) == 2:
+            order = sorted(darts)
+        else:
+            a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+            e1 = np.cross(n, a)
+            e1 /= np.linalg.norm(e1)
+            e2 = np.cross(n, e1)
+            r = min(g.lengths[d // 2] for d in darts) * 0.25
+            ang = []
+            for d in darts:
+                u = _point_at(g.chain(d), r) - g.nodes[v]
+                ang.append(np.arctan2(u @ e2, u @ e1))
+            order = [darts[i] for i in np.argsort(ang, kind="stable")]
+        for i, d in enumerate(order):
+            nxt[d] = order[(i + 1) % len(order)]
+    faces = []
+    used = set()
+    for start in sorted(nxt):
+        if start in used:
+            continue
+        face = []
+        d = start
+        while d not in used:
+            used.add(d)
+            face.append(d)
+            d = nxt[d ^ 1]  # arrive at head(d), leave by the dart after the reverse of d
+        faces.append(face)
+    return faces
+
+
+def _corner_cycles(g: _Graph) -> list[list[int]]:
+    """For every pair of curves at a node, the shortest cycle through both avoiding the node."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    nodes = sorted(g.out)
+    if not nodes:
+        return []
+    idx = {v: i for i, v in enumerate(nodes)}
+    m = len(nodes)
+    best = {}  # (i, j) -> dart from i to j of the shortest curve
+    for c in g.core:
+        a, b = idx[int(g.edges[c, 0])], idx[int(g.edges[c, 1])]
+        for (i, j, d) in ((a, b, 2 * c), (b, a, 2 * c + 1)):
+            if (i, j) not in best or g.lengths[best[(i, j)] // 2] > g.lengths[c]:
+                best[(i, j)] = d
+    rows = np.array([k[0] for k in best], dtype=np.int64)
+    cols = np.array([k[1] for k in best], dtype=np.int64)
+    wts = np.array([max(g.lengths[d // 2], 1e-300) for d in best.values()])
+    cycles = []
+    for v in nodes:
+        darts = g.out[v]
+        if len(darts) < 2:
+            continue
+        iv = idx[v]
+        mask = (rows != iv) & (cols != iv)
+        graph = csr_matrix((wts[mask], (rows[mask], cols[mask])), shape=(m, m))
+        heads = sorted({idx[g.head(d)] for d in darts})
+        dist, pred = dijkstra(graph, directed=True, indices=heads, return_predecessors=True)
+        row_of = {h: r for r, h in enumerate(heads)}
+        for x in range(len(darts)):
+            for y in range(x + 1, len(darts)):
+                d1, d2 = darts[x], darts[y]
+                a, b = idx[g.head(d1)], idx[g.head(d2)]
+                if a == b:
+                    cycles.append([d1, d2 ^ 1])
+                    continue
+                r = row_of[a]
+                if not np.isfinite(dist[r, b]):
+                    continue
+                path = []
+                w = b
+                while w != a:
+                    p = pred[r, w]
+                    path.append(best[(p, w)])
+                    w = p
+                cycles.append([d1] + path[::-1] + [d2 ^ 1])
+    return cycles
+
+
+def _canonical(cycle: list[int]) -> tuple:
+    """An orientation- and rotation-free key of a dart cycle."""
+    return tuple(sorted(d // 2 for d in cycle))
+
+
+def find_cycles(
+    chains: list[np.ndarray],
+    edges: np.ndarray,
+    nodes: np.ndarray,
+    *,
+    fold_angle: float = 30.0,
+    coarse_points: int = 64,
+    time_limit: float = 60.0,
+) -> CycleSet:
+    """Choose the patch boundaries of a curve network.
+
+    Parameters
+    ----------
+    chains : list of (m_c, 3) ndarray
+        Each curve as a polyline from its start node to its end node (node positions included;
+        a loop without node does not repeat its first point).
+    edges : (c, 2) ndarray of int
+        Start and end node of each curve, ``-1`` for a loop without node.
+    nodes : (n, 3) ndarray
+        Node positions.
+    fold_angle : float
+        Two candidate cycles that meet a common curve from sides closer than this angle (degrees)
+        are exclusive.
+    coarse_points : int
+        Size of the coarse polygon on which a candidate's minimal-area triangulation is computed.
+    time_limit : float
+        Seconds allowed to the integer program.
+
+    Returns
+    -------
+    CycleSet
+
+    Notes
+    -----
+    Candidates: :math:`O(\\sum_v \\deg(v)^2)` shortest-path cycles plus the rotation faces; each is
+    scored in :math:`O(k^3)` for a coarse polygon of ``k <= coarse_points`` points.
+    """
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    keep = prune_dangling(edges, len(nodes))
+    g = _Graph(chains, edges, keep, nodes)
+
+    # ------------------------------------------------------------------ candidates
+    raw = []
+    if g.core:
+        normals = _node_frames(g)
+        raw += _rotation_faces(g, normals)
+        raw += _corner_cycles(g)
+    seen = {}
+    for cyc in raw:
+        curves = [d // 2 for d in cyc]
+        if len(set(curves)) != len(curves):
+            continue  # runs twice through a curve: not a disk boundary
+        key = _canonical(cyc)
+        if key not in seen:
+            seen[key] = cyc
+    cands = [seen[k] for k in sorted(seen)]
+    cands += [[2 * c] for c in g.loops]
+    if not cands:
+        return CycleSet([], [], 0, [])
+
+    # ------------------------------------------------------------------ coarse geometry
+    per_curve = {}
+    costs = np.zeros(len(cands))
+    inward = []  # per candidate: {curve: mean inward unit vector}
+    for k, cyc in enumerate(cands):
+        kc = max(2, min(8, coarse_points // len(cyc) + 1))
+        poly, owner = [], []
+        for d in cyc:
+            key = (d // 2, kc)
+            if key not in per_curve:
+                ch = g.chains[d // 2]
+                if g.edges[d // 2, 0] < 0 or g.edges[d // 2, 0] == g.edges[d // 2, 1]:
+                    ch = np.vstack([ch, ch[:1]]) if g.edges[d // 2, 0] < 0 else ch
+                per_curve[key] = _resample(ch, kc if len(cyc) > 1 else max(kc, coarse_points // 2))
+            pts = per_curve[key] if d % 2 == 0 else per_curve[key][::-1]
+            poly.append(pts[:-1])
+            owner += [d // 2] * (len(pts) - 1)
+        poly = np.vstack(poly)
+        owner = np.array(owner)
+        if len(poly) < 3:
+            costs[k] = 0.0
+            inward.append({})
+            continue
+        area, tris = min_area_triangulation(poly)
+        costs[k] = area
+        inward.append(_inward_directions(poly, tris, owner))
+
+    # ------------------------------------------------------------------ selection
+    chosen = _select(cands, costs, inward, len(edges), fold_angle, time_limit)
+    cycles = [cands[k] for k in chosen]
+    cycles = _orient(cycles)
+    return CycleSet(
+        [[d // 2 for d in c] for c in cycles],
+        [[1 if d % 2 == 0 else -1 for d in c] for c in cycles],
+        len(cands),
+        [float(costs[k]) for k in chosen],
+    )
+
+
+def _inward_directions(poly, tris, owner):
+    """Mean unit vector, per curve, from the polygon edges into the spanning triangulation."""
+    n = len(poly)
+    third = {}
+    for t in tris:
+        for a, b, c in ((t[0], t[1], t[2]), (t[1], t[2], t[0]), (t[2], t[0], t[1])):
+            if (b - a) % n == 1:
+                third[a] = c
+            elif (a - b) % n == 1:
+                third[b] = c
+    acc = {}
+    for i in range(n):
+        if i not in third:
+            continue
+        p, q, r = poly[i], poly[(i + 1) % n], poly[third[i]]
+        e = q - p
+        le = np.linalg.norm(e)
+        if le == 0:
+            continue
+        e /= le
+        u = (r - p) - ((r - p) @ e) * e
+        nu = np.linalg.norm(u)
+        if nu == 0:
+            continue
+        acc.setdefault(int(owner[i]), []).append(le * u / nu)
+    out = {}
+    for c, vs in acc.items():
+        s = np.sum(vs, axis=0)
+        ns = np.linalg.norm(s)
+        if ns > 0:
+            out[c] = s / ns
+    return out
+
+
+def _select(cands, costs, inward, n_curves, fold_angle, time_limit):
+    """Solve the 0-1 program; returns the indices of the chosen candidates."""
+    from scipy.optimize import Bounds, LinearConstraint, milp
+    from scipy.sparse import coo_matrix
+
+    K = len(cands)
+    rows, cols = [], []
+    by_curve = {}
+    for k, cyc in enumerate(cands):
+        for d in cyc:
+            rows.append(d // 2)
+            cols.append(k)
+            by_curve.setdefault(d // 2, []).append(k)
+    A = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_curves, K)).tocsr()
+    cos_max = np.cos(np.radians(fold_angle))
+    conflicts = set()
+    for c, ks in by_curve.items():
+        for i in range(len(ks)):
+            for j in range(i + 1, len(ks)):
+                a, b = inward[ks[i]].get(c), inward[ks[j]].get(c)
+                if a is not None and b is not None and a @ b > cos_max:
+                    conflicts.add((ks[i], ks[j]))
+    constraints = [LinearConstraint(A, -np.inf, 2.0)]
+    if conflicts:
+        cr = np.repeat(np.arange(len(conflicts)), 2)
+        cc = np.array(sorted(conflicts)).ravel()
+        C = coo_matrix((np.ones(len(cc)), (cr, cc)), shape=(len(conflicts), K)).tocsr()
+        constraints.append(LinearConstraint(C, -np.inf, 1.0))
+    size = np.array([len(c) for c in cands], dtype=float)
+    total = float(costs.sum()) or 1.0
+    obj = -size + 0.999 * costs / total
+    res = milp(
+        obj,
+        constraints=constraints,
+        integrality=np.ones(K),
+        bounds=Bounds(0, 1),
+        options={"time_limit": time_limit, "disp": False},
+    )
+    if res.x is None:
+        return _greedy(cands, costs, conflicts, n_curves)
+    return [k for k in range(K) if res.x[k] > 0.5]
+
+
+def _greedy(cands, costs, conflicts, n_curves):
+    """Fallback selection: cheapest area per curve first, respecting the same constraints."""
+    use = np.zeros(n_curves, dtype=np.int64)
+    bad = {}
+    for a, b in conflicts:
+        bad.setdefault(a, set()).add(b)
+        bad.setdefault(b, set()).add(a)
+    chosen = []
+    for k in np.argsort(costs / np.maximum([len(c) for c in cands], 1), kind="stable"):
+        cur = [d // 2 for d in cands[k]]
+        if (use[cur] < 2).all() and not (bad.get(k, set()) & set(chosen)):
+            use[cur] += 1
+            chosen.append(int(k))
+    return sorted(chosen)
+
+
+def _orient(cycles: list[list[int]]) -> list[list[int]]:
+    """Reverse cycles so that two cycles sharing a curve run through it in opposite directions."""
+    by_curve = {}
+    for k, cyc in enumerate(cycles):
+        for d in cyc:
+            by_curve.setdefault(d // 2, []).append(k)
+    flip = [None] * len(cycles)
+    for root in range(len(cycles)):
+        if flip[root] is not None:
+            continue
+        flip[root] = False
+        queue = deque([root])
+        while queue:
+            k = queue.popleft()
+            for d in cycles[k]:
+                dk = d ^ int(flip[k])  # dart as traversed after flipping
+                for m in by_curve[d // 2]:
+                    if m == k or flip[m] is not None:
+                        continue
+                    dm = next(e for e in cycles[m] if e // 2 == d // 2)
+                    flip[m] = (dm == dk)  # same direction: reverse m
+                    queue.append(m)
+    out = []
+    for cyc, f in zip(cycles, flip):
+        out.append([d ^ 1 for d in reversed(cyc)] if f else list(cyc))
+    return out

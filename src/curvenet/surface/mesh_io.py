@@ -1,0 +1,86 @@
+"""Mesh writers: pure functions from a :class:`SurfaceMesh` to the bytes of a file.
+
+``MESH_WRITERS`` maps an extension to ``(writer, description)``; the caller writes the bytes
+(atomically, with :func:`curvenet.io.atomic_write`).
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+__all__ = ["mesh_to_obj", "mesh_to_ply", "MESH_WRITERS"]
+
+
+def mesh_to_obj(mesh, *, precision: int = 9) -> bytes:
+    """Wavefront OBJ text: ``v`` lines, then one group ``g patch_K`` of ``f`` lines per patch.
+
+    Parameters
+    ----------
+    mesh : SurfaceMesh
+    precision : int
+        Significant digits of the coordinates.
+
+    Returns
+    -------
+    bytes
+    """
+    out = io.StringIO()
+    out.write("# curvenet surface mesh\n")
+    out.write(f"# vertices {len(mesh.vertices)} triangles {len(mesh.triangles)} patches {mesh.n_patches}\n")
+    fmt = f"v %.{precision}g %.{precision}g %.{precision}g\n"
+    for v in mesh.vertices:
+        out.write(fmt % (v[0], v[1], v[2]))
+    T = np.asarray(mesh.triangles) + 1
+    P = np.asarray(mesh.patch)
+    for k in np.unique(P):
+        out.write(f"g patch_{int(k)}\n")
+        for t in T[P == k]:
+            out.write(f"f {t[0]} {t[1]} {t[2]}\n")
+    return out.getvalue().encode("ascii")
+
+
+def mesh_to_ply(mesh, *, binary: bool = True) -> bytes:
+    """PLY with float64 vertices and triangle faces carrying an int ``patch`` property.
+
+    Parameters
+    ----------
+    mesh : SurfaceMesh
+    binary : bool
+        Binary little-endian (default) or ASCII.
+
+    Returns
+    -------
+    bytes
+    """
+    V = np.asarray(mesh.vertices, dtype="<f8")
+    T = np.asarray(mesh.triangles, dtype="<i4")
+    P = np.asarray(mesh.patch, dtype="<i4")
+    header = (
+        "ply\n"
+        f"format {'binary_little_endian' if binary else 'ascii'} 1.0\n"
+        "comment curvenet surface mesh\n"
+        f"element vertex {len(V)}\n"
+        "property double x\nproperty double y\nproperty double z\n"
+        f"element face {len(T)}\n"
+        "property list uchar int vertex_indices\n"
+        "property int patch\n"
+        "end_header\n"
+    ).encode("ascii")
+    if binary:
+        face = np.zeros(len(T), dtype=[("n", "u1"), ("v", "<i4", (3,)), ("patch", "<i4")])
+        face["n"] = 3
+        face["v"] = T
+        face["patch"] = P
+        return header + V.tobytes() + face.tobytes()
+    lines = ["%.17g %.17g %.17g" % tuple(v) for v in V]
+    lines += [f"3 {t[0]} {t[1]} {t[2]} {p}" for t, p in zip(T, P)]
+    return header + ("\n".join(lines) + "\n").encode("ascii")
+
+
+#: extension -> (writer, description)
+MESH_WRITERS = {
+    ".obj": (mesh_to_obj, "Wavefront OBJ triangles, one group per patch"),
+    ".ply": (mesh_to_ply, "binary PLY triangles with a patch id per face"),
+}
