@@ -19,6 +19,8 @@ __all__ = ["reconstruct", "METHODS", "DEFAULT_METHOD"]
 #: checked (N, d) float array and returns a :class:`CurveNetwork`.
 METHODS: dict[str, tuple[str, str]] = {
     "paper": ("curvenet.paper", "reconstruct_paper"),
+    "emst": ("curvenet.emst", "reconstruct_emst"),
+    "robust": ("curvenet.robust", "reconstruct_robust"),
 }
 
 #: The method used when none is named.

@@ -1,0 +1,83 @@
+"""The EMST baseline."""
+
+import numpy as np
+import pytest
+
+from curvenet.emst import emst_edges, reconstruct_emst
+from curvenet.errors import InputError
+from curvenet.reconstruct import reconstruct
+
+
+def line(a, b, n):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return a + (b - a) * np.linspace(0, 1, n)[:, None]
+
+
+def test_line_is_one_curve_through_every_point():
+    p = line((0, 0, 0), (1, 0.5, 0.2), 40)
+    rng = np.random.default_rng(0)
+    q = p[rng.permutation(40)]
+    net = reconstruct_emst(q)
+    assert net.n_nodes == 2 and net.n_curves == 1
+    c = net.curves[0]
+    assert len(c.points) == 40 and sorted(c.indices.tolist()) == list(range(40))
+    assert np.array_equal(q[c.indices], c.points)
+    assert c.length == pytest.approx(np.linalg.norm([1, 0.5, 0.2]))
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_y_junction(d):
+    arms = [line(np.zeros(d), np.r_[np.cos(a), np.sin(a), np.zeros(d - 2)], 30)[1:] for a in (0.3, 2.4, 4.3)]
+    p = np.vstack([np.zeros((1, d))] + arms)
+    net = reconstruct_emst(p)
+    assert net.n_nodes == 4 and net.n_curves == 3
+    assert sorted(net.valence.tolist()) == [1, 1, 1, 3]
+    centre = net.nodes[net.valence == 3][0]
+    assert np.allclose(centre, 0.0)
+
+
+def test_circle_is_opened_never_a_loop():
+    t = np.linspace(0, 2 * np.pi, 100, endpoint=False)
+    net = reconstruct_emst(np.column_stack([np.cos(t), np.sin(t)]))
+    assert net.n_curves == 1 and net.n_nodes == 2 and not net.curves[0].closed
+    assert net.betti == (1, 0)
+
+
+def test_disconnected_knn_graph_gives_a_forest():
+    p = np.vstack([line((0, 0), (1, 0), 30), line((0, 5), (1, 5), 30)])
+    net = reconstruct_emst(p, k=5)
+    assert net.n_curves == 2 and net.n_nodes == 4 and net.betti == (2, 0)
+    assert len(emst_edges(p, k=5)) == 58
+
+
+def test_independent_of_point_order():
+    rng = np.random.default_rng(1)
+    p = np.vstack([line((0, 0), (1, 0), 50), line((0.5, 0), (0.5, 1), 50)[1:]]) + rng.normal(0, 0.003, (99, 2))
+    a = reconstruct_emst(p).canonical()
+    b = reconstruct_emst(p[rng.permutation(len(p))]).canonical()
+    assert np.array_equal(a.nodes, b.nodes)
+    assert len(a.curves) == len(b.curves)
+    for x, y in zip(a.curves, b.curves):
+        assert np.array_equal(x.points, y.points)
+
+
+def test_equal_edge_lengths_and_duplicates():
+    # a regular grid row has only tied lengths; duplicates have length zero
+    p = np.vstack([line((0, 0), (1, 0), 11), [[0.5, 0.0]]])
+    net = reconstruct_emst(p)
+    assert sum(len(c.points) for c in net.curves) - (net.n_curves - 1) >= 12 - 2
+    assert net.betti[0] == 1
+
+
+def test_registered_and_parameters():
+    p = line((0, 0), (1, 1), 20)
+    net = reconstruct(p, method="emst", k=8)
+    assert net.parameters["k"] == 8 and net.parameters["method"] == "emst"
+    assert "tracing" in net.stats["time"]
+    with pytest.raises(InputError):
+        reconstruct_emst(p, k=0)
+
+
+def test_single_point():
+    net = reconstruct_emst(np.zeros((1, 3)))
+    assert net.n_nodes == 1 and net.n_curves == 0
