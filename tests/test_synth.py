@@ -115,3 +115,71 @@ def test_bad_arguments(models):
     for kw in ({"h": -1.0}, {"noise": -0.1}, {"density_ratio": 0.5}, {"outliers": -1}):
         with pytest.raises(InputError):
             synth.sample(models["cube"], **kw)
+
+
+# ------------------------------------------------------------------------- CASSIE sketches
+def _write_sketch(path):
+    import json
+
+    data = {
+        "strokes": [{"id": 0, "segments": [0, 1]}, {"id": 1, "segments": [2]}],
+        "segments": [
+            # a cubic Bézier whose control points are evenly spaced on a line: the line itself
+            {"id": 0, "stroke_id": 0, "ctrl_pts": [[[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]], "nodes": [0, 1]},
+            {"id": 1, "stroke_id": 0, "ctrl_pts": [[[3, 0, 0], [3, 2, 0]]], "nodes": [1, 2]},
+            # drawn from its end node to its start node: must be reoriented
+            {"id": 2, "stroke_id": 1, "ctrl_pts": [[[0, 1, 1], [0, 0.5, 0.5], [0, 0.25, 0.1], [0, 0, 0]]],
+             "nodes": [3, 0]},
+        ],
+        "nodes": [
+            {"id": 0, "position": [0, 0, 0], "neighbor_edges": [0, 2]},
+            {"id": 1, "position": [3, 0, 0], "neighbor_edges": [0, 1]},
+            {"id": 2, "position": [3, 2, 0], "neighbor_edges": [1]},
+            {"id": 3, "position": [0, 1, 1], "neighbor_edges": [2]},
+        ],
+    }
+    path.write_text(json.dumps(data))
+
+
+def test_cassie_loader_on_a_handmade_file(tmp_path):
+    f = tmp_path / "tiny.json"
+    _write_sketch(f)
+    raw = synth.cassie.load(f, contract=False, step=0.01)
+    assert raw.n_nodes == 4 and raw.n_curves == 3
+    c0 = raw.curves[0]
+    assert np.allclose(c0.points[:, 1:], 0) and c0.length == pytest.approx(3.0)
+    assert np.abs(np.diff(c0.points[:, 0])).max() <= 0.01 + 1e-12
+    for c in raw.curves:
+        assert np.array_equal(c.points[0], raw.nodes[c.start]) and np.array_equal(c.points[-1], raw.nodes[c.end])
+    net = synth.cassie.load(f, step=0.01)  # node 0 and node 1 have valence 2: all one curve
+    assert net.n_nodes == 2 and net.n_curves == 1
+    assert net.curves[0].length == pytest.approx(3.0 + 2.0 + raw.curves[2].length)
+    assert net.parameters["h"] == 0.002
+
+
+def test_cassie_missing():
+    with pytest.raises(InputError):
+        synth.cassie.load("no-such-sketch-xyz")
+
+
+cassie_needed = pytest.mark.skipif(not synth.cassie.available(), reason="CASSIE dataset not found")
+
+
+@cassie_needed
+def test_cassie_free_creations_present():
+    names = {p.stem for p in (synth.cassie.root() / "sketch_graph").glob("*.json")}
+    assert len(synth.cassie.FREE_CREATIONS) == 16 and set(synth.cassie.FREE_CREATIONS) <= names
+
+
+@cassie_needed
+def test_cassie_hat():
+    net = synth.cassie.load("hat")
+    assert net.dimension == 3 and 2 not in set(net.valence.tolist())
+    assert net.n_nodes > 50 and net.n_curves > 100
+    for c in net.curves:
+        if c.start is not None:
+            assert np.array_equal(c.points[0], net.nodes[c.start])
+    # the hat's curves that share no node stay more than 3h (6 mm) apart
+    assert synth.cassie.min_separation(net, within=0.006) == float("inf")
+    P, L = synth.sample(net, h=0.002)
+    assert abs(len(P) - sum(c.length for c in net.curves) / 0.002) < 0.02 * len(P)

@@ -5,7 +5,8 @@
 >>> points, labels = synth.sample(truth, noise=0.2, rng=1)
 """
 
+from . import cassie
 from .models import MODELS, h_of, model, model_names
 from .sampler import sample
 
-__all__ = ["MODELS", "model", "model_names", "h_of", "sample"]
+__all__ = ["cassie", "MODELS", "model", "model_names", "h_of", "sample"]
