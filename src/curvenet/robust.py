@@ -1,0 +1,678 @@
+"""The robust, parameter-free default method ("robust").
+
+Outline (every radius is in units of the *local* sampling spacing ``h_i``):
+
+1. **Spacing.** ``h_i`` is the mean distance to the 4 nearest neighbours divided by 1.5 (on a
+   uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h), smoothed by the median over the
+   point and its 8 nearest neighbours. Density may vary along the curves.
+2. **Linked graph.** Each point is joined to those of its ``k`` nearest neighbours closer than
+   ``link * h``, unless both ends are clearly on a curve (linearity of the local PCA above 0.6) and
+   the link makes more than ``tangent_angle`` degrees with both local tangents. This keeps two
+   close parallel curves, and the two sides of an acute angle, apart.
+3. **Shell test.** Around each point, the points reached through the linked graph without leaving
+   the ball of radius ``shell_outer * h`` are collected; those farther than ``shell_inner * h``
+   form the shell, and the number of connected groups of the shell is counted: 1 at a free end,
+   2 on a curve (a sharp corner included), 3 or more near a junction, 0 for an isolated clump.
+4. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
+   ``link * h``) into regions; the remaining points fall apart into chains, one per curve
+   segment. Each chain is ordered by geodesic distance from one end (Dijkstra on the linked
+   graph) and attached to the regions its two ends touch.
+5. **Network.** A region touched by one chain end is a free end: its points extend the chain and
+   the node is the extreme point. A region touched by 2 ends is no node (the chains are joined
+   through it; a chain joined to itself is a closed loop). A region touched by 3 or more is a
+   junction; its node is the least-squares intersection of the tangent lines of the incident
+   chains, fitted on their first ``3 h``. Short spurs (a chain from a junction to a free end shorter
+   than ``min_spur * h``) and small isolated clumps are dropped: they are what a few outliers make.
+6. **Smoothing** (``smooth=True``): each curve is replaced by a smoothing spline (scipy
+   ``make_splprep``) pinned at its end nodes and evaluated densely.
+
+The result does not depend on the order of the input points: they are sorted by coordinates
+first and every tie is broken by that order.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components, dijkstra
+
+from . import _robust_kernels as _k
+from .errors import InputError
+from .network import Curve, CurveNetwork
+from .neighbors import build_tree, knn
+from .validate import as_points
+
+__all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
+
+_DEFAULTS = {
+    "k": 16,
+    "shell_inner": 2.5,
+    "shell_outer": 4.5,
+    "link": 2.5,
+    "tangent_angle": 45.0,
+    "min_spur": 3.0,
+}
+
+
+# ---------------------------------------------------------------------------------- stages
+def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Local sampling spacing of every point.
+
+    Parameters
+    ----------
+    dist, idx : (N, k) ndarray
+        Distances and indices of the k nearest neighbours (self excluded), k >= 4.
+
+    Returns
+    -------
+    (N,) ndarray of float
+        Mean distance to the 4 nearest neighbours divided by 1.5, median-smoothed over the point
+        and its 8 nearest neighbours.
+    """
+    m = min(4, dist.shape[1])
+    raw = dist[:, :m].mean(axis=1) / (1.5 if m >= 4 else 1.0)
+    j = min(8, idx.shape[1])
+    h = np.median(np.concatenate([raw[:, None], raw[idx[:, :j]]], axis=1), axis=1)
+    pos = h[h > 0]
+    floor = (pos.min() if len(pos) else 1.0) * 1e-3
+    return np.maximum(h, floor)
+
+
+def _tangents(P: np.ndarray, idx: np.ndarray, m: int = 8):
+    """Principal direction and linearity of each point's ``m`` nearest neighbours (+ itself)."""
+    nb = np.concatenate([np.arange(len(P))[:, None], idx[:, :m]], axis=1)
+    Q = P[nb]
+    Q = Q - Q.mean(axis=1, keepdims=True)
+    C = np.einsum("nki,nkj->nij", Q, Q)
+    w, v = np.linalg.eigh(C)
+    t = v[:, :, -1]
+    lam1 = np.maximum(w[:, -1], 1e-300)
+    lin = 1.0 - w[:, -2] / lam1
+    return t, lin
+
+
+def _linked_edges(P, h, dist, idx, t, lin, link, tangent_angle):
+    """Directed kNN edges kept by the distance and tangent tests: (src, dst, length)."""
+    n, k = idx.shape
+    src = np.repeat(np.arange(n), k)
+    dst = idx.ravel()
+    dd = dist.ravel()
+    hh = 0.5 * (h[src] + h[dst])
+    keep = (dd <= link * hh) & (src != dst)
+    src, dst, dd = src[keep], dst[keep], dd[keep]
+    vec = P[dst] - P[src]
+    nrm = np.maximum(dd, 1e-300)
+    c = np.cos(np.radians(tangent_angle))
+    cs = np.abs(np.einsum("ij,ij->i", vec, t[src])) / nrm
+    cd = np.abs(np.einsum("ij,ij->i", vec, t[dst])) / nrm
+    ok = (cs >= c) | (cd >= c) | (lin[src] < 0.6) | (lin[dst] < 0.6) | (dd == 0)
+    return src[ok], dst[ok], dd[ok]
+
+
+def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
+    """Number of connected groups of linked points in the shell around each point.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        Points.
+    h : (N,) ndarray
+        Local spacing.
+    indptr, indices : ndarray
+        CSR adjacency of the linked graph.
+    shell_inner, shell_outer : float
+        Shell radii in units of ``h``.
+
+    Returns
+    -------
+    (N,) ndarray of int32
+    """
+    return _k.shell_groups(
+        np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
+        indptr, indices, float(shell_inner), float(shell_outer),
+    )
+
+
+def _components(n, a, b, mask):
+    """Connected components of the points in ``mask`` joined by edges (a, b) inside ``mask``.
+
+    Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id.
+    """
+    sel = mask[a] & mask[b]
+    g = coo_matrix((np.ones(int(sel.sum())), (a[sel], b[sel])), shape=(n, n)).tocsr()
+    _, lab = connected_components(g, directed=False)
+    lab = np.where(mask, lab, -1)
+    ids = np.flatnonzero(mask)
+    # relabel by first occurrence (deterministic, independent of scipy's numbering)
+    _, first = np.unique(lab[ids], return_index=True)
+    order = np.argsort(ids[first])
+    remap = np.full(lab.max() + 2 if len(ids) else 1, -1, dtype=np.int64)
+    uniq = np.unique(lab[ids])
+    remap[uniq[order]] = np.arange(len(uniq))
+    out = np.full(n, -1, dtype=np.int64)
+    out[ids] = remap[lab[ids]]
+    return out, len(uniq)
+
+
+def _first_per_label(labels, key, ids):
+    """For each label, the id with the largest key (ties: smallest id)."""
+    o = np.lexsort((ids, -key, labels))
+    lab_sorted = labels[o]
+    first = np.ones(len(o), dtype=bool)
+    first[1:] = lab_sorted[1:] != lab_sorted[:-1]
+    return ids[o[first]], lab_sorted[first]
+
+
+# ---------------------------------------------------------------------------------- helpers
+def _fit_line(X):
+    c = X.mean(axis=0)
+    if len(X) < 2:
+        return c, None
+    _, _, vt = np.linalg.svd(X - c, full_matrices=False)
+    return c, vt[0]
+
+
+def _polylen(X):
+    if len(X) < 2:
+        return 0.0
+    return float(np.linalg.norm(np.diff(X, axis=0), axis=1).sum())
+
+
+class _Chain:
+    __slots__ = ("ids", "ends", "closed")
+
+    def __init__(self, ids, ends, closed=False):
+        self.ids = ids  # ordered point ids (sorted-order ids)
+        self.ends = ends  # [start region, end region]; -1 none
+        self.closed = closed
+
+
+# ---------------------------------------------------------------------------------- method
+def reconstruct_robust(
+    points,
+    *,
+    spacing: float | None = None,
+    k: int | None = None,
+    shell_inner: float | None = None,
+    shell_outer: float | None = None,
+    link: float | None = None,
+    tangent_angle: float | None = None,
+    min_spur: float | None = None,
+    smooth: bool = False,
+    smoothing: float | None = None,
+) -> CurveNetwork:
+    """Reconstruct a curve network without tuning: the robust default method.
+
+    Parameters
+    ----------
+    points : (N, 2) or (N, 3) array_like
+        Points sampled along curves, in any order.
+    spacing : float, optional
+        Sampling spacing h. Default: estimated per point (see :func:`local_spacing`); the
+        median is reported. A given value is used everywhere.
+    k : int, optional
+        Neighbours per point for the linked graph (default 16).
+    shell_inner, shell_outer : float, optional
+        Radii of the junction-test shell in spacings (default 2.5 and 4.5).
+    link : float, optional
+        Longest link between two points, in spacings (default 2.5).
+    tangent_angle : float, optional
+        Largest angle in degrees between a link and a local tangent (default 45).
+    min_spur : float, optional
+        Spurs (junction to free end) and isolated pieces shorter than this many spacings are
+        dropped (default 3).
+    smooth : bool
+        Replace each curve by a smoothing spline through its end nodes, densely evaluated.
+    smoothing : float, optional
+        Smoothing factor per point in squared spacings (default: 0.25, i.e. noise of about
+        h/2); used only with ``smooth=True``.
+
+    Returns
+    -------
+    CurveNetwork
+        Nodes (junctions and free ends), curves ending exactly at their nodes (closed loops
+        without node have ``start = end = None``), parameters used and stage timings.
+    """
+    tm: dict[str, float] = {}
+    t0 = time.perf_counter()
+    P0 = as_points(points)
+    prm = dict(_DEFAULTS)
+    given = dict(k=k, shell_inner=shell_inner, shell_outer=shell_outer, link=link,
+                 tangent_angle=tangent_angle, min_spur=min_spur)
+    for name, val in given.items():
+        if val is not None:
+            if not np.isfinite(val) or val <= 0:
+                raise InputError(f"{name} must be a positive number, got {val!r}")
+            prm[name] = val
+    prm["k"] = int(prm["k"])
+    if prm["k"] < 4:
+        raise InputError(f"k must be at least 4, got {prm['k']}")
+    if prm["shell_outer"] <= prm["shell_inner"]:
+        raise InputError(
+            f"shell_outer ({prm['shell_outer']}) must be larger than shell_inner ({prm['shell_inner']})"
+        )
+    if spacing is not None and (not np.isfinite(spacing) or spacing <= 0):
+        raise InputError(f"spacing must be a positive number, got {spacing!r}")
+    if smoothing is not None and (not np.isfinite(smoothing) or smoothing < 0):
+        raise InputError(f"smoothing must be a non-negative number, got {smoothing!r}")
+
+    N, dim = P0.shape
+    order = np.lexsort(P0.T[::-1])
+    P = P0[order]
+    params_out = dict(prm)
+    params_out["smooth"] = bool(smooth)
+    if N < 5:
+        net = CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
+        params_out["spacing"] = float(spacing) if spacing is not None else None
+        return net
+
+    # 1. neighbours and spacing
+    tree = build_tree(P)
+    dist, idx = knn(P, prm["k"], tree=tree)
+    tm["neighbors"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    if spacing is None:
+        h = local_spacing(dist, idx)
+        params_out["spacing"] = float(np.median(h))
+        params_out["spacing_range"] = [float(np.percentile(h, 5)), float(np.percentile(h, 95))]
+        params_out["spacing_estimated"] = True
+    else:
+        h = np.full(N, float(spacing))
+        params_out["spacing"] = float(spacing)
+        params_out["spacing_estimated"] = False
+
+    # 2. linked graph
+    t, lin = _tangents(P, idx)
+    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["tangent_angle"])
+    indptr, indices = _k.csr_union(N, src.astype(np.int64), dst.astype(np.int64))
+    tm["graph"] = time.perf_counter() - t1
+
+    # 3. shell test
+    t1 = time.perf_counter()
+    groups = shell_group_counts(P, h, indptr, indices, prm["shell_inner"], prm["shell_outer"])
+    tm["nodes"] = time.perf_counter() - t1
+
+    # 4. regions and chains
+    t1 = time.perf_counter()
+    flagged = groups != 2
+    # regions: flagged points joined by plain short links (any direction)
+    ksrc = np.repeat(np.arange(N), idx.shape[1])
+    kdst = idx.ravel()
+    kshort = dist.ravel() <= prm["link"] * 0.5 * (h[ksrc] + h[kdst])
+    reg, n_reg = _components(N, ksrc[kshort], kdst[kshort], flagged)
+    chn, n_chn = _components(N, src, dst, ~flagged)
+
+    chains = _order_chains(P, h, src, dst, dd, chn, n_chn, reg)
+    regions = [np.flatnonzero(reg == r) for r in range(n_reg)]
+    tm["tracing"] = time.perf_counter() - t1
+
+    # 5. network
+    t1 = time.perf_counter()
+    nodes, curves = _assemble(P, h, chains, regions, prm)
+    tm["assemble"] = time.perf_counter() - t1
+
+    # map back to input indices
+    for c in curves:
+        c.indices = np.where(c.indices >= 0, order[np.maximum(c.indices, 0)], -1)
+
+    if smooth:
+        t1 = time.perf_counter()
+        s = 0.25 if smoothing is None else float(smoothing)
+        params_out["smoothing"] = s
+        curves = [_smooth_curve(c, nodes, s * float(np.median(h)) ** 2) for c in curves]
+        tm["smooth"] = time.perf_counter() - t1
+    params_out["groups_histogram"] = {str(g): int(c) for g, c in zip(*np.unique(groups, return_counts=True))}
+    net = CurveNetwork(nodes, curves, params_out, {"time": tm})
+    return net
+
+
+def _order_chains(P, h, src, dst, dd, chn, n_chn, reg):
+    """Order every chain by geodesic distance from one end; find the regions its ends touch."""
+    N = len(P)
+    chains: list[_Chain] = []
+    if n_chn == 0:
+        return chains
+    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
+    a, b, w = src[inside], dst[inside], np.maximum(dd[inside], 1e-12)
+    g = coo_matrix((w, (a, b)), shape=(N, N)).tocsr()
+    ids = np.flatnonzero(chn >= 0)
+    lab = chn[ids]
+    # first point of every chain (lowest id)
+    _, first = np.unique(lab, return_index=True)
+    s0 = ids[first]
+    d0 = dijkstra(g, directed=False, indices=s0, min_only=True)
+    e1, e1lab = _first_per_label(lab, d0[ids], ids)
+    e1_by_chain = np.empty(n_chn, dtype=np.int64)
+    e1_by_chain[e1lab] = e1
+    d1 = dijkstra(g, directed=False, indices=e1_by_chain, min_only=True)
+    par = d1[ids]
+    o = np.lexsort((ids, par, lab))
+    ids_o, lab_o, par_o = ids[o], lab[o], par[o]
+    bounds = np.flatnonzero(np.r_[True, lab_o[1:] != lab_o[:-1], True])
+
+    # contacts: linked edges between a chain point and a region point
+    cmask = (chn[src] >= 0) & (reg[dst] >= 0)
+    c_pt = src[cmask]
+    c_reg = reg[dst[cmask]]
+    cmask2 = (chn[dst] >= 0) & (reg[src] >= 0)
+    c_pt = np.r_[c_pt, dst[cmask2]]
+    c_reg = np.r_[c_reg, reg[src[cmask2]]]
+    c_chain = chn[c_pt]
+    pos_in_chain = np.empty(N)
+    pos_in_chain[ids_o] = par_o
+    c_par = pos_in_chain[c_pt]
+    corder = np.lexsort((c_reg, c_chain))
+    c_chain, c_reg, c_par, c_pt = c_chain[corder], c_reg[corder], c_par[corder], c_pt[corder]
+    cb = np.searchsorted(c_chain, np.arange(n_chn + 1))
+
+    for ci in range(n_chn):
+        seg = ids_o[bounds[ci]:bounds[ci + 1]]
+        pseg = par_o[bounds[ci]:bounds[ci + 1]]
+        L = pseg[-1] if len(pseg) else 0.0
+        cr = c_reg[cb[ci]:cb[ci + 1]]
+        cp = c_par[cb[ci]:cb[ci + 1]]
+        if len(cr) == 0:
+            chains.append(_loop_or_piece(P, h, g, seg))
+            continue
+        hl = float(np.median(h[seg]))
+        reach = min(0.5 * L, 4.0 * hl)
+        ends = [-1, -1]
+        for side, sel in ((0, cp <= reach), (1, cp >= L - reach)):
+            if side == 1 and L <= 2 * reach:
+                sel = cp > 0.5 * L
+            if side == 0 and L <= 2 * reach:
+                sel = cp <= 0.5 * L
+            if sel.any():
+                r, cnt = np.unique(cr[sel], return_counts=True)
+                ends[side] = int(r[np.argmax(cnt)])
+        chains.append(_Chain(seg, ends))
+    return chains
+
+
+def _loop_or_piece(P, h, g, seg):
+    """A chain that touches no region: a closed loop (cut open and ordered), or an open piece."""
+    if len(seg) < 3:
+        return _Chain(seg, [-1, -1])
+    s = int(seg[0])
+    sub = g[seg][:, seg].tocoo()
+    X = P[seg]
+    hl = float(np.median(h[seg]))
+    # tangent at the start point
+    near = np.linalg.norm(X - X[0], axis=1) <= 3.0 * hl
+    _, u = _fit_line(X[near])
+    if u is None:
+        return _Chain(seg, [-1, -1])
+    side = (X - X[0]) @ u
+    a, b = sub.row, sub.col
+    cut = near[a] & near[b] & ((side[a] < 0) != (side[b] < 0)) & (a != 0) & (b != 0)
+    # keep the start's links to the positive side only
+    cut |= ((a == 0) & (side[b] < 0)) | ((b == 0) & (side[a] < 0))
+    keep = ~cut
+    n = len(seg)
+    gg = coo_matrix((sub.data[keep], (a[keep], b[keep])), shape=(n, n)).tocsr()
+    dd = dijkstra(gg, directed=False, indices=0)
+    finite = np.isfinite(dd)
+    o = np.lexsort((np.arange(n), dd))
+    o = o[finite[o]]
+    rest = np.flatnonzero(~finite)
+    ordered = seg[o]
+    last = X[o[-1]]
+    closed = np.linalg.norm(last - X[0]) <= 3.0 * hl and _polylen(X[o]) > 6.0 * hl
+    if len(rest):
+        # unreachable points: append by their position along the tangent (rare)
+        ordered = np.r_[ordered, seg[rest[np.argsort(side[rest], kind="stable")]]]
+    return _Chain(ordered, [-1, -1], closed=bool(closed))
+
+
+def _assemble(P, h, chains, regions, prm):
+    """Turn chains and regions into nodes and curves (spur pruning, joins, node positions)."""
+    regions = list(regions)
+    dim = P.shape[1]
+    # dangling open ends -> empty free-end regions
+    for c in chains:
+        if c.closed:
+            continue
+        for s in (0, 1):
+            if c.ends[s] < 0:
+                regions.append(np.zeros(0, dtype=np.int64))
+                c.ends[s] = len(regions) - 1
+    alive = [True] * len(chains)
+
+    def valence():
+        v = np.zeros(len(regions), dtype=np.int64)
+        for i, c in enumerate(chains):
+            if alive[i] and not c.closed:
+                v[c.ends[0]] += 1
+                v[c.ends[1]] += 1
+        return v
+
+    hmed = float(np.median(h))
+    # prune short spurs and small isolated pieces
+    for _ in range(3):
+        v = valence()
+        changed = False
+        for i, c in enumerate(chains):
+            if not alive[i]:
+                continue
+            hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
+            if c.closed:
+                if _polylen(P[c.ids]) < 2 * prm["min_spur"] * hl:
+                    alive[i] = False
+                    changed = True
+                continue
+            a, b = c.ends
+            length = _polylen(P[c.ids])
+            ext = sum(_extent(P, regions[r]) for r in (a, b) if v[r] == 1)
+            free_a, free_b = v[a] == 1, v[b] == 1
+            if (free_a or free_b) and length + ext < prm["min_spur"] * hl:
+                if free_a and free_b or v[a] >= 3 or v[b] >= 3:
+                    alive[i] = False
+                    changed = True
+                    v = valence()
+        if not changed:
+            break
+
+    # join chains through regions of valence 2
+    for _ in range(len(chains) + 1):
+        v = valence()
+        two = [r for r in range(len(regions)) if v[r] == 2]
+        if not two:
+            break
+        r = two[0]
+        inc = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed for s in (0, 1) if c.ends[s] == r]
+        (i, si), (j, sj) = inc
+        ci = chains[i]
+        a_ids = ci.ids if si == 1 else ci.ids[::-1]
+        a_other = ci.ends[1 - si]
+        if i == j:
+            mid = _order_between(P, regions[r], P[a_ids[-1]], P[a_ids[0]])
+            chains[i] = _Chain(np.r_[a_ids, mid], [-1, -1], closed=True)
+            regions[r] = np.zeros(0, dtype=np.int64)
+            continue
+        cj = chains[j]
+        b_ids = cj.ids if sj == 0 else cj.ids[::-1]
+        b_other = cj.ends[1 - sj]
+        mid = _order_between(P, regions[r], P[a_ids[-1]], P[b_ids[0]])
+        chains[i] = _Chain(np.r_[a_ids, mid, b_ids], [a_other, b_other])
+        alive[j] = False
+        regions[r] = np.zeros(0, dtype=np.int64)
+
+    v = valence()
+    live = [c for i, c in enumerate(chains) if alive[i]]
+    # node positions
+    node_of = {}
+    node_pos = []
+    end_ext: dict[tuple[int, int], np.ndarray] = {}
+    for r in range(len(regions)):
+        if v[r] == 0:
+            continue
+        inc = [(ci, s) for ci, c in enumerate(live) if not c.closed for s in (0, 1) if c.ends[s] == r]
+        if v[r] == 1:
+            ci, s = inc[0]
+            c = live[ci]
+            ids = c.ids if s == 1 else c.ids[::-1]  # ids run towards the region
+            ext, pos = _free_end(P, h, ids, regions[r])
+            end_ext[(ci, s)] = ext
+            node_pos.append(pos)
+        else:
+            node_pos.append(_junction(P, h, live, inc, regions[r]))
+        node_of[r] = len(node_pos) - 1
+    nodes = np.asarray(node_pos, dtype=float).reshape(-1, dim)
+    # canonical node order (by coordinates)
+    if len(nodes):
+        norder = np.lexsort(np.round(nodes, 9).T[::-1])
+        new_id = np.empty(len(norder), dtype=np.int64)
+        new_id[norder] = np.arange(len(norder))
+        nodes = nodes[norder]
+    curves = []
+    for ci, c in enumerate(live):
+        if c.closed:
+            curves.append(Curve(P[c.ids], None, None, True, c.ids.copy()))
+            continue
+        ids = c.ids
+        ext0 = end_ext.get((ci, 0), np.zeros(0, dtype=np.int64))
+        ext1 = end_ext.get((ci, 1), np.zeros(0, dtype=np.int64))
+        ids = np.r_[ext0[::-1], ids, ext1]
+        a, b = int(new_id[node_of[c.ends[0]]]), int(new_id[node_of[c.ends[1]]])
+        pts = P[ids]
+        ind = ids.astype(np.int64)
+        # the curve ends exactly at its nodes (a free end's node is its extreme point)
+        if not (len(ext0) and np.array_equal(P[ext0[-1]], nodes[a])):
+            pts = np.vstack([nodes[a], pts])
+            ind = np.r_[-1, ind]
+        if not (len(ext1) and np.array_equal(P[ext1[-1]], nodes[b])):
+            pts = np.vstack([pts, nodes[b]])
+            ind = np.r_[ind, -1]
+        cv = Curve(pts, a, b, False, ind)
+        if a > b:
+            cv = cv.reversed()
+        curves.append(cv)
+    curves.sort(key=lambda c: (-1 if c.start is None else c.start, -1 if c.end is None else c.end,
+                               tuple(np.round(c.points[min(1, len(c.points) - 1)], 9))))
+    return nodes, curves
+
+
+def _extent(P, ids):
+    if len(ids) < 2:
+        return 0.0
+    X = P[ids]
+    return float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+
+
+def _order_between(P, ids, pa, pb):
+    """Region points ordered from ``pa`` towards ``pb``."""
+    if len(ids) == 0:
+        return ids
+    u = pb - pa
+    nu = np.linalg.norm(u)
+    if nu == 0:
+        return ids
+    proj = (P[ids] - pa) @ (u / nu)
+    return ids[np.lexsort((ids, proj))]
+
+
+def _end_portion(P, h, ids, span=3.0):
+    """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h."""
+    X = P[ids[::-1]]
+    if len(X) < 2:
+        return X
+    seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+    hl = float(h[ids[-1]])
+    m = max(int(np.searchsorted(seg, span * hl, side="right")), min(3, len(X)))
+    return X[:m]
+
+
+def _free_end(P, h, ids, rid):
+    """Extension ids (ordered outward) and node position of a free end."""
+    E = _end_portion(P, h, ids, span=4.0)
+    tip = E[0]
+    if len(E) >= 2:
+        u = E[0] - E[-1]
+        nu = np.linalg.norm(u)
+        u = u / nu if nu > 0 else None
+    else:
+        u = None
+    if len(rid) == 0:
+        return np.zeros(0, dtype=np.int64), tip
+    R = P[rid]
+    if u is None:
+        u = R.mean(axis=0) - tip
+        nu = np.linalg.norm(u)
+        u = u / nu if nu > 0 else np.eye(P.shape[1])[0]
+    proj = (R - tip) @ u
+    o = np.lexsort((rid, proj))
+    ext = rid[o]
+    ext = ext[proj[o] > -1e-12] if (proj > -1e-12).any() else ext
+    # drop points behind the tip (they belong to the chain's thickness), keep the rest in order
+    if len(ext) == 0:
+        return ext, tip
+    return ext, P[ext[-1]].copy()
+
+
+def _junction(P, h, live, inc, rid):
+    """Least-squares intersection of the tangent lines of the incident chain ends."""
+    dim = P.shape[1]
+    cR = P[rid].mean(axis=0) if len(rid) else None
+    A = np.zeros((dim, dim))
+    b = np.zeros(dim)
+    cs = []
+    for ci, s in inc:
+        c = live[ci]
+        ids = c.ids if s == 1 else c.ids[::-1]
+        E = _end_portion(P, h, ids, span=3.0)
+        cc, u = _fit_line(E)
+        cs.append(E[0])
+        if u is None:
+            continue
+        M = np.eye(dim) - np.outer(u, u)
+        A += M
+        b += M @ cc
+    anchor = cR if cR is not None else np.mean(cs, axis=0)
+    hl = float(np.median(h[rid])) if len(rid) else float(np.median([h[live[ci].ids[0]] for ci, _ in inc]))
+    w = 1e-2
+    A += w * np.eye(dim)
+    b += w * anchor
+    try:
+        x = np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        x = anchor
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > 3.0 * _DEFAULTS["shell_outer"] * hl:
+        x = anchor
+    return x
+
+
+def _smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
+    """A smoothing spline of one curve, pinned at its end nodes, evaluated densely."""
+    from scipy.interpolate import make_splprep
+
+    X = c.points
+    if len(X) < 4:
+        return c
+    # drop repeated points (splines need distinct parameters)
+    keep = np.r_[True, np.linalg.norm(np.diff(X, axis=0), axis=1) > 0]
+    X = X[keep]
+    if c.closed:
+        X = np.vstack([X, X[:1]])
+    m = len(X)
+    if m < 4:
+        return c
+    w = np.ones(m)
+    if not c.closed:
+        w[0] = w[-1] = 1e3  # pin the ends at the nodes
+    try:
+        spl, u = make_splprep(X.T, w=w, s=s_per_point * m, k=3, per=bool(c.closed))
+    except Exception:  # pragma: no cover - degenerate input
+        return c
+    seg = np.linalg.norm(np.diff(X, axis=0), axis=1)
+    n_out = max(int(3 * m), 8)
+    uu = np.linspace(u[0], u[-1], n_out)
+    Y = np.asarray(spl(uu)).T
+    if c.closed:
+        Y = Y[:-1]
+    else:
+        Y[0] = c.points[0]
+        Y[-1] = c.points[-1]
+    del seg
+    return Curve(Y, c.start, c.end, c.closed, np.full(len(Y), -1, dtype=np.int64))
