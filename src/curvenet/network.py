@@ -239,6 +239,57 @@ class CurveNetwork:
         curves.sort(key=lambda c: _key(c, decimals))
         return CurveNetwork(self.nodes[order], curves, dict(self.parameters), dict(self.stats))
 
+    def to_networkx(self):
+        """The network as a ``networkx.MultiGraph``: one node per network node, one edge per curve.
+
+        Returns
+        -------
+        networkx.MultiGraph
+            Nodes ``0 .. n-1`` are the network's nodes, with attributes ``pos`` (tuple of d
+            floats), ``valence``, ``kind`` (``"junction"`` for valence >= 3, ``"end"`` for
+            valence 1, ``"other"``) and ``anchor=False``. Curve ``i`` is the edge with key ``i``
+            between its end nodes, with attributes ``curve`` (= i), ``points`` ((m, d) array,
+            from node ``start`` to node ``end``), ``indices`` ((m,) input point indices),
+            ``closed``, ``length``, ``start`` and ``end``. The graph attributes hold
+            ``dimension`` and ``parameters``.
+
+        Notes
+        -----
+        A closed loop that meets no other curve has no node. So that it is not lost and the
+        graph keeps the network's Betti numbers, such a loop gets an *anchor* node: node
+        ``n + j`` for the ``j``-th free loop, at the loop's first point, with ``kind="loop"``,
+        ``anchor=True`` and valence 2; the loop is a self-loop edge on it (``start`` and
+        ``end`` of the edge data stay ``None``). Remove nodes with ``anchor=True`` to drop the
+        free loops.
+
+        Raises
+        ------
+        MissingDependencyError
+            When networkx is not installed (extra ``io``).
+        """
+        from .errors import require
+
+        nx = require("networkx", "CurveNetwork.to_networkx", "io")
+        g = nx.MultiGraph(dimension=self.dimension, parameters=dict(self.parameters))
+        val = self.valence
+        for j, p in enumerate(self.nodes):
+            v = int(val[j])
+            kind = "junction" if v >= 3 else ("end" if v == 1 else "other")
+            g.add_node(j, pos=tuple(float(x) for x in p), valence=v, kind=kind, anchor=False)
+        n_anchor = len(self.nodes)
+        for i, c in enumerate(self.curves):
+            if c.start is None:
+                a = n_anchor
+                n_anchor += 1
+                first = c.points[0] if len(c.points) else np.zeros(self.dimension)
+                g.add_node(a, pos=tuple(float(x) for x in first), valence=2, kind="loop", anchor=True)
+                s = e = a
+            else:
+                s, e = int(c.start), int(c.end)
+            g.add_edge(s, e, key=i, curve=i, points=c.points, indices=c.indices, closed=bool(c.closed),
+                       length=c.length, start=c.start, end=c.end)
+        return g
+
     def __repr__(self) -> str:
         return (
             f"CurveNetwork(dimension={self.dimension}, nodes={self.n_nodes}, "

@@ -16,6 +16,10 @@ import numpy as np
 from ..errors import FormatError
 from ..network import CurveNetwork
 from .atomic import atomic_write, check_output_path
+from .dxf import network_to_dxf
+from .graphml import network_to_graphml
+from .svg import network_to_svg
+from .vtp import network_to_vtp
 from .network_io import network_to_json, network_to_obj, network_to_ply, read_network
 from .points import check_readable, read_las, read_npy, read_obj, read_ply, read_text
 
@@ -48,6 +52,10 @@ WRITERS: dict[str, tuple[Callable[..., Any], str]] = {
     ".json": (network_to_json, "curvenet JSON network"),
     ".obj": (network_to_obj, "Wavefront OBJ polylines (l lines)"),
     ".ply": (network_to_ply, "PLY vertices and edges"),
+    ".dxf": (network_to_dxf, "DXF: 3D polylines or splines (layer CURVES), node points (NODES) (extra io)"),
+    ".svg": (network_to_svg, "SVG drawing of a 2D network or a projection of a 3D one"),
+    ".vtp": (network_to_vtp, "VTK XML PolyData polylines and node vertices (ParaView)"),
+    ".graphml": (network_to_graphml, "GraphML graph: nodes with x y z, one edge per curve with its polyline"),
 }
 
 

@@ -1,0 +1,72 @@
+"""DXF writer (extra ``io``, ezdxf): curves as 3D polylines or splines, nodes as points."""
+
+from __future__ import annotations
+
+import io
+
+from ..errors import require
+from ..network import CurveNetwork
+
+__all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER"]
+
+CURVE_LAYER = "CURVES"
+NODE_LAYER = "NODES"
+
+
+def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
+    """The network as an ASCII DXF drawing (AutoCAD R2010).
+
+    Each curve is one entity on layer ``CURVES``: a 3D ``POLYLINE`` through its points (closed
+    for a loop), or with ``smooth`` a ``SPLINE`` whose fit points are the curve's points. Each
+    node is a ``POINT`` on layer ``NODES``. Curves get the colours of the PNG pictures (true
+    colour); 2D networks are written with z = 0.
+
+    Parameters
+    ----------
+    net : CurveNetwork
+    smooth : bool, optional
+        Write splines instead of polylines. By default, splines when the network was made with
+        the ``smooth`` parameter set (``net.parameters["smooth"]``).
+
+    Returns
+    -------
+    str
+        The DXF text. Curves with fewer than 2 points are left out.
+    """
+    ezdxf = require("ezdxf", "writing DXF files", "io")
+    from ..plots.network_png import curve_colors
+
+    if smooth is None:
+        smooth = bool(net.parameters.get("smooth", False))
+    doc = ezdxf.new("R2010")
+    doc.layers.add(CURVE_LAYER, color=5)
+    doc.layers.add(NODE_LAYER, color=1)
+    msp = doc.modelspace()
+    colors = curve_colors(net)
+    for i, c in enumerate(net.curves):
+        pts = [_xyz(p) for p in c.points]
+        if len(pts) < 2:
+            continue
+        attribs = {"layer": CURVE_LAYER}
+        if smooth and len(pts) >= 3:
+            fit = pts + [pts[0]] if c.closed else pts
+            e = msp.add_spline(fit_points=fit, dxfattribs=attribs)
+            if c.closed:
+                e.closed = True
+        else:
+            e = msp.add_polyline3d(pts, close=bool(c.closed), dxfattribs=attribs)
+        e.rgb = _rgb(colors[i])
+    for p in net.nodes:
+        msp.add_point(_xyz(p), dxfattribs={"layer": NODE_LAYER})
+    buf = io.StringIO()
+    doc.write(buf)
+    return buf.getvalue()
+
+
+def _xyz(p) -> tuple[float, float, float]:
+    return (float(p[0]), float(p[1]), float(p[2]) if len(p) > 2 else 0.0)
+
+
+def _rgb(hexcolor: str) -> tuple[int, int, int]:
+    h = hexcolor.lstrip("#")
+    return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16))

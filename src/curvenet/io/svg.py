@@ -1,0 +1,130 @@
+"""SVG writer: a 2D network, or a projection of a 3D network, as a vector drawing."""
+
+from __future__ import annotations
+
+from typing import Literal
+from xml.sax.saxutils import escape, quoteattr
+
+import numpy as np
+
+from ..errors import InputError
+from ..network import CurveNetwork
+
+__all__ = ["network_to_svg", "PROJECTIONS", "project"]
+
+#: Projections of 3D networks onto the drawing plane: (u, v) coordinates from (x, y, z).
+PROJECTIONS = ("xy", "xz", "yz", "iso")
+
+_C30, _S30 = np.cos(np.pi / 6), np.sin(np.pi / 6)
+
+
+def project(points, projection: str = "xy") -> np.ndarray:
+    """Project (m, 2|3) points to (m, 2) drawing coordinates.
+
+    ``"xy"``, ``"xz"``, ``"yz"`` keep two coordinates; ``"iso"`` is the isometric view
+    ``u = (x - y) cos 30°``, ``v = z - (x + y) sin 30°`` (x to the lower right, y to the lower
+    left, z up). A 2D network accepts only ``"xy"``.
+    """
+    p = np.asarray(points, dtype=float)
+    if projection not in PROJECTIONS:
+        raise InputError(f"unknown SVG projection {projection!r}; expected one of: {', '.join(PROJECTIONS)}")
+    if p.shape[-1] == 2:
+        if projection != "xy":
+            raise InputError(f"a 2D network can only be drawn with projection 'xy', got {projection!r}")
+        return p.reshape(-1, 2)
+    p = p.reshape(-1, 3)
+    x, y, z = p.T
+    if projection == "xy":
+        return np.column_stack([x, y])
+    if projection == "xz":
+        return np.column_stack([x, z])
+    if projection == "yz":
+        return np.column_stack([y, z])
+    return np.column_stack([(x - y) * _C30, z - (x + y) * _S30])
+
+
+def network_to_svg(
+    net: CurveNetwork,
+    *,
+    projection: Literal["xy", "xz", "yz", "iso"] = "xy",
+    width: int = 800,
+    nodes: bool = True,
+) -> str:
+    """The network as an SVG drawing.
+
+    Coordinates stay in input units (the ``viewBox`` frames the network; ``v`` is negated
+    because SVG's y axis points down), so a drawing program imports the true scale. Each curve
+    is a ``<polyline>`` (``<polygon>`` for a closed loop) with ``id="curve-<i>"``,
+    ``data-start``/``data-end`` node ids and a ``<title>`` tooltip; each node a ``<circle>``
+    with ``id="node-<j>"`` and ``class`` ``junction``, ``end`` or ``other``.
+
+    Parameters
+    ----------
+    net : CurveNetwork
+    projection : {"xy", "xz", "yz", "iso"}
+        How to draw a 3D network (see :func:`project`); 2D networks use ``"xy"``.
+    width : int
+        Width in pixels of the drawing; the height follows the aspect ratio.
+    nodes : bool
+        Draw the nodes.
+
+    Returns
+    -------
+    str
+    """
+    from ..plots.network_png import END_COLOR, JUNCTION_COLOR, OTHER_NODE_COLOR, curve_colors, node_kinds
+
+    if not isinstance(width, (int, np.integer)) or width <= 0:
+        raise InputError(f"SVG width must be a positive integer, got {width!r}")
+    d = net.dimension
+    curves_uv = [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
+    nodes_uv = project(net.nodes, projection) if len(net.nodes) else np.zeros((0, 2))
+    allp = np.vstack([nodes_uv, *curves_uv]) if (len(nodes_uv) or curves_uv) else np.zeros((0, 2))
+    if len(allp) == 0:
+        allp = np.zeros((1, 2))
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    span = hi - lo
+    big = float(span.max()) or 1.0
+    pad = 0.03 * big
+    span = np.maximum(span, 1e-3 * big)
+    vb = (lo[0] - pad, -(lo[1] + span[1]) - pad, span[0] + 2 * pad, span[1] + 2 * pad)
+    height = max(1, int(round(width * vb[3] / vb[2])))
+    sw = 0.004 * big
+    r = 0.008 * big
+
+    def num(v: float) -> str:
+        return f"{v:.9g}"
+
+    def pts(uv) -> str:
+        return " ".join(f"{num(u)},{num(0.0 - v)}" for u, v in uv)
+
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+        f'viewBox="{" ".join(num(v) for v in vb)}" data-projection="{projection}" data-dimension="{d}">',
+        f"<title>curvenet network: {net.n_nodes} nodes, {net.n_curves} curves</title>",
+        f'<g id="curves" fill="none" stroke-width="{num(sw)}" stroke-linecap="round" stroke-linejoin="round">',
+    ]
+    colors = curve_colors(net)
+    for i, (c, uv) in enumerate(zip(net.curves, curves_uv)):
+        tag = "polygon" if c.closed else "polyline"
+        ends = "free loop" if c.start is None else f"nodes {c.start}-{c.end}"
+        data = "" if c.start is None else f' data-start="{int(c.start)}" data-end="{int(c.end)}"'
+        out.append(
+            f'<{tag} id="curve-{i}" class="curve" stroke="{colors[i]}"{data} points="{pts(uv)}">'
+            f"<title>{escape(f'curve {i}: {ends}')}</title></{tag}>"
+        )
+    out.append("</g>")
+    if nodes and len(nodes_uv):
+        kinds = node_kinds(net)
+        fill = {"junction": JUNCTION_COLOR, "end": END_COLOR, "other": OTHER_NODE_COLOR}
+        val = net.valence
+        out.append(f'<g id="nodes" stroke="black" stroke-width="{num(sw / 2)}">')
+        for j, (u, v) in enumerate(nodes_uv):
+            out.append(
+                f'<circle id="node-{j}" class={quoteattr(kinds[j])} cx="{num(u)}" cy="{num(0.0 - v)}" r="{num(r)}" '
+                f'fill="{fill[kinds[j]]}"><title>node {j}, valence {int(val[j])}</title></circle>'
+            )
+        out.append("</g>")
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
