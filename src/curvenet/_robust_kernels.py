@@ -23,6 +23,7 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - com
     done = np.full(n, -1, dtype=np.int64)  # == p when settled
     gd = np.zeros(n, dtype=np.float64)  # tentative geodesic distance from p
     comp = np.full(n, -1, dtype=np.int64)
+    shell = np.full(n, -1, dtype=np.int64)
     reached = np.empty(n, dtype=np.int64)
     heap_k = np.empty(n + 1, dtype=np.float64)
     heap_v = np.empty(n + 1, dtype=np.int64)
@@ -95,11 +96,22 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - com
                         break
                 heap_k[i] = nk
                 heap_v[i] = b
-        # connected groups of shell points (ri <= geodesic distance), linked among themselves
+        # the shell: reached points at least ri away, both along the graph and in space
+        for q in range(nreach):
+            a = reached[q]
+            if gd[a] < ri:
+                continue
+            d2 = 0.0
+            for c in range(d):
+                t = P[a, c] - P[p, c]
+                d2 += t * t
+            if d2 >= ri * ri:
+                shell[a] = p
+        # connected groups of shell points, linked among themselves
         ng = 0
         for q in range(nreach):
             a = reached[q]
-            if gd[a] < ri or comp[a] == p:
+            if shell[a] != p or comp[a] == p:
                 continue
             ng += 1
             comp[a] = p
@@ -110,7 +122,7 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - com
                 x = stack[top]
                 for e in range(indptr[x], indptr[x + 1]):
                     y = indices[e]
-                    if done[y] == p and gd[y] >= ri and comp[y] != p:
+                    if shell[y] == p and comp[y] != p:
                         comp[y] = p
                         stack[top] = y
                         top += 1

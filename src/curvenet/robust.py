@@ -46,12 +46,14 @@ from .validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
+import os
+LIN = float(os.environ.get("RB_LIN", "0.3"))
 _DEFAULTS = {
     "k": 16,
-    "shell_inner": 2.5,
-    "shell_outer": 4.5,
+    "shell_inner": float(os.environ.get("RB_RI", "2.5")),
+    "shell_outer": float(os.environ.get("RB_RO", "5.5")),
     "link": 2.5,
-    "tangent_angle": 45.0,
+    "link_width": float(os.environ.get("RB_W", "1.0")),
     "min_spur": 3.0,
 }
 
@@ -93,7 +95,7 @@ def _tangents(P: np.ndarray, idx: np.ndarray, m: int = 8):
     return t, lin
 
 
-def _linked_edges(P, h, dist, idx, t, lin, link, tangent_angle):
+def _linked_edges(P, h, dist, idx, t, lin, link, width):
     """Directed kNN edges kept by the distance and tangent tests: (src, dst, length)."""
     n, k = idx.shape
     src = np.repeat(np.arange(n), k)
@@ -104,10 +106,11 @@ def _linked_edges(P, h, dist, idx, t, lin, link, tangent_angle):
     src, dst, dd = src[keep], dst[keep], dd[keep]
     vec = P[dst] - P[src]
     nrm = np.maximum(dd, 1e-300)
-    c = np.cos(np.radians(tangent_angle))
-    cs = np.abs(np.einsum("ij,ij->i", vec, t[src])) / nrm
-    cd = np.abs(np.einsum("ij,ij->i", vec, t[dst])) / nrm
-    ok = (cs >= c) | (cd >= c) | (lin[src] < 0.6) | (lin[dst] < 0.6) | (dd == 0)
+    # distance of the far end from the line through each end along its tangent
+    ps = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[src]) ** 2, 0.0))
+    pd = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[dst]) ** 2, 0.0))
+    w = width * hh[keep]
+    ok = (ps <= w) | (pd <= w) | (lin[src] < LIN) | (lin[dst] < LIN) | (dd == 0)
     return src[ok], dst[ok], dd[ok]
 
 
@@ -198,7 +201,7 @@ def reconstruct_robust(
     shell_inner: float | None = None,
     shell_outer: float | None = None,
     link: float | None = None,
-    tangent_angle: float | None = None,
+    link_width: float | None = None,
     min_spur: float | None = None,
     smooth: bool = False,
     smoothing: float | None = None,
@@ -218,8 +221,9 @@ def reconstruct_robust(
         Radii of the junction-test shell in spacings (default 2.5 and 4.5).
     link : float, optional
         Longest link between two points, in spacings (default 2.5).
-    tangent_angle : float, optional
-        Largest angle in degrees between a link and a local tangent (default 45).
+    link_width : float, optional
+        A link is kept when its far end lies within this many spacings of the tangent line
+        through one of its ends (default 1.0).
     min_spur : float, optional
         Spurs (junction to free end) and isolated pieces shorter than this many spacings are
         dropped (default 3).
@@ -240,7 +244,7 @@ def reconstruct_robust(
     P0 = as_points(points)
     prm = dict(_DEFAULTS)
     given = dict(k=k, shell_inner=shell_inner, shell_outer=shell_outer, link=link,
-                 tangent_angle=tangent_angle, min_spur=min_spur)
+                 link_width=link_width, min_spur=min_spur)
     for name, val in given.items():
         if val is not None:
             if not np.isfinite(val) or val <= 0:
@@ -285,7 +289,7 @@ def reconstruct_robust(
 
     # 2. linked graph
     t, lin = _tangents(P, idx)
-    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["tangent_angle"])
+    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"])
     indptr, indices = _k.csr_union(N, src.astype(np.int64), dst.astype(np.int64))
     tm["graph"] = time.perf_counter() - t1
 
@@ -449,6 +453,40 @@ def _assemble(P, h, chains, regions, prm):
         return v
 
     hmed = float(np.median(h))
+    # a short chain leaving a region and coming back to it lies inside the junction: absorb it
+    for i, c in enumerate(chains):
+        if not c.closed and c.ends[0] == c.ends[1] and len(regions[c.ends[0]]):
+            hl = float(np.median(h[c.ids]))
+            if _polylen(P[c.ids]) < 2.0 * prm["shell_outer"] * hl:
+                alive[i] = False
+                regions[c.ends[0]] = np.r_[regions[c.ends[0]], c.ids]
+    # two free ends facing each other across a small gap are one curve broken by noise: join
+    v = valence()
+    tips = []
+    for i, c in enumerate(chains):
+        if alive[i] and not c.closed:
+            for s in (0, 1):
+                r = c.ends[s]
+                if v[r] == 1:
+                    end_pt = c.ids[-1] if s == 1 else c.ids[0]
+                    tips.append((r, np.r_[regions[r], end_pt].astype(np.int64)))
+    if len(tips) >= 2:
+        for a in range(len(tips)):
+            for b in range(a + 1, len(tips)):
+                ra, ia = tips[a]
+                rb, ib = tips[b]
+                if ra == rb:
+                    continue
+                gap = np.min(np.linalg.norm(P[ia][:, None, :] - P[ib][None, :, :], axis=2))
+                if gap <= prm["link"] * 1.2 * hmed:
+                    # merge region rb into ra
+                    regions[ra] = np.r_[regions[ra], regions[rb]]
+                    regions[rb] = np.zeros(0, dtype=np.int64)
+                    for c in chains:
+                        for s in (0, 1):
+                            if c.ends[s] == rb:
+                                c.ends[s] = ra
+                    tips[b] = (ra, ib)
     # prune short spurs and small isolated pieces
     for _ in range(3):
         v = valence()
