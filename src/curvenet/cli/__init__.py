@@ -18,6 +18,9 @@ COMMANDS = (
     "reconstruct",
     "info",
     "formats",
+    "render",
+    "view",
+    "bench",
 )
 
 

@@ -1,0 +1,65 @@
+"""``curvenet bench``: run the benchmark and write its report (Markdown, JSON, figures)."""
+
+from __future__ import annotations
+
+import sys
+
+from . import add_common
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "bench",
+        help="measure the methods on ground-truth networks (docs/benchmarks.md)",
+        description=(
+            "Run methods x synthetic models x sampling conditions (and the CASSIE sketches when the "
+            "dataset is found), score them against the ground truth and write benchmarks.md, "
+            "benchmarks.json and figures (img/) into --out. `curvenet bench --out docs` regenerates "
+            "docs/benchmarks.md."
+        ),
+    )
+    p.add_argument("--quick", action="store_true", help="two small models, small tuning grid (under a minute)")
+    p.add_argument("--methods", nargs="+", metavar="M", help="methods to run (default: all, and paper-tuned)")
+    p.add_argument("--models", nargs="+", metavar="NAME", help="synthetic models (default: all)")
+    p.add_argument("--conditions", nargs="+", metavar="C",
+                   help="sampling conditions: clean, 'noise 0.2h', 'density x3', 'noise 0.3h + density x3'")
+    p.add_argument("--no-cassie", action="store_true", help="skip the CASSIE real-data table")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
+    p.add_argument("--out", default=".", help="output folder (default: the current folder)")
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..bench import run_all, summarize
+
+    quiet = getattr(args, "quiet", False)
+    progress = None if quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    cmd = ["curvenet bench"]
+    if args.quick:
+        cmd.append("--quick")
+    for opt in ("methods", "models", "conditions"):
+        if getattr(args, opt):
+            cmd.append(f"--{opt} " + " ".join(repr(v) if " " in v else v for v in getattr(args, opt)))
+    cmd += ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures + [f"--out {args.out}"]
+    res = run_all(
+        args.out,
+        quick=args.quick,
+        methods=args.methods,
+        models=args.models,
+        conditions=args.conditions,
+        cassie=not args.no_cassie,
+        figures=not args.no_figures,
+        progress=progress if getattr(args, "verbose", False) else None,
+        command=" ".join(cmd),
+    )
+    if not quiet:
+        for s in summarize(res["rows"]):
+            print(
+                f"{s['dataset']:9s} {s['condition']:24s} {s['method']:12s} node F1 {s['node_f1']:.3f}  "
+                f"curve F1 {s['curve_f1']:.3f}  exact {s['exact_topology'] * 100:5.1f}%  "
+                f"offset {s['node_offset_h']:.2f}h  ({s['n']} models, {s['errors']} errors, {s['time']:.1f}s)"
+            )
+        for f in res["files"]:
+            print(f"wrote {f}")
+    return 0

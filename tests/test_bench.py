@@ -1,0 +1,130 @@
+"""The benchmark runner, its report and the `curvenet bench` command (small sizes)."""
+
+import importlib
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from curvenet import bench, synth
+from curvenet.errors import InputError
+from curvenet.metrics import compare
+
+rec = importlib.import_module("curvenet.reconstruct")  # the module (the package exports the function)
+
+
+@pytest.fixture(scope="module")
+def rows():
+    return bench.run_bench(["emst"], ["crossing", "cube"], quick=True)
+
+
+def test_rows_cover_models_and_conditions(rows):
+    assert len(rows) == 2 * len(bench.CONDITIONS)
+    assert {(r["model"], r["condition"]) for r in rows} == {
+        (m, c) for m in ("crossing", "cube") for c in bench.CONDITIONS
+    }
+    for r in rows:
+        for k in ("N_n", "N_c", "N_d", "parameters", "time", "node_f1", "curve_f1", "exact_topology",
+                  "node_offset_h", "true_N_n", "true_N_c"):
+            assert k in r, k
+        assert r["error"] is None and r["parameters"] == {"k": 12}
+
+
+def test_rows_are_the_metrics_of_the_method(rows):
+    r = next(x for x in rows if x["model"] == "cube" and x["condition"] == "noise 0.2h")
+    truth = synth.model("cube")
+    pts, _ = synth.sample(truth, rng=bench._seed("cube", "noise 0.2h"), noise=0.2)
+    assert r["N_d"] == len(pts)
+    net = rec.reconstruct(pts, method="emst")
+    m = compare(net, truth, h=synth.h_of(truth))
+    assert (r["N_n"], r["N_c"]) == (net.n_nodes, net.n_curves)
+    assert r["curve_f1"] == m["curve_f1"] and r["node_f1"] == m["node_f1"]
+    # deterministic: the same run gives the same rows
+    again = bench.run_bench(["emst"], ["cube"], ["noise 0.2h"], quick=True)[0]
+    assert again["curve_f1"] == r["curve_f1"] and again["N_c"] == r["N_c"]
+
+
+def test_markdown_and_json(rows, tmp_path):
+    md = bench.write_markdown(rows, tmp_path / "b.md", command="test")
+    assert (tmp_path / "b.md").read_text() == md
+    assert "| Model | true N_n / N_c | Method | N_n | N_c | N_d | Parameters | Time (s)" in md
+    assert "**crossing**" in md and "**cube**" in md and "Machine:" in md
+    for c in bench.CONDITIONS:
+        assert f"## Synthetic models, {c}" in md
+    bench.write_json(rows, tmp_path / "b.json", extra={"machine": bench.machine()})
+    data = json.loads((tmp_path / "b.json").read_text())
+    assert len(data["rows"]) == len(rows) and data["machine"]["cores"] >= 1
+
+
+def test_summary_means(rows):
+    s = bench.summarize(rows)
+    clean = next(x for x in s if x["condition"] == "clean" and x["method"] == "emst")
+    vals = [r["curve_f1"] for r in rows if r["condition"] == "clean"]
+    assert clean["n"] == 2 and clean["curve_f1"] == pytest.approx(np.mean(vals))
+
+
+def test_bad_names():
+    with pytest.raises(InputError):
+        bench.run_bench(["nope"], ["cube"], quick=True)
+    with pytest.raises(InputError):
+        bench.run_bench(["emst"], ["nope"], quick=True)
+    with pytest.raises(InputError):
+        bench.run_bench(["emst"], ["cube"], ["nope"], quick=True)
+
+
+def test_missing_and_failing_methods(monkeypatch):
+    monkeypatch.setitem(rec.METHODS, "ghost", ("curvenet.no_such_module", "f"))
+    monkeypatch.setitem(rec.METHODS, "broken", ("curvenet.validate", "as_points"))  # returns no network
+    assert "ghost" not in bench.available_methods()
+    rows = bench.run_bench(["ghost", "broken", "emst"], ["cube"], ["clean"], quick=True)
+    assert [r["method"] for r in rows] == ["broken", "emst"]
+    assert rows[0]["error"] and rows[0]["curve_f1"] == 0.0 and rows[1]["error"] is None
+
+
+def test_tune_paper_is_never_worse_than_fixed():
+    pytest.importorskip("curvenet.paper")
+    truth = synth.model("crossing")
+    h = synth.h_of(truth)
+    pts, _ = synth.sample(truth)
+    grid = {"epsilon": (1e-3, 3e-2), "tau_s": (5.0,), "theta": (120.0,)}
+    params, m = bench.tune_paper(pts, truth, h=h, grid=grid)
+    assert set(params) == {"epsilon", "tau_s", "theta"}
+    fixed = compare(rec.reconstruct(pts, method="paper"), truth, h=h)
+    assert m["curve_f1"] >= fixed["curve_f1"]
+    again = compare(rec.reconstruct(pts, method="paper", **params), truth, h=h)
+    assert again["curve_f1"] == m["curve_f1"]
+
+
+def test_cli_quick(tmp_path):
+    pytest.importorskip("curvenet.cli")
+    cmd = [sys.executable, "-m", "curvenet.cli", "bench", "--quick", "--methods", "emst", "--no-cassie",
+           "--no-figures", "--conditions", "clean", "--out", str(tmp_path)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    md = (tmp_path / "benchmarks.md").read_text()
+    assert "curvenet bench --quick" in md and "| emst |" in md.replace("|  |  | emst", "| emst")
+    data = json.loads((tmp_path / "benchmarks.json").read_text())
+    assert {r["model"] for r in data["rows"]} == set(bench.QUICK_MODELS)
+    assert "synthetic clean" in res.stdout.replace("  ", " ").replace("  ", " ")
+
+
+def test_cli_missing_out_folder(tmp_path):
+    pytest.importorskip("curvenet.cli")
+    from curvenet.cli import main
+
+    assert main(["bench", "--quick", "--methods", "emst", "--out", str(tmp_path / "nope"), "-q"]) != 0
+
+
+def test_figures(tmp_path):
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("curvenet.paper")
+    from curvenet.plots import bench_figures
+
+    sweep = bench.eps_sweep("crossing", [1e-3, 1e-2])
+    assert sweep["true_N_n"] == 7 and len(sweep["N_c"]) == 2
+    p = bench_figures.figure7(sweep, tmp_path / "f7.png")
+    q = bench_figures.figure8("fig8", "emst", tmp_path / "f8.png")
+    for f in (p, q):
+        assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
