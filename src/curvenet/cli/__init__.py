@@ -18,8 +18,6 @@ COMMANDS = (
     "reconstruct",
     "info",
     "formats",
-    "render",
-    "view",
     "bench",
 )
 
