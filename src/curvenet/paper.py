@@ -122,7 +122,7 @@ DEFAULT_EPSILON = {2: 2e-2, 3: 1e-3}
 #: Default ``tau_s`` in units of the median nearest-neighbour spacing ``h``. The starting points
 #: must lie beyond the candidates removed around a node, which reach about ``k / 2`` spacings
 #: along each curve (more at acute junctions), so ``tau_s`` must exceed that.
-DEFAULT_TAU_FACTOR = 1.0  # times k * h, see _default_tau_s
+DEFAULT_TAU_FACTOR = 1.5  # times k * h, see _default_tau_s
 
 _CHUNK = 65536
 
@@ -187,20 +187,42 @@ def _group_candidates(points: np.ndarray, cand: np.ndarray, tau_s: float) -> lis
     return groups
 
 
-def _select_node(gp: np.ndarray) -> int:
-    """Position in ``gp`` ((n, d) group points, sorted by coordinates) of the group's node.
+def _select_nodes(points: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
+    """The node of each group (an index into ``points``), Algorithm 1 lines 12-16.
 
-    The farthest candidate from the centroid is removed until four remain (ties: first in
-    coordinate order); the candidate nearest the last centroid is the node.
+    In each group (members ascending by index, i.e. by coordinates) the candidate farthest from
+    the centroid of the remaining ones is removed (ties: the first) until four remain; the
+    candidate nearest the last centroid (ties: the first) is the node. Groups are processed
+    together, padded to a power-of-two size.
     """
-    alive = np.arange(len(gp))
-    while len(alive) > 4:
-        c = gp[alive].mean(axis=0)
-        d = ((gp[alive] - c) ** 2).sum(axis=1)
-        alive = np.delete(alive, int(np.argmax(d)))
-    c = gp[alive].mean(axis=0)
-    d = ((gp[alive] - c) ** 2).sum(axis=1)
-    return int(alive[int(np.argmin(d))])
+    out = np.empty(len(groups), dtype=np.int64)
+    if not groups:
+        return out
+    sizes = np.array([len(g) for g in groups])
+    pad = 1 << np.ceil(np.log2(np.maximum(sizes, 1))).astype(int)
+    for m in np.unique(pad):
+        sel = np.flatnonzero(pad == m)
+        G, d = len(sel), points.shape[1]
+        X = np.zeros((G, m, d))
+        alive = np.zeros((G, m), dtype=bool)
+        for r, gi in enumerate(sel):
+            X[r, : sizes[gi]] = points[groups[gi]]
+            alive[r, : sizes[gi]] = True
+        cnt = sizes[sel].astype(float)
+        rows = np.arange(G)
+        while True:
+            c = (X * alive[:, :, None]).sum(axis=1) / cnt[:, None]
+            dd = ((X - c[:, None, :]) ** 2).sum(axis=2)
+            act = cnt > 4
+            if not act.any():
+                break
+            j = np.argmax(np.where(alive, dd, -np.inf), axis=1)
+            alive[rows[act], j[act]] = False
+            cnt[act] -= 1
+        j = np.argmin(np.where(alive, dd, np.inf), axis=1)
+        for r, gi in enumerate(sel):
+            out[gi] = groups[gi][j[r]]
+    return out
 
 
 def detect_nodes(points: np.ndarray, *, k: int = DEFAULT_K, epsilon: float, tau_s: float,
@@ -231,65 +253,87 @@ def detect_nodes(points: np.ndarray, *, k: int = DEFAULT_K, epsilon: float, tau_
     delta = point_variation(points, k, neighbors=neighbors)
     cand = np.flatnonzero(delta > epsilon)
     groups = _group_candidates(points, cand, tau_s)
-    nodes = np.array([g[_select_node(points[g])] for g in groups], dtype=np.int64)
-    nodes.sort()
+    nodes = np.sort(_select_nodes(points, groups))
     return {"delta": delta, "candidates": cand, "groups": groups, "nodes": nodes}
 
 
 # ---------------------------------------------------------------------------------------------
 # Algorithm 2
 # ---------------------------------------------------------------------------------------------
-def _radius_lists(p: np.ndarray, tau_s: float, k0: int = 16):
-    """CSR lists of the neighbours at distance ``< tau_s`` of every point, sorted by (dist, index).
+class _Lists:
+    """Neighbour lists of the available points, at distance ``< tau_s``, sorted by (distance, index).
 
-    Returns ``(indptr (n+1,), indices (nnz,))``. Uses k-nearest queries, growing ``k`` only for
-    the rows whose list is full.
+    Every row starts as a prefix of at most ``K`` nearest neighbours (``base``, padded with -1;
+    ``complete`` tells whether the prefix is the whole list). Rows found too short while tracing
+    are replaced by their full list (``ov_ptr``/``ov_idx``, row ``ov_row[i]``), so tracing sees
+    exactly the full lists while storing only ``K`` neighbours for most points.
     """
-    n = len(p)
-    if n < 2:
-        return np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    tree = build_tree(p)
-    ub = float(np.nextafter(tau_s, np.inf))
-    rows_all, dist_all, idx_all = [], [], []
-    todo = np.arange(n)
-    k = min(k0, n)
-    while len(todo):
-        kq = min(k + 1, n)
-        dist, idx = tree.query(p[todo], k=kq, distance_upper_bound=ub)
-        dist = dist.reshape(len(todo), kq)
-        idx = idx.reshape(len(todo), kq)
-        full = np.isfinite(dist[:, -1]) & (kq < n)
-        done = ~full
-        r = np.repeat(todo[done], kq)
-        d = dist[done].ravel()
-        j = idx[done].ravel()
-        keep = (d < tau_s) & (j != r) & (j < n)
-        rows_all.append(r[keep])
-        dist_all.append(d[keep])
-        idx_all.append(j[keep].astype(np.int64))
-        todo = todo[full]
-        k *= 2
-    rows = np.concatenate(rows_all)
-    dist = np.concatenate(dist_all)
-    idx = np.concatenate(idx_all)
-    order = np.lexsort((idx, dist, rows))
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
-    return indptr, idx[order]
+
+    def __init__(self, p: np.ndarray, tau_s: float, K: int = 8):
+        self.p = p
+        self.tau = tau_s
+        n = len(p)
+        self.tree = build_tree(p)
+        self.ub = float(np.nextafter(tau_s, np.inf))
+        kq = int(min(K + 1, n))
+        dist, idx = self.tree.query(p, k=kq, distance_upper_bound=self.ub)
+        dist = dist.reshape(n, kq)
+        idx = idx.reshape(n, kq).astype(np.int64)
+        # a row is complete when the query returned fewer than kq points within the bound
+        complete = ~np.isfinite(dist[:, -1]) | (kq >= n)
+        bad = (idx == np.arange(n)[:, None]) | ~(dist < tau_s)
+        dist = np.where(bad, np.inf, dist)
+        # ties at the end of an incomplete row may have left out an equal point: trim them
+        last = np.where(complete, np.inf, dist[:, -1])
+        dist = np.where(~complete[:, None] & (dist >= last[:, None]), np.inf, dist)
+        # order by (distance, index); the tree only guarantees the distance order
+        order = np.lexsort((idx, dist), axis=-1)
+        dist = np.take_along_axis(dist, order, axis=1)
+        idx = np.take_along_axis(idx, order, axis=1)
+        idx[~np.isfinite(dist)] = -1
+        self.base = np.ascontiguousarray(idx)
+        self.complete = complete
+        self.ov_row = np.full(n, -1, dtype=np.int64)
+        self._ov_lists: list[np.ndarray] = []
+        self.ov_ptr = np.zeros(1, dtype=np.int64)
+        self.ov_idx = np.zeros(0, dtype=np.int64)
+
+    def complete_rows(self, rows) -> None:
+        """Replace the given rows by their full lists (no-op for rows already full)."""
+        rows = np.asarray(rows, dtype=np.int64)
+        rows = rows[(self.ov_row[rows] < 0) & ~self.complete[rows]]
+        if len(rows) == 0:
+            return
+        balls = self.tree.query_ball_point(self.p[rows], r=self.ub)
+        for r, ball in zip(rows, balls):
+            j = np.asarray(ball, dtype=np.int64)
+            d = np.sqrt(((self.p[j] - self.p[r]) ** 2).sum(axis=1))
+            ok = (d < self.tau) & (j != r)
+            j, d = j[ok], d[ok]
+            self.ov_row[r] = len(self._ov_lists)
+            self._ov_lists.append(j[np.lexsort((j, d))])
+        self.ov_ptr = np.zeros(len(self._ov_lists) + 1, dtype=np.int64)
+        np.cumsum([len(x) for x in self._ov_lists], out=self.ov_ptr[1:])
+        self.ov_idx = np.concatenate(self._ov_lists).astype(np.int64)
 
 
-def _trace_kernel(p, indptr, indices, is_node, starts, cos_theta, stamp, stamp0):
+def _trace_kernel(p, base, complete, ov_row, ov_ptr, ov_idx, is_node, starts, cos_theta,
+                  stamp, stamp0, need, bad):
     """Trace all curves from the nodes ``starts`` (Algorithm 2, lines 1-23).
 
-    ``stamp`` (n,) int64 marks points used in the current pass (``stamp[q] == pass id``) so
-    that nothing is reset between passes. Returns flat arrays: per curve its start, end and
-    whether it ended at a dead end, and the concatenated point sequences with offsets.
+    ``stamp`` (n,) marks points used in the current pass (``stamp[q] == pass id``), so nothing
+    is reset between passes. A pass that runs out of neighbours on a row that is not complete
+    sets ``need[row]`` and ``bad[t]`` and goes on speculatively; the caller completes those rows
+    and runs the pass again. Returns flat arrays: per curve its pass, start, end, whether it
+    ended at a dead end, offsets into the concatenated point sequences, and the sequences.
     """
     n = p.shape[0]
     d = p.shape[1]
+    kb = base.shape[1]
     cap = 4 * n + 16
     seq = np.empty(cap, dtype=np.int64)
     ccap = 64
+    cpass = np.empty(ccap, dtype=np.int64)
     cstart = np.empty(ccap, dtype=np.int64)
     cend = np.empty(ccap, dtype=np.int64)
     cdead = np.empty(ccap, dtype=np.bool_)
@@ -300,8 +344,18 @@ def _trace_kernel(p, indptr, indices, is_node, starts, cos_theta, stamp, stamp0)
     for t in range(starts.shape[0]):
         a = starts[t]
         pid = stamp0 + t
-        for jj in range(indptr[a], indptr[a + 1]):
-            s = indices[jj]
+        ra = ov_row[a]
+        if ra >= 0:
+            na = ov_ptr[ra + 1] - ov_ptr[ra]
+        else:
+            na = kb
+        for jj in range(na):
+            if ra >= 0:
+                s = ov_idx[ov_ptr[ra] + jj]
+            else:
+                s = base[a, jj]
+                if s < 0:
+                    break
             if is_node[s] or stamp[s] == pid:
                 continue
             # a new curve: a, s, ...
@@ -319,11 +373,19 @@ def _trace_kernel(p, indptr, indices, is_node, starts, cos_theta, stamp, stamp0)
             end = -1
             while True:
                 nxt = -1
-                for ii in range(indptr[cur], indptr[cur + 1]):
-                    q = indices[ii]
-                    if stamp[q] == pid and not is_node[q]:
-                        continue
-                    if q == prev:
+                r = ov_row[cur]
+                if r >= 0:
+                    m = ov_ptr[r + 1] - ov_ptr[r]
+                else:
+                    m = kb
+                for ii in range(m):
+                    if r >= 0:
+                        q = ov_idx[ov_ptr[r] + ii]
+                    else:
+                        q = base[cur, ii]
+                        if q < 0:
+                            break
+                    if stamp[q] == pid or q == prev:
                         continue
                     # interior angle at cur between cur->prev and cur->q (criterion 3)
                     dot = 0.0
@@ -341,6 +403,9 @@ def _trace_kernel(p, indptr, indices, is_node, starts, cos_theta, stamp, stamp0)
                     nxt = q
                     break
                 if nxt < 0:
+                    if r < 0 and not complete[cur]:
+                        need[cur] = True
+                        bad[t] = True
                     end = cur  # dead end: free-end node at cur
                     break
                 if ns + 1 >= cap:
@@ -358,6 +423,9 @@ def _trace_kernel(p, indptr, indices, is_node, starts, cos_theta, stamp, stamp0)
                 cur = nxt
             if nc + 1 >= ccap:
                 ccap2 = 2 * ccap
+                x0 = np.empty(ccap2, dtype=np.int64)
+                x0[:nc] = cpass[:nc]
+                cpass = x0
                 x1 = np.empty(ccap2, dtype=np.int64)
                 x1[:nc] = cstart[:nc]
                 cstart = x1
@@ -371,15 +439,17 @@ def _trace_kernel(p, indptr, indices, is_node, starts, cos_theta, stamp, stamp0)
                 x4[: nc + 1] = coff[: nc + 1]
                 coff = x4
                 ccap = ccap2
+            cpass[nc] = t
             cstart[nc] = a
             cend[nc] = end
             cdead[nc] = not is_node[end]
             nc += 1
             coff[nc] = ns
-    return cstart[:nc].copy(), cend[:nc].copy(), cdead[:nc].copy(), coff[: nc + 1].copy(), seq[:ns].copy()
+    return (cpass[:nc].copy(), cstart[:nc].copy(), cend[:nc].copy(), cdead[:nc].copy(),
+            coff[: nc + 1].copy(), seq[:ns].copy())
 
 
-_COMPILED = {}
+_COMPILED: dict[str, Any] = {}
 
 
 def _kernel(use_numba: bool | None):
@@ -401,6 +471,51 @@ def _kernel(use_numba: bool | None):
             require("numba", "the compiled tracing kernel", "fast")
         return _trace_kernel
     return k
+
+
+def _trace(lists: _Lists, is_node: np.ndarray, nodes: np.ndarray, theta: float, use_numba):
+    """Algorithm 2, lines 1-23, from every node, then from the free ends found on the way.
+
+    Returns the raw curves ``(start, end, seq)`` in node order (then in order of their starting
+    point) and the list of free-end nodes.
+    """
+    kern = _kernel(use_numba)
+    n = len(lists.p)
+    cos_t = float(np.cos(np.radians(theta)))
+    stamp = np.full(n, -1, dtype=np.int64)
+    need = np.zeros(n, dtype=np.bool_)
+    pid = 0
+    raw: list[tuple[int, int, np.ndarray]] = []
+    free: list[int] = []
+    todo = np.sort(np.asarray(nodes, dtype=np.int64))
+    while len(todo):
+        lists.complete_rows(todo)  # starting points: everything within tau_s of the node
+        done: dict[int, list[tuple[int, int, np.ndarray, bool]]] = {}
+        pending = todo
+        while len(pending):
+            bad = np.zeros(len(pending), dtype=np.bool_)
+            cp, cs, ce, cd, co, seq = kern(lists.p, lists.base, lists.complete, lists.ov_row,
+                                           lists.ov_ptr, lists.ov_idx, is_node, pending, cos_t,
+                                           stamp, pid, need, bad)
+            pid += len(pending)
+            for c in range(len(cs)):
+                if not bad[cp[c]]:
+                    done.setdefault(int(cs[c]), []).append(
+                        (int(cs[c]), int(ce[c]), seq[co[c]:co[c + 1]], bool(cd[c])))
+            rows = np.flatnonzero(need)
+            need[:] = False
+            lists.complete_rows(rows)
+            pending = pending[bad]
+        new = set()
+        for a in todo:
+            for s, e, sq, dead in done.get(int(a), []):
+                raw.append((s, e, sq))
+                if dead and not is_node[e]:
+                    new.add(e)
+        todo = np.array(sorted(new), dtype=np.int64)
+        is_node[todo] = True
+        free.extend(todo.tolist())
+    return raw, free
 
 
 def _merge_twins(curves: list[tuple[int, int, np.ndarray]]):
@@ -589,29 +704,12 @@ def reconstruct_paper(
     keep[nodes] = True
     sub = np.flatnonzero(keep)  # ascending: still in coordinate order
     ps = np.ascontiguousarray(p[sub])
-    indptr, indices = _radius_lists(ps, tau)
+    lists = _Lists(ps, tau)
     loc = np.full(n, -1, dtype=np.int64)
     loc[sub] = np.arange(len(sub))
     is_node = np.zeros(len(sub), dtype=np.bool_)
     is_node[loc[nodes]] = True
-    stamp = np.full(len(sub), -1, dtype=np.int64)
-    kern = _kernel(use_numba)
-    cos_t = float(np.cos(np.radians(theta)))
-    todo = np.sort(loc[nodes])
-    passes = 0
-    raw: list[tuple[int, int, np.ndarray]] = []
-    free: list[int] = []
-    while len(todo):
-        cs, ce, cd, co, seq = kern(ps, indptr, indices, is_node, todo, cos_t, stamp, passes)
-        passes += len(todo)
-        new = []
-        for c in range(len(cs)):
-            raw.append((int(cs[c]), int(ce[c]), seq[co[c]:co[c + 1]]))
-            if cd[c] and not is_node[ce[c]]:
-                is_node[ce[c]] = True
-                new.append(int(ce[c]))
-        free.extend(new)
-        todo = np.array(sorted(new), dtype=np.int64)
+    raw, free = _trace(lists, is_node, loc[nodes], float(theta), use_numba)
     times["tracing"] = time.perf_counter() - t0
 
     # Algorithm 2, lines 24-28: reverse search
