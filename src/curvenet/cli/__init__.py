@@ -18,6 +18,8 @@ COMMANDS = (
     "reconstruct",
     "info",
     "formats",
+    "render",
+    "view",
     "bench",
 )
 

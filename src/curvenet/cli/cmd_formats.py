@@ -20,4 +20,14 @@ def run(args) -> int:
     print("Writable network files (by extension):")
     for ext, (_, desc) in sorted(WRITERS.items()):
         print(f"  {ext:<9} {desc}")
+    print("Pictures (with the input points):")
+    for ext, desc in PICTURES.items():
+        print(f"  {ext:<9} {desc}")
     return 0
+
+
+#: Picture outputs, which are not network writers (they take the input points too).
+PICTURES = {
+    ".png": "PNG picture: curvenet render, or reconstruct --png (extra viz)",
+    ".html": "interactive viewer, one offline file: curvenet view, or reconstruct --html (extra viz)",
+}

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from . import add_common
+from .cmd_render import add_picture_options
 
 #: CLI option -> method parameter name; only options the user gave are passed on.
 _PARAMS = {
@@ -40,6 +41,11 @@ def register(sub) -> None:
     p.add_argument("--columns", type=lambda s: [c.strip() for c in s.split(",") if c.strip()], default=None,
                    help="coordinate columns of a text/array input, e.g. 0,1,2 or x,y,z")
     p.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN or infinite coordinates")
+    p.add_argument("--png", metavar="FILE.png", default=None,
+                   help="also draw the result (input points faint, curves coloured) as a PNG picture")
+    p.add_argument("--html", metavar="FILE.html", default=None,
+                   help="also write the interactive viewer (one offline HTML file)")
+    add_picture_options(p, points=False)
     add_common(p)
     p.set_defaults(func=run)
 
@@ -52,43 +58,61 @@ def collect_params(args) -> dict:
 
 
 def run(args) -> int:
-    from ..io import check_output_path, read_points, write_network
+    from ..errors import FormatError
+    from ..io import WRITERS, check_output_path, extension, read_points, write_network
     from ..reconstruct import reconstruct
+    from .cmd_render import check_extension, picture_options
+    from .progress import Stages, _fmt, print_summary
 
     outputs = list(args.output)
+    inputs = [args.input]
     for out in outputs:  # fail on a bad output before any work
-        check_output_path(out, inputs=[args.input])
-        from ..io import WRITERS, extension
-        from ..errors import FormatError
-
+        check_output_path(out, inputs=inputs)
         if extension(out) not in WRITERS:
-            raise FormatError(f"{out}: unknown output extension {extension(out)!r}; writable: {', '.join(sorted(WRITERS))}")
-    points = read_points(args.input, columns=args.columns, drop_nonfinite=args.drop_nonfinite)
-    net = reconstruct(points, method=args.method, **collect_params(args))
-    for out in outputs:
-        write_network(net, out, inputs=[args.input])
+            raise FormatError(f"{out}: unknown output extension {extension(out)!r}; writable: {', '.join(sorted(WRITERS))}"
+                              + " (pictures: --png FILE.png, --html FILE.html)")
+    if args.png:
+        check_extension(args.png, ".png", "the --png picture")
+        check_output_path(args.png, inputs=inputs)
+    if args.html:
+        check_extension(args.html, ".html", "the --html viewer")
+        check_output_path(args.html, inputs=inputs)
+    if not (outputs or args.png or args.html) and not args.quiet:
+        print("curvenet: note: no output file given (-o, --png, --html); printing the summary only", file=sys.stderr)
+
+    st = Stages(quiet=args.quiet, verbose=args.verbose)
+    params = collect_params(args)
+    st.info(f"input: {args.input}; method: {args.method}; given parameters: "
+            + (", ".join(f"{k}={v}" for k, v in params.items()) or "none"))
+    with st.stage(f"reading {Path(args.input).name}"):
+        points = read_points(args.input, columns=args.columns, drop_nonfinite=args.drop_nonfinite)
+    st.info(f"  {len(points)} points, dimension {points.shape[1]}")
+    with st.stage(f"reconstructing ({args.method})"):
+        net = reconstruct(points, method=args.method, **params)
+    if st.verbose:
+        st.info("  parameters used: " + ", ".join(f"{k}={_fmt(v)}" for k, v in net.parameters.items()))
+        times = {k: v for k, v in net.stats.get("time", {}).items() if k != "total"}
+        if times:
+            st.info("  method stages: " + ", ".join(f"{k} {v:.3f} s" for k, v in times.items()))
+    written = []
+    n_files = len(outputs) + bool(args.png) + bool(args.html)
+    with st.stage("writing", total=n_files) as bar:
+        for out in outputs:
+            write_network(net, out, inputs=inputs)
+            written.append(out)
+            bar.advance()
+        if args.png:
+            from ..plots.network_png import save_png
+
+            save_png(net, args.png, inputs=inputs, points=points, **picture_options(args))
+            written.append(args.png)
+            bar.advance()
+        if args.html:
+            from ..viewer import save_html
+
+            save_html(net, args.html, inputs=inputs, points=points)
+            written.append(args.html)
+            bar.advance()
     if not args.quiet:
-        print_summary(net, Path(args.input).stem, outputs)
+        print_summary(net, Path(args.input).stem, written)
     return 0
-
-
-def print_summary(net, name: str, outputs=(), file=None) -> None:
-    """Print the result in the form of the paper's Table 1."""
-    file = file or sys.stdout
-    p = net.parameters
-    t = net.stats.get("time", {}).get("total", float("nan"))
-
-    def fmt(v):
-        return "-" if v is None else (f"{v:.3g}" if isinstance(v, float) else str(v))
-
-    head = ["Model", "N_n", "N_c", "N_d", "eps", "tau_S", "theta", "Time(s)"]
-    row = [name, str(net.n_nodes), str(net.n_curves), str(net.stats.get("N_d", "-")),
-           fmt(p.get("epsilon")), fmt(p.get("tau_s")), fmt(p.get("theta")), f"{t:.3f}"]
-    w = [max(len(a), len(b)) for a, b in zip(head, row)]
-    print("  ".join(a.ljust(n) for a, n in zip(head, w)), file=file)
-    print("  ".join(b.ljust(n) for b, n in zip(row, w)), file=file)
-    other = {k: v for k, v in p.items() if k not in ("epsilon", "tau_s", "theta")}
-    if other:
-        print("parameters: " + ", ".join(f"{k}={fmt(v)}" for k, v in other.items()), file=file)
-    for out in outputs:
-        print(f"wrote {out}", file=file)

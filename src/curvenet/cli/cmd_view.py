@@ -1,0 +1,57 @@
+"""``curvenet view NETWORK.json -o OUT.html``: an interactive viewer in one offline HTML file."""
+
+from __future__ import annotations
+
+from . import add_common
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "view",
+        help="write an interactive viewer (one self-contained offline .html file)",
+        description="Write an interactive 3D/2D viewer of a network as one HTML file with its JavaScript "
+                    "embedded (works offline): rotate and zoom, toggle nodes and points, hover for ids.",
+    )
+    p.add_argument("network", help="a curvenet .json network (from curvenet reconstruct)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.html", help="the HTML file to write")
+    p.add_argument("--points", metavar="INPUT", default=None, help="point file to show (usually the input)")
+    p.add_argument("--columns", type=lambda s: [c.strip() for c in s.split(",") if c.strip()], default=None,
+                   help="coordinate columns of the --points file, e.g. 0,1,2 or x,y,z")
+    p.add_argument("--max-points", type=int, default=None,
+                   help="show at most this many input points (default 200000; thinned independently of order)")
+    p.add_argument("--title", default=None, help="page title")
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def viewer_options(args) -> dict:
+    from ..viewer import MAX_VIEWER_POINTS
+
+    opts = {"max_points": MAX_VIEWER_POINTS if args.max_points is None else args.max_points}
+    if getattr(args, "title", None) is not None:
+        opts["title"] = args.title
+    return opts
+
+
+def run(args) -> int:
+    from ..errors import InputError
+    from ..io import check_output_path, read_network, read_points
+    from ..viewer import save_html
+    from .cmd_render import check_extension
+    from .progress import Stages
+
+    check_extension(args.output, ".html", "the viewer")
+    if args.max_points is not None and args.max_points < 0:
+        raise InputError(f"--max-points must be >= 0, got {args.max_points}")
+    inputs = [args.network] + ([args.points] if args.points else [])
+    check_output_path(args.output, inputs=inputs)
+    st = Stages(quiet=args.quiet, verbose=args.verbose)
+    with st.stage("reading"):
+        net = read_network(args.network)
+        pts = read_points(args.points, columns=args.columns) if args.points else None
+    st.info(f"network: {net!r}" + ("" if pts is None else f"; {len(pts)} points"))
+    with st.stage("writing viewer"):
+        save_html(net, args.output, inputs=inputs, points=pts, **viewer_options(args))
+    if not args.quiet:
+        print(f"wrote {args.output}")
+    return 0
