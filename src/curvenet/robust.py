@@ -47,6 +47,8 @@ from .validate import as_points
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
 import os
+SPAN = float(os.environ.get("RB_SPAN", "3.0"))
+NW = float(os.environ.get("RB_NW", "3.0"))
 LIN = float(os.environ.get("RB_LIN", "0.3"))
 _DEFAULTS = {
     "k": 16,
@@ -82,20 +84,47 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return np.maximum(h, floor)
 
 
-def _tangents(P: np.ndarray, idx: np.ndarray, m: int = 8):
-    """Principal direction and linearity of each point's ``m`` nearest neighbours (+ itself)."""
-    nb = np.concatenate([np.arange(len(P))[:, None], idx[:, :m]], axis=1)
-    Q = P[nb]
-    Q = Q - Q.mean(axis=1, keepdims=True)
-    C = np.einsum("nki,nkj->nij", Q, Q)
-    w, v = np.linalg.eigh(C)
-    t = v[:, :, -1]
-    lam1 = np.maximum(w[:, -1], 1e-300)
-    lin = 1.0 - w[:, -2] / lam1
-    return t, lin
+def _pca_dir(Q, w=None):
+    """Principal direction and eigenvalues of point sets Q (n, m, d) with weights w (n, m)."""
+    if w is None:
+        w = np.ones(Q.shape[:2])
+    sw = np.maximum(w.sum(axis=1, keepdims=True), 1e-300)
+    mu = (Q * w[..., None]).sum(axis=1, keepdims=True) / sw[..., None]
+    Z = (Q - mu) * np.sqrt(w)[..., None]
+    C = np.einsum("nki,nkj->nij", Z, Z)
+    ev, v = np.linalg.eigh(C)
+    return v[:, :, -1], ev
 
 
-def _linked_edges(P, h, dist, idx, t, lin, link, width):
+def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
+    """Local tangent and linearity of each point.
+
+    A first direction from the 4 nearest neighbours is refined by a PCA of the ``m`` nearest
+    that lie within one spacing of its line (a strip that leaves out a close parallel curve).
+    The linearity ``1 - l2 / l1`` is that of the plain 8-neighbour PCA.
+    """
+    n = len(P)
+    self_ = np.arange(n)[:, None]
+    Q4 = P[np.concatenate([self_, idx[:, :4]], axis=1)]
+    t, _ = _pca_dir(Q4)
+    m = min(m, idx.shape[1])
+    Qm = P[np.concatenate([self_, idx[:, :m]], axis=1)]
+    rel = Qm - P[:, None, :]
+    for _ in range(2):
+        along = np.einsum("nkd,nd->nk", rel, t)
+        perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
+        w = (perp2 <= h[:, None] ** 2).astype(float)
+        t, _ = _pca_dir(Qm, w)
+    _, ev = _pca_dir(Qm[:, :9])
+    lin = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
+    # RMS distance of the strip neighbours from the tangent line: the noise level
+    along = np.einsum("nkd,nd->nk", rel, t)
+    perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
+    rms = np.sqrt((np.maximum(perp2, 0.0) * w).sum(axis=1) / np.maximum(w.sum(axis=1), 1))
+    return t, lin, rms
+
+
+def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0):
     """Directed kNN edges kept by the distance and tangent tests: (src, dst, length)."""
     n, k = idx.shape
     src = np.repeat(np.arange(n), k)
@@ -109,7 +138,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width):
     # distance of the far end from the line through each end along its tangent
     ps = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[src]) ** 2, 0.0))
     pd = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[dst]) ** 2, 0.0))
-    w = width * hh[keep]
+    w = np.maximum(width * hh[keep], wmin)
     ok = (ps <= w) | (pd <= w) | (lin[src] < LIN) | (lin[dst] < LIN) | (dd == 0)
     return src[ok], dst[ok], dd[ok]
 
@@ -288,8 +317,10 @@ def reconstruct_robust(
         params_out["spacing_estimated"] = False
 
     # 2. linked graph
-    t, lin = _tangents(P, idx)
-    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"])
+    t, lin, rms = _tangents(P, idx, h)
+    noise = float(np.median(rms))
+    params_out["noise"] = noise
+    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise)
     indptr, indices = _k.csr_union(N, src.astype(np.int64), dst.astype(np.int64))
     tm["graph"] = time.perf_counter() - t1
 
@@ -457,7 +488,8 @@ def _assemble(P, h, chains, regions, prm):
     for i, c in enumerate(chains):
         if not c.closed and c.ends[0] == c.ends[1] and len(regions[c.ends[0]]):
             hl = float(np.median(h[c.ids]))
-            if _polylen(P[c.ids]) < 2.0 * prm["shell_outer"] * hl:
+            cen = P[regions[c.ends[0]]].mean(axis=0)
+            if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm["shell_outer"] * hl:
                 alive[i] = False
                 regions[c.ends[0]] = np.r_[regions[c.ends[0]], c.ids]
     # two free ends facing each other across a small gap are one curve broken by noise: join
@@ -659,7 +691,7 @@ def _junction(P, h, live, inc, rid):
     for ci, s in inc:
         c = live[ci]
         ids = c.ids if s == 1 else c.ids[::-1]
-        E = _end_portion(P, h, ids, span=3.0)
+        E = _end_portion(P, h, ids, span=SPAN)
         cc, u = _fit_line(E)
         cs.append(E[0])
         if u is None:
