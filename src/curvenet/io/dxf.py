@@ -31,7 +31,8 @@ def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
     Returns
     -------
     str
-        The DXF text. Curves with fewer than 2 points are left out.
+        The DXF text. Curves with fewer than 2 points are left out; a curve with fewer than 3
+        distinct points stays a polyline when ``smooth`` is on.
     """
     ezdxf = require("ezdxf", "writing DXF files", "io")
     from ..plots.network_png import curve_colors
@@ -48,8 +49,8 @@ def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
         if len(pts) < 2:
             continue
         attribs = {"layer": CURVE_LAYER}
-        if smooth and len(pts) >= 3:
-            fit = pts + [pts[0]] if c.closed else pts
+        fit = _fit_points(pts, c.closed) if smooth else []
+        if len(fit) >= 3:
             e = msp.add_spline(fit_points=fit, dxfattribs=attribs)
             if c.closed:
                 e.closed = True
@@ -61,6 +62,25 @@ def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue()
+
+
+def _fit_points(pts, closed: bool) -> list:
+    """Spline fit points: no (nearly) repeated consecutive points, which break the interpolation;
+    a closed curve ends where it starts."""
+    import numpy as np
+
+    a = np.asarray(pts, dtype=float)
+    tol = 1e-9 * max(float(np.ptp(a, axis=0).max()), 1e-300)
+    fit = [pts[0]]
+    for q in pts[1:]:
+        if np.linalg.norm(np.asarray(q) - np.asarray(fit[-1])) > tol:
+            fit.append(q)
+    if closed and len(fit) > 2:
+        if np.linalg.norm(np.asarray(fit[-1]) - np.asarray(fit[0])) <= tol:
+            fit[-1] = fit[0]
+        else:
+            fit.append(fit[0])
+    return fit
 
 
 def _xyz(p) -> tuple[float, float, float]:
