@@ -47,7 +47,7 @@ from .validate import as_points
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
 import os
-SPAN = float(os.environ.get("RB_SPAN", "3.0"))
+SPAN = float(os.environ.get("RB_SPAN", "6.0"))
 NW = float(os.environ.get("RB_NW", "3.0"))
 LIN = float(os.environ.get("RB_LIN", "0.3"))
 _DEFAULTS = {

@@ -1,0 +1,313 @@
+"""Tests of the robust default method on small hand-made networks (each hard case of issue 8)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curvenet.errors import InputError
+from curvenet.robust import reconstruct_robust
+
+H = 1.0  # sampling spacing of every generator below
+
+
+def _seg(a, b, h=H, ends=True):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    n = max(int(round(np.linalg.norm(b - a) / h)), 1)
+    t = np.linspace(0.0, 1.0, n + 1)
+    if not ends:
+        t = t[1:-1]
+    return a + t[:, None] * (b - a)
+
+
+def _star(k, length=30.0, planar=True, angles=None):
+    """k straight arms from the origin; returns points and the arm end points."""
+    if angles is None:
+        angles = 2 * np.pi * np.arange(k) / k
+    pts = [np.zeros((1, 3))]
+    ends = []
+    rng = np.random.default_rng(k)
+    for i, a in enumerate(angles):
+        if planar:
+            d = np.array([np.cos(a), np.sin(a), 0.0])
+        else:
+            d = rng.normal(size=3)
+            d /= np.linalg.norm(d)
+        # spread the arms of a non-planar star apart (golden-angle sphere points)
+        if not planar:
+            z = 1 - 2 * (i + 0.5) / k
+            r = np.sqrt(1 - z * z)
+            phi = i * np.pi * (3 - np.sqrt(5))
+            d = np.array([r * np.cos(phi), r * np.sin(phi), z])
+        e = length * d
+        ends.append(e)
+        pts.append(_seg(np.zeros(3), e)[1:])
+    return np.vstack(pts), np.array(ends)
+
+
+def _circle(c, r, h=H, normal_z=True):
+    n = int(round(2 * np.pi * r / h))
+    t = 2 * np.pi * np.arange(n) / n
+    c = np.asarray(c, float)
+    return c + r * np.column_stack([np.cos(t), np.sin(t), np.zeros(n)])
+
+
+def _noisy(p, sigma, seed=0):
+    return p + np.random.default_rng(seed).normal(scale=sigma, size=p.shape)
+
+
+def _contracted_valences(net):
+    """Valences of the nodes, ignoring valence-2 nodes (a split curve is not an error)."""
+    v = net.valence
+    return sorted(int(x) for x in v if x != 2)
+
+
+# ---------------------------------------------------------------------------------- junctions
+@pytest.mark.parametrize("k", [3, 4, 5, 6, 8])
+def test_planar_star_valence(k):
+    pts, ends = _star(k)
+    net = reconstruct_robust(pts)
+    assert net.n_curves == k
+    assert _contracted_valences(net) == sorted([1] * k + [k])
+    centre = net.nodes[np.argmax(net.valence)]
+    assert np.linalg.norm(centre) < 0.5 * H
+
+
+@pytest.mark.parametrize("k", [3, 5, 8])
+def test_nonplanar_star_valence(k):
+    pts, _ = _star(k, planar=False)
+    net = reconstruct_robust(pts)
+    assert net.n_curves == k
+    assert _contracted_valences(net) == sorted([1] * k + [k])
+    assert np.linalg.norm(net.nodes[np.argmax(net.valence)]) < 0.5 * H
+
+
+def test_free_end_node_at_the_true_end():
+    pts, ends = _star(3)
+    net = reconstruct_robust(pts)
+    free = net.nodes[net.valence == 1]
+    assert len(free) == 3
+    for e in ends:
+        assert np.min(np.linalg.norm(free - e, axis=1)) < 0.25 * H
+
+
+def test_acute_30_degrees():
+    a = np.radians(15.0)
+    pts, _ = _star(3, angles=[a, -a, np.pi])
+    net = reconstruct_robust(pts)
+    assert net.n_curves == 3
+    assert _contracted_valences(net) == [1, 1, 1, 3]
+    assert np.linalg.norm(net.nodes[np.argmax(net.valence)]) < 1.0 * H
+
+
+def test_crossing_is_a_valence_4_node():
+    pts = np.vstack([_seg([-30, 0, 0], [30, 0, 0]), _seg([0, -30, 0], [0, 30, 0])])
+    pts = np.unique(pts, axis=0)
+    net = reconstruct_robust(pts)
+    assert net.n_curves == 4
+    assert _contracted_valences(net) == [1, 1, 1, 1, 4]
+    assert np.linalg.norm(net.nodes[net.valence == 4][0]) < 0.5 * H
+
+
+# ---------------------------------------------------------------------------------- loops, corners
+def test_closed_loop_has_no_node():
+    net = reconstruct_robust(_circle([0, 0, 0], 15.0))
+    assert net.n_nodes == 0
+    assert net.n_curves == 1
+    c = net.curves[0]
+    assert c.closed and c.start is None and c.end is None
+    assert net.betti == (1, 1)
+
+
+def test_loop_through_one_node():
+    # a circle touching a straight line's end: the line ends on the circle (valence 3)
+    circ = _circle([0, 0, 0], 12.0)
+    line = _seg([12, 0, 0], [40, 0, 0])[1:]
+    net = reconstruct_robust(np.vstack([circ, line]))
+    assert net.n_curves == 2
+    loops = [c for c in net.curves if c.start == c.end and c.start is not None]
+    assert len(loops) == 1
+    assert _contracted_valences(net) == [1, 3]
+
+
+def test_sharp_corner_is_not_a_node():
+    pts = np.vstack([_seg([0, 0, 0], [20, 0, 0]), _seg([20, 0, 0], [20, 20, 0])[1:]])
+    net = reconstruct_robust(pts)
+    assert net.n_curves == 1
+    assert sorted(net.valence.tolist()) == [1, 1]
+    # the polyline follows the corner
+    c = net.curves[0]
+    assert np.min(np.linalg.norm(c.points - [20, 0, 0], axis=1)) < 0.5 * H
+
+
+def test_two_curves_between_the_same_nodes_2_5h_apart():
+    # two straight rails 2.5h apart joined at both ends by short bridges, plus tails
+    top = _seg([0, 1.25, 0], [40, 1.25, 0])
+    bot = _seg([0, -1.25, 0], [40, -1.25, 0])
+    # the rails meet at the nodes (0,0) and (40,0) through 30-degree ramps
+    ramp = lambda x0, s: np.array([[x0 + s * t * np.cos(np.radians(15)), 0, 0] for t in []]).reshape(0, 3)
+    del ramp
+    tail_l = _seg([-6, 0, 0], [-25, 0, 0])
+    tail_r = _seg([46, 0, 0], [65, 0, 0])
+    fan_l = np.vstack([_seg([-6, 0, 0], [0, 1.25, 0])[1:-1], _seg([-6, 0, 0], [0, -1.25, 0])[1:-1]])
+    fan_r = np.vstack([_seg([46, 0, 0], [40, 1.25, 0])[1:-1], _seg([46, 0, 0], [40, -1.25, 0])[1:-1]])
+    pts = np.vstack([top, bot, tail_l, tail_r, fan_l, fan_r])
+    net = reconstruct_robust(pts)
+    ends = net.edges
+    between = [c for c in net.curves if c.start is not None and c.start != c.end
+               and sorted(net.valence[[c.start, c.end]].tolist()) == [3, 3]]
+    assert len(between) == 2
+    assert _contracted_valences(net) == [1, 1, 3, 3]
+    assert len(ends) == 4
+
+
+# ---------------------------------------------------------------------------------- conditions
+def _cube(h=H, size=30.0):
+    c = np.array([[x, y, z] for x in (0, size) for y in (0, size) for z in (0, size)], float)
+    pts = [c]
+    for i in range(8):
+        for j in range(i + 1, 8):
+            if np.count_nonzero(c[i] != c[j]) == 1:
+                pts.append(_seg(c[i], c[j], h, ends=False))
+    return np.vstack(pts), c
+
+
+def _check_cube(net, corners, tol):
+    assert net.n_curves == 12
+    assert sorted(net.valence.tolist()) == [3] * 8
+    for x in corners:
+        assert np.min(np.linalg.norm(net.nodes - x, axis=1)) < tol
+
+
+def test_cube_clean_exact_and_curves_end_at_nodes():
+    pts, corners = _cube()
+    net = reconstruct_robust(pts)
+    _check_cube(net, corners, 0.5 * H)
+    for c in net.curves:
+        assert np.array_equal(c.points[0], net.nodes[c.start])
+        assert np.array_equal(c.points[-1], net.nodes[c.end])
+
+
+def test_cube_with_noise_0_3h():
+    pts, corners = _cube()
+    net = reconstruct_robust(_noisy(pts, 0.3 * H, seed=3))
+    _check_cube(net, corners, 1.5 * H)
+
+
+def test_cube_with_density_ratio_3():
+    # spacing varying smoothly from 0.67h to 2h along x
+    c = np.array([[x, y, z] for x in (0, 30.0) for y in (0, 30.0) for z in (0, 30.0)], float)
+    pts = [c]
+    for i in range(8):
+        for j in range(i + 1, 8):
+            if np.count_nonzero(c[i] != c[j]) == 1:
+                L = np.linalg.norm(c[j] - c[i])
+                s, out = 0.0, []
+                while True:
+                    p = c[i] + (c[j] - c[i]) * s / L
+                    step = 0.67 + 1.33 * (0.5 + 0.5 * np.sin(p[0] / 6.0))
+                    s += step
+                    if s >= L - 0.5 * step:
+                        break
+                    out.append(c[i] + (c[j] - c[i]) * s / L)
+                pts.append(np.array(out))
+    net = reconstruct_robust(np.vstack(pts))
+    _check_cube(net, c, 1.0 * H)
+
+
+def test_2d_input():
+    pts, _ = _star(4)
+    net = reconstruct_robust(pts[:, :2])
+    assert net.dimension == 2
+    assert _contracted_valences(net) == [1, 1, 1, 1, 4]
+    assert net.nodes.shape[1] == 2
+
+
+def test_isolated_outliers_make_no_curves():
+    pts, corners = _cube()
+    rng = np.random.default_rng(5)
+    out = rng.uniform(-10, 40, size=(6, 3))
+    # keep outliers away from the edges so that they are truly isolated
+    far = [o for o in out if np.min(np.linalg.norm(pts - o, axis=1)) > 6 * H]
+    net = reconstruct_robust(np.vstack([pts, far]))
+    _check_cube(net, corners, 0.5 * H)
+
+
+# ---------------------------------------------------------------------------------- invariants
+def test_permutation_invariance():
+    pts, _ = _cube()
+    pts = _noisy(pts, 0.1 * H, seed=1)
+    a = reconstruct_robust(pts)
+    perm = np.random.default_rng(2).permutation(len(pts))
+    b = reconstruct_robust(pts[perm])
+    ca, cb = a.canonical(), b.canonical()
+    assert np.allclose(ca.nodes, cb.nodes)
+    assert len(ca.curves) == len(cb.curves)
+    for x, y in zip(ca.curves, cb.curves):
+        assert (x.start, x.end, x.closed) == (y.start, y.end, y.closed)
+        assert np.allclose(x.points, y.points)
+        # indices refer to the input order of each call
+        ok = x.indices >= 0
+        assert np.array_equal(perm[y.indices[ok]], x.indices[ok])
+
+
+def test_indices_point_at_the_input_points():
+    pts, _ = _star(3)
+    net = reconstruct_robust(pts)
+    for c in net.curves:
+        ok = c.indices >= 0
+        assert np.array_equal(pts[c.indices[ok]], c.points[ok])
+
+
+def test_parameters_reported_and_overridable():
+    pts, _ = _star(3)
+    net = reconstruct_robust(pts)
+    for name in ("spacing", "k", "shell_inner", "shell_outer", "link", "link_width", "min_spur"):
+        assert name in net.parameters
+    assert abs(net.parameters["spacing"] - H) < 0.1
+    net2 = reconstruct_robust(pts, spacing=1.0, shell_inner=3.0, shell_outer=6.0)
+    assert net2.parameters["spacing"] == 1.0 and net2.parameters["shell_outer"] == 6.0
+    assert net2.parameters["spacing_estimated"] is False
+
+
+@pytest.mark.parametrize("bad", [dict(spacing=-1.0), dict(k=2), dict(shell_inner=5.0, shell_outer=4.0),
+                                 dict(link=0.0), dict(smoothing=-1.0)])
+def test_bad_parameters(bad):
+    pts, _ = _star(3)
+    with pytest.raises(InputError):
+        reconstruct_robust(pts, **bad)
+
+
+def test_tiny_inputs():
+    assert reconstruct_robust(np.zeros((1, 3))).n_curves == 0
+    assert reconstruct_robust(np.random.default_rng(0).normal(size=(4, 2))).n_curves == 0
+
+
+# ---------------------------------------------------------------------------------- smoothing
+def test_smooth_output_ends_at_nodes():
+    pts, corners = _cube()
+    net = reconstruct_robust(_noisy(pts, 0.2 * H, seed=4), smooth=True)
+    assert net.parameters["smooth"] is True
+    for c in net.curves:
+        assert len(c.points) > 10
+        assert (c.indices == -1).all()
+        assert np.allclose(c.points[0], net.nodes[c.start])
+        assert np.allclose(c.points[-1], net.nodes[c.end])
+
+
+def test_smooth_loop_stays_on_the_circle():
+    pts = _noisy(_circle([0, 0, 0], 15.0), 0.2 * H, seed=6)
+    net = reconstruct_robust(pts, smooth=True)
+    assert net.n_curves == 1 and net.curves[0].closed
+    r = np.linalg.norm(net.curves[0].points[:, :2], axis=1)
+    assert np.abs(r - 15.0).max() < 0.5 * H
+
+
+def test_registered_as_method():
+    from curvenet.reconstruct import METHODS, reconstruct
+
+    assert "robust" in METHODS
+    pts, _ = _star(3)
+    net = reconstruct(pts, method="robust")
+    assert net.parameters["method"] == "robust"
+    assert "total" in net.stats["time"]
