@@ -296,6 +296,7 @@ def render_png(
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    points = _check_points(net, points)
     if height is None:
         height = _default_height(net, points, width)
     if not (width > 0 and height > 0 and dpi > 0):
