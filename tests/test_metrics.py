@@ -182,3 +182,24 @@ def test_hausdorff_and_densify():
 def test_bad_h(truth):
     with pytest.raises(InputError):
         compare(truth, truth, h=0.0)
+
+
+def test_invariant_under_rigid_motion_and_scaling(truth):
+    # a faulty result (extra spur), moved and scaled together with the truth and h
+    res = net([A, B, C, D, (0.5, 0.0), (0.5, 0.3)], [(0, 4), (4, 1), (4, 5), (1, 2), (1, 3)])
+    base = compare(res, truth, h=H)
+    a = 0.7
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+    def move(n, s):
+        return CurveNetwork(
+            (n.nodes @ R.T) * s + [5.0, -2.0],
+            [Curve((c.points @ R.T) * s + [5.0, -2.0], c.start, c.end, c.closed) for c in n.curves],
+        )
+
+    for s in (1.0, 3.0):
+        m = compare(move(res, s), move(truth, s), h=H * s)
+        for k in ("node_f1", "curve_f1", "coverage", "exact_topology", "betti_found"):
+            assert m[k] == base[k], k
+        # distances are measured on polylines densified to h/4: accurate to about h/8
+        assert m["chamfer_h"] == pytest.approx(base["chamfer_h"], abs=0.125)

@@ -42,12 +42,21 @@ FREE_CREATIONS = (
 
 
 def root() -> Path:
-    """The dataset folder: ``$CURVENET_CASSIE``, else ``<repository>/../shared/datasets/cassie``."""
+    """The dataset folder.
+
+    ``$CURVENET_CASSIE`` when set; else ``../shared/datasets/cassie`` relative to the source
+    checkout this module lives in, then relative to the current folder (a clean clone with
+    ``shared/`` beside it, the package installed non-editable); the first that exists.
+    """
     env = os.environ.get("CURVENET_CASSIE")
     if env:
         return Path(env)
-    repo = Path(__file__).resolve().parents[3]
-    return repo.parent / "shared" / "datasets" / "cassie"
+    rel = Path("..") / "shared" / "datasets" / "cassie"
+    candidates = [Path(__file__).resolve().parents[3] / rel, Path.cwd() / rel]
+    for c in candidates:
+        if (c / "sketch_graph").is_dir():
+            return c.resolve()
+    return candidates[0]
 
 
 def available() -> bool:
