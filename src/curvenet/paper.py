@@ -55,7 +55,9 @@ Our reading of the pseudo-code, line by line:
 * **Step bound and free ends** (not in the paper): a point farther than ``tau_s`` from the
   current point is not admissible. When no admissible point remains, the curve has reached a
   *dead end*: it ends there and its last point becomes a new free-end node (valence 1). Free-end
-  nodes are then traced from like the detected nodes, so that their curves also have twins.
+  nodes are then traced from like the detected nodes, so that their curves also have twins;
+  dead ends met on those traces do not make further nodes (their curves find no twin and are
+  dropped), so traces cannot wander from free end to free end onto curves that touch no node.
   Without the bound, a curve reaching a free end would jump across to any far point and free
   ends could never be nodes. ``tau_s`` is the paper's own neighbourhood scale and must already
   exceed the gap left by the removed candidates around a node (or no starting point exists), so
@@ -476,8 +478,10 @@ def _kernel(use_numba: bool | None):
 def _trace(lists: _Lists, is_node: np.ndarray, nodes: np.ndarray, theta: float, use_numba):
     """Algorithm 2, lines 1-23, from every node, then from the free ends found on the way.
 
-    Returns the raw curves ``(start, end, seq)`` in node order (then in order of their starting
-    point) and the list of free-end nodes.
+    Only dead ends of curves traced from the detected nodes become free-end nodes; a curve
+    traced from a free end that reaches a dead end ends at a point that is no node, has no
+    twin, and is discarded by the reverse search. Returns the raw curves ``(start, end, seq)``
+    in node order (then in order of their starting point) and the list of free-end nodes.
     """
     kern = _kernel(use_numba)
     n = len(lists.p)
@@ -488,6 +492,7 @@ def _trace(lists: _Lists, is_node: np.ndarray, nodes: np.ndarray, theta: float, 
     raw: list[tuple[int, int, np.ndarray]] = []
     free: list[int] = []
     todo = np.sort(np.asarray(nodes, dtype=np.int64))
+    first = True
     while len(todo):
         lists.complete_rows(todo)  # starting points: everything within tau_s of the node
         done: dict[int, list[tuple[int, int, np.ndarray, bool]]] = {}
@@ -510,11 +515,12 @@ def _trace(lists: _Lists, is_node: np.ndarray, nodes: np.ndarray, theta: float, 
         for a in todo:
             for s, e, sq, dead in done.get(int(a), []):
                 raw.append((s, e, sq))
-                if dead and not is_node[e]:
+                if dead and first and not is_node[e]:
                     new.add(e)
         todo = np.array(sorted(new), dtype=np.int64)
         is_node[todo] = True
         free.extend(todo.tolist())
+        first = False
     return raw, free
 
 
