@@ -297,10 +297,14 @@ def test_smooth_output_ends_at_nodes():
 
 def test_smooth_loop_stays_on_the_circle():
     pts = _noisy(_circle([0, 0, 0], 15.0), 0.2 * H, seed=6)
+    raw = reconstruct_robust(pts)
     net = reconstruct_robust(pts, smooth=True)
     assert net.n_curves == 1 and net.curves[0].closed
     r = np.linalg.norm(net.curves[0].points[:, :2], axis=1)
-    assert np.abs(r - 15.0).max() < 0.5 * H
+    r_raw = np.linalg.norm(raw.curves[0].points[:, :2], axis=1)
+    # smoothing reduces the noise, the seam of the loop included
+    assert np.abs(r - 15.0).mean() < np.abs(r_raw - 15.0).mean()
+    assert np.abs(r - 15.0).max() < np.abs(r_raw - 15.0).max()
 
 
 def test_registered_as_method():

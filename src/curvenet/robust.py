@@ -24,7 +24,7 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``):
    chains, fitted on their first ``3 h``. Short spurs (a chain from a junction to a free end shorter
    than ``min_spur * h``) and small isolated clumps are dropped: they are what a few outliers make.
 6. **Smoothing** (``smooth=True``): each curve is replaced by a smoothing spline (scipy
-   ``make_splprep``) pinned at its end nodes and evaluated densely.
+   ``splprep``) pinned at its end nodes and evaluated densely.
 
 The result does not depend on the order of the input points: they are sorted by coordinates
 first and every tie is broken by that order.
@@ -48,7 +48,7 @@ __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
 import os
 SPAN = float(os.environ.get("RB_SPAN", "6.0"))
-NW = float(os.environ.get("RB_NW", "3.0"))
+NW = float(os.environ.get("RB_NW", "4.5"))
 LIN = float(os.environ.get("RB_LIN", "0.3"))
 _DEFAULTS = {
     "k": 16,
@@ -118,8 +118,10 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     _, ev = _pca_dir(Qm[:, :9])
     lin = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
     # RMS distance of the strip neighbours from the tangent line: the noise level
-    along = np.einsum("nkd,nd->nk", rel, t)
-    perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
+    mu = (Qm * w[..., None]).sum(axis=1) / np.maximum(w.sum(axis=1), 1)[:, None]
+    relc = Qm - mu[:, None, :]
+    along = np.einsum("nkd,nd->nk", relc, t)
+    perp2 = np.einsum("nkd,nkd->nk", relc, relc) - along**2
     rms = np.sqrt((np.maximum(perp2, 0.0) * w).sum(axis=1) / np.maximum(w.sum(axis=1), 1))
     return t, lin, rms
 
@@ -259,8 +261,9 @@ def reconstruct_robust(
     smooth : bool
         Replace each curve by a smoothing spline through its end nodes, densely evaluated.
     smoothing : float, optional
-        Smoothing factor per point in squared spacings (default: 0.25, i.e. noise of about
-        h/2); used only with ``smooth=True``.
+        Smoothing factor per point in squared spacings (default: the mean squared distance
+        of a sample from its curve, estimated from the spread around the local tangents);
+        used only with ``smooth=True``.
 
     Returns
     -------
@@ -354,9 +357,14 @@ def reconstruct_robust(
 
     if smooth:
         t1 = time.perf_counter()
-        s = 0.25 if smoothing is None else float(smoothing)
+        hm = float(np.median(h))
+        if smoothing is None:
+            # mean squared distance of a sample from the true curve, from the noise estimate
+            s = max(noise**2 * dim / max(dim - 1, 1), 1e-4 * hm**2) / hm**2
+        else:
+            s = float(smoothing)
         params_out["smoothing"] = s
-        curves = [_smooth_curve(c, nodes, s * float(np.median(h)) ** 2) for c in curves]
+        curves = [_smooth_curve(c, nodes, s * hm**2) for c in curves]
         tm["smooth"] = time.perf_counter() - t1
     params_out["groups_histogram"] = {str(g): int(c) for g, c in zip(*np.unique(groups, return_counts=True))}
     net = CurveNetwork(nodes, curves, params_out, {"time": tm})
@@ -714,35 +722,38 @@ def _junction(P, h, live, inc, rid):
 
 
 def _smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
-    """A smoothing spline of one curve, pinned at its end nodes, evaluated densely."""
-    from scipy.interpolate import make_splprep
+    """A smoothing spline of one curve, pinned at its end nodes, evaluated densely.
+
+    An open curve is fitted with heavy weights on its two end points (the nodes) and its
+    first and last samples are set exactly to them. A closed loop is padded on both sides by
+    a quarter of itself, fitted as an open curve, and the middle turn is kept.
+    """
+    from scipy.interpolate import splev, splprep
 
     X = c.points
-    if len(X) < 4:
-        return c
-    # drop repeated points (splines need distinct parameters)
     keep = np.r_[True, np.linalg.norm(np.diff(X, axis=0), axis=1) > 0]
     X = X[keep]
-    if c.closed:
-        X = np.vstack([X, X[:1]])
     m = len(X)
-    if m < 4:
+    if m < 6:
         return c
-    w = np.ones(m)
+    q = 0
+    if c.closed:
+        q = max(m // 4, 3)
+        X = np.vstack([X[-q:], X, X[:q + 1]])
+    w = np.ones(len(X))
     if not c.closed:
         w[0] = w[-1] = 1e3  # pin the ends at the nodes
     try:
-        spl, u = make_splprep(X.T, w=w, s=s_per_point * m, k=3, per=bool(c.closed))
+        tck, u = splprep(list(X.T), w=w, s=s_per_point * len(X), k=3, quiet=2)
     except Exception:  # pragma: no cover - degenerate input
         return c
-    seg = np.linalg.norm(np.diff(X, axis=0), axis=1)
     n_out = max(int(3 * m), 8)
-    uu = np.linspace(u[0], u[-1], n_out)
-    Y = np.asarray(spl(uu)).T
     if c.closed:
-        Y = Y[:-1]
+        uu = np.linspace(u[q], u[q + m], n_out + 1)[:-1]
     else:
+        uu = np.linspace(u[0], u[-1], n_out)
+    Y = np.asarray(splev(uu, tck)).T
+    if not c.closed:
         Y[0] = c.points[0]
         Y[-1] = c.points[-1]
-    del seg
     return Curve(Y, c.start, c.end, c.closed, np.full(len(Y), -1, dtype=np.int64))
