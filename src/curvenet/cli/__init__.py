@@ -21,6 +21,7 @@ COMMANDS = (
     "render",
     "view",
     "bench",
+    "surface",
 )
 
 

@@ -123,6 +123,7 @@ def surface(
     fold_angle: float = 30.0,
     min_angle: float = 25.0,
     time_limit: float = 60.0,
+    max_triangles: int = 200_000,
 ) -> SurfaceMesh:
     """Surface a curve network: find its patch boundaries and fill each with a triangle mesh.
 
@@ -132,7 +133,9 @@ def surface(
         2D or 3D network (2D is surfaced in the plane ``z = 0``). Curves hanging off the rest
         (trees ending at free ends) are ignored; a loop, with or without a node, bounds a patch.
     target_edge : float, optional
-        Edge length wanted inside the patches; default: the median spacing of the curve points.
+        Edge length wanted inside the patches. Default: the median spacing of the curve points,
+        raised if needed so that the patches hold about ``max_triangles`` triangles at most (the
+        quality triangulation then grades from the boundary spacing to this length).
     fair : bool
         Biharmonic (True) or harmonic (False) placement of the interior vertices.
     fold_angle : float
@@ -142,6 +145,8 @@ def surface(
         Minimum triangle angle asked of the 2D quality triangulation.
     time_limit : float
         Seconds allowed to the integer program choosing the cycles.
+    max_triangles : int
+        Budget used for the default ``target_edge`` (ignored when ``target_edge`` is given).
 
     Returns
     -------
@@ -183,9 +188,14 @@ def surface(
     edges = network.edges
     seg = np.concatenate([np.linalg.norm(np.diff(ch, axis=0), axis=1) for ch in chains] or [np.zeros(0)])
     seg = seg[seg > 0]
-    h = float(target_edge) if target_edge is not None else (float(np.median(seg)) if len(seg) else scale / 10)
-
     cs = find_cycles(chains, edges, nodes, fold_angle=fold_angle, time_limit=time_limit)
+    if target_edge is not None:
+        h = float(target_edge)
+    else:
+        h = float(np.median(seg)) if len(seg) else scale / 10
+        # equilateral triangles of side h cover sqrt(3)/4 h^2 each
+        area = float(sum(cs.costs or []))
+        h = max(h, np.sqrt(area / (np.sqrt(3.0) / 4.0 * max(int(max_triangles), 1))))
     t1 = time.perf_counter()
 
     # ------------------------------------------------------------------ shared boundary vertices

@@ -77,10 +77,12 @@ def prune_dangling(edges: np.ndarray, n_nodes: int) -> np.ndarray:
     keep = np.ones(len(edges), dtype=bool)
     with_node = edges[:, 0] >= 0
     while True:
-        deg = np.zeros(n_nodes, dtype=np.int64)
+        deg = np.zeros(n_nodes + 1, dtype=np.int64)  # slot n_nodes: loops without node
         e = edges[keep & with_node]
         np.add.at(deg, e.ravel(), 1)
-        bad = keep & with_node & ((deg[np.maximum(edges[:, 0], 0)] == 1) | (deg[np.maximum(edges[:, 1], 0)] == 1))
+        e0 = np.where(with_node, edges[:, 0], n_nodes)
+        e1 = np.where(with_node, edges[:, 1], n_nodes)
+        bad = keep & with_node & ((deg[e0] == 1) | (deg[e1] == 1))
         if not bad.any():
             return keep
         keep &= ~bad
@@ -150,7 +152,10 @@ def _node_frames(g: _Graph):
         t = np.array(t)
         if len(t) < 2:
             continue
-        w, vec = np.linalg.eigh(t.T @ t)
+        # normal of the plane through the tips of the unit tangents (for a cone of curves, its
+        # axis; for curves in a tangent plane, the plane's normal)
+        tc = t - t.mean(axis=0) if len(t) >= 3 else t
+        w, vec = np.linalg.eigh(tc.T @ tc)
         normals[v] = vec[:, 0]
     # sign propagation: breadth-first over the graph, from the lowest node (by coordinates)
     order = sorted(normals, key=lambda v: tuple(np.round(g.nodes[v], 9)))

@@ -121,8 +121,12 @@ def is_simple_polygon(q: np.ndarray, *, chunk: int = 512) -> bool:
     return True
 
 
-def _domain(poly: np.ndarray, *, min_stretch: float = 0.2) -> tuple[np.ndarray, str]:
-    """2D layout of a 3D polygon: best-fit-plane projection if simple, else a circle."""
+def _domain(poly: np.ndarray, *, min_stretch: float = 0.2):
+    """2D layout of a 3D polygon: best-fit-plane projection if simple, else a circle.
+
+    Returns the 2D points, the kind (``"plane"`` or ``"circle"``) and, for a plane, its centre
+    and the (3, 3) orthonormal frame whose last row is the normal.
+    """
     c = poly.mean(axis=0)
     _, _, vt = np.linalg.svd(poly - c, full_matrices=False)
     q = (poly - c) @ vt[:2].T
@@ -130,12 +134,12 @@ def _domain(poly: np.ndarray, *, min_stretch: float = 0.2) -> tuple[np.ndarray, 
     e2 = np.linalg.norm(np.diff(np.vstack([q, q[:1]]), axis=0), axis=1)
     ok = (e3 > 0).all() and (e2 >= min_stretch * e3).all() and is_simple_polygon(q)
     if ok:
-        return q, "plane"
+        return q, "plane", (c, vt)
     s = np.concatenate([[0.0], np.cumsum(e3)])
     L = s[-1]
     t = 2 * np.pi * s[:-1] / L
     r = L / (2 * np.pi)
-    return np.column_stack([r * np.cos(t), r * np.sin(t)]), "circle"
+    return np.column_stack([r * np.cos(t), r * np.sin(t)]), "circle", None
 
 
 def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
@@ -160,7 +164,6 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
     if V.shape[1] == 2:
         V = np.column_stack([V, np.zeros(len(V))])
     n = len(V)
-    W = np.zeros(0)
     I, J = [], []
     ws = []
     for a, b, c in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
@@ -206,23 +209,6 @@ def _extend(L, M, xb: np.ndarray, nb: int, biharmonic: bool) -> np.ndarray:
     return np.asarray(x).reshape(-1, xb.shape[1])
 
 
-def _folded(X: np.ndarray, T: np.ndarray, limit: float = -0.2) -> bool:
-    """Whether two triangles sharing an edge have normals more than ~100 degrees apart."""
-    n = np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]])
-    ln = np.linalg.norm(n, axis=1)
-    if (ln <= 0).any():
-        return True
-    n /= ln[:, None]
-    e = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
-    f = np.tile(np.arange(len(T)), 3)
-    key = np.sort(e, axis=1)
-    order = np.lexsort(key.T[::-1])
-    key, f = key[order], f[order]
-    same = (key[1:] == key[:-1]).all(axis=1)
-    a, b = f[:-1][same], f[1:][same]
-    return bool(((n[a] * n[b]).sum(axis=1) < limit).any())
-
-
 def triangulate_patch(
     poly: np.ndarray, *, target_edge: float, fair: bool = True, min_angle: float = 25.0
 ) -> tuple[np.ndarray, np.ndarray, str]:
@@ -236,8 +222,10 @@ def triangulate_patch(
         Target edge length of the interior (Triangle's maximum area is that of an equilateral
         triangle with this side).
     fair : bool
-        Place the interior by a biharmonic extension of the boundary (smoother, fuller patches),
-        falling back to the harmonic one if that folds; ``False``: harmonic extension.
+        When the polygon projects simply on its best-fit plane, the patch is a height field over
+        the domain mesh and the heights are a biharmonic (True: smoother, fuller patches) or
+        harmonic (False) extension of the boundary heights. Otherwise the interior is the
+        harmonic extension of the 3D boundary over a disk.
     min_angle : float
         Minimum angle (degrees) asked of Triangle's quality refinement.
 
@@ -261,7 +249,7 @@ def triangulate_patch(
     n = len(poly)
     if n == 3:
         return np.zeros((0, 3)), np.array([[0, 1, 2]], dtype=np.int64), "plane"
-    q, kind = _domain(poly)
+    q, kind, frame = _domain(poly)
     segs = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
     amax = np.sqrt(3.0) / 4.0 * target_edge**2
     # the domain of a circle has the polygon's arc length, a projection is no larger: same scale
@@ -274,16 +262,21 @@ def triangulate_patch(
     signed = 0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1])
     if signed < 0:
         T = T[:, ::-1]
-    nb = n
     if len(Vd) == n:
         return np.zeros((0, 3)), T, kind
+    if kind == "plane":
+        # a height field over the best-fit plane: the tangential layout is the domain mesh
+        # itself (its quality is kept); only the heights are extended from the boundary
+        c, vt = frame
+        L, M = cotan_laplacian(Vd, T, clip=False)
+        hb = (poly - c) @ vt[2]
+        hi = _extend(L, M, hb[:, None], n, fair)[:, 0]
+        if not np.isfinite(hi).all():
+            L, M = cotan_laplacian(Vd, T)
+            hi = _extend(L, M, hb[:, None], n, False)[:, 0]
+        X = c + Vd[n:] @ vt[:2] + hi[:, None] * vt[2]
+        return X, T, kind
+    # circle domain: harmonic extension of the 3D boundary (clipped weights: maximum principle)
     L, M = cotan_laplacian(Vd, T)
-    X = np.empty((len(Vd), 3))
-    X[:n] = poly
-    X[n:] = _extend(L, M, poly, nb, False)
-    if fair:
-        Xb = X.copy()
-        Xb[n:] = _extend(L, M, poly, nb, True)
-        if not _folded(Xb, T):
-            X = Xb
-    return X[n:], T, kind
+    X = _extend(L, M, poly, n, False)
+    return X, T, kind

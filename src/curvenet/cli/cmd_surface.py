@@ -1,0 +1,64 @@
+"""``curvenet surface NETWORK.json -o MESH.obj|ply``: surface a curve network into a mesh."""
+
+from __future__ import annotations
+
+import time
+
+from . import add_common
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "surface",
+        help="surface a curve network (.json) into a triangle mesh (.obj or .ply)",
+        description="Find the patches bounded by the network's curves, fill each with a faired "
+        "triangle mesh, and write the mesh (format by extension).",
+    )
+    p.add_argument("network", help="a curvenet network (.json)")
+    p.add_argument("-o", "--output", action="append", default=[], metavar="MESH",
+                   help="output mesh (.obj or .ply); repeatable")
+    p.add_argument("--target-edge", type=float, default=None,
+                   help="edge length inside the patches (default: from the curve point spacing)")
+    p.add_argument("--no-fair", action="store_true",
+                   help="harmonic instead of biharmonic placement of the patch interiors")
+    p.add_argument("--png", metavar="FILE.png", default=None, help="also draw the surface as a PNG picture")
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..errors import FormatError
+    from ..io import atomic_write, check_output_path, extension, read_network
+    from ..surface import MESH_WRITERS, surface
+
+    inputs = [args.network]
+    for out in args.output:
+        check_output_path(out, inputs=inputs)
+        if extension(out) not in MESH_WRITERS:
+            raise FormatError(f"{out}: unknown mesh extension {extension(out)!r}; writable: "
+                              + ", ".join(sorted(MESH_WRITERS)))
+    if args.png:
+        if extension(args.png) != ".png":
+            raise FormatError(f"{args.png}: the --png picture must end in .png")
+        check_output_path(args.png, inputs=inputs)
+    net = read_network(args.network)
+    t0 = time.perf_counter()
+    mesh = surface(net, target_edge=args.target_edge, fair=not args.no_fair)
+    dt = time.perf_counter() - t0
+    for out in args.output:
+        atomic_write(out, MESH_WRITERS[extension(out)][0](mesh), inputs=inputs)
+    if args.png:
+        from ..plots.surface_png import render_surface_png
+
+        atomic_write(args.png, render_surface_png(mesh, network=net), inputs=inputs)
+    if not args.quiet:
+        closed = len(mesh.triangles) > 0 and len(mesh.boundary_edges()) == 0
+        print(f"{args.network}: {mesh.n_patches} patches, {len(mesh.vertices)} vertices, "
+              f"{len(mesh.triangles)} triangles, Euler characteristic {mesh.euler_characteristic}"
+              f"{', closed' if closed else ''} ({dt:.2f} s)")
+        if args.verbose:
+            print("  time: " + ", ".join(f"{k} {v:.3f} s" for k, v in mesh.stats["time"].items())
+                  + f"; candidate cycles {mesh.stats['candidates']}; target edge {mesh.stats['target_edge']:.4g}")
+        for out in args.output + ([args.png] if args.png else []):
+            print(f"  wrote {out}")
+    return 0
