@@ -24,7 +24,7 @@ METHODS: dict[str, tuple[str, str]] = {
 }
 
 #: The method used when none is named.
-DEFAULT_METHOD = "paper"
+DEFAULT_METHOD = "robust"
 
 
 def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:

@@ -7,7 +7,8 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``):
    point and its 8 nearest neighbours. Density may vary along the curves.
 2. **Linked graph.** Each point is joined to those of its ``k`` nearest neighbours closer than
    ``link * h``, unless both ends are clearly on a curve (linearity of the local PCA above 0.6) and
-   the link makes more than ``tangent_angle`` degrees with both local tangents. This keeps two
+   its far end lies more than ``link_width * h`` (or 4.5 times the estimated noise) from the
+   tangent line through either end. This keeps two
    close parallel curves, and the two sides of an acute angle, apart.
 3. **Shell test.** Around each point, the points reached through the linked graph without leaving
    the ball of radius ``shell_outer * h`` are collected; those farther than ``shell_inner * h``
