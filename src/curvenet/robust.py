@@ -6,13 +6,13 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``):
    uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h), smoothed by the median over the
    point and its 8 nearest neighbours. Density may vary along the curves.
 2. **Linked graph.** Each point is joined to those of its ``k`` nearest neighbours closer than
-   ``link * h``, unless both ends are clearly on a curve (linearity of the local PCA above 0.6) and
+   ``link * h``, unless both ends are clearly on a curve (linearity of the local PCA above 0.3) and
    its far end lies more than ``link_width * h`` (or 4.5 times the estimated noise) from the
    tangent line through either end. This keeps two
    close parallel curves, and the two sides of an acute angle, apart.
-3. **Shell test.** Around each point, the points reached through the linked graph without leaving
-   the ball of radius ``shell_outer * h`` are collected; those farther than ``shell_inner * h``
-   form the shell, and the number of connected groups of the shell is counted: 1 at a free end,
+3. **Shell test.** Around each point, the points reached through the linked graph within a
+   geodesic distance of ``shell_outer * h`` are collected; those at least ``shell_inner * h``
+   away, both along the graph and in space, form the shell, and the number of connected groups of the shell is counted: 1 at a free end,
    2 on a curve (a sharp corner included), 3 or more near a junction, 0 for an isolated clump.
 4. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
    ``link * h``) into regions; the remaining points fall apart into chains, one per curve
@@ -47,16 +47,18 @@ from .validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
-import os
-SPAN = float(os.environ.get("RB_SPAN", "6.0"))
-NW = float(os.environ.get("RB_NW", "4.5"))
-LIN = float(os.environ.get("RB_LIN", "0.3"))
+#: Length (in spacings) of the chain end fitted for the tangent line at a junction.
+SPAN = 6.0
+#: Links may stray from a tangent line by this many times the estimated noise.
+NW = 4.5
+#: Below this linearity a point has no reliable tangent and its links are kept.
+LIN = 0.3
 _DEFAULTS = {
     "k": 16,
-    "shell_inner": float(os.environ.get("RB_RI", "2.5")),
-    "shell_outer": float(os.environ.get("RB_RO", "5.5")),
+    "shell_inner": 2.5,
+    "shell_outer": 5.5,
     "link": 2.5,
-    "link_width": float(os.environ.get("RB_W", "1.0")),
+    "link_width": 1.0,
     "min_spur": 3.0,
 }
 
@@ -250,7 +252,7 @@ def reconstruct_robust(
     k : int, optional
         Neighbours per point for the linked graph (default 16).
     shell_inner, shell_outer : float, optional
-        Radii of the junction-test shell in spacings (default 2.5 and 4.5).
+        Radii of the junction-test shell in spacings (default 2.5 and 5.5).
     link : float, optional
         Longest link between two points, in spacings (default 2.5).
     link_width : float, optional
