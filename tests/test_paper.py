@@ -217,6 +217,27 @@ def test_numba_and_python_kernels_agree():
         assert same_network(reconstruct_paper(pts, use_numba=True), reconstruct_paper(pts, use_numba=False))
 
 
+# ------------------------------------------------------------------------------ criterion 4
+def test_reverse_search_replaces_the_end_of_a_curve_by_the_start_of_its_twin():
+    from curvenet.paper import _merge_twins
+
+    a, b = 100, 200
+    seq = lambda *v: np.array(v, dtype=np.int64)  # noqa: E731
+    curves = [
+        (a, b, seq(a, 1, 2, 3, 4, 5, 6, 99, b)),  # near its end it strayed onto point 99 (Fig. 5b)
+        (a, b, seq(a, 11, 12, 13, 14, b)),  # a second curve between the same nodes
+        (b, a, seq(b, 14, 13, 12, 11, a)),
+        (b, a, seq(b, 7, 6, 5, 4, 3, 2, 1, a)),  # traced from b: right next to b
+        (a, 300, seq(a, 50, 51, 300)),  # no twin: not found from both directions
+        (a, a, seq(a, 60, 61, 62, a)),  # a loop through one node is its own twin
+    ]
+    merged, unmatched = _merge_twins(curves)
+    assert unmatched == 1
+    got = sorted(tuple(c[2].tolist()) for c in merged)
+    assert got == sorted([(a, 1, 2, 3, 4, 5, 6, 7, b), (a, 11, 12, 13, 14, b), (a, 60, 61, 62, a)])
+    assert all(c[0] == c[2][0] and c[1] == c[2][-1] for c in merged)
+
+
 # ------------------------------------------------------------------------------ Algorithm 1
 @pytest.mark.parametrize("d", [2, 3])
 def test_point_variation_is_equation_2_centred_at_the_point(d):
