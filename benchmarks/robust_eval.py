@@ -74,15 +74,16 @@ def main(argv=None):
 
 
 def run_cassie(method):
-    try:
-        from curvenet.synth import cassie
-    except ImportError:
-        print("no CASSIE loader yet")
+    """The 16 CASSIE free creations sampled at 2 mm (coordinates in metres: h = 0.002)."""
+    from curvenet.synth import cassie
+
+    if not cassie.available():
+        print("CASSIE data not found")
         return
     f1 = []
-    for name in cassie.names():
+    for name in cassie.FREE_CREATIONS:
         truth = cassie.load(name)
-        h = 2.0
+        h = 0.002
         pts, _ = synth.sample(truth, h=h, rng=0)
         t0 = time.perf_counter()
         net = reconstruct(pts, method=method)
