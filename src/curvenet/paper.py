@@ -116,15 +116,21 @@ __all__ = [
 DEFAULT_K = 10
 
 #: Threshold on the point variation, by dimension. δ is scale-free. On clean, uniformly sampled
-#: curves δ is ~1e-16 on straight parts, below ~1e-5 on curved 3D curves sampled at >= 20 points
-#: per radius, and above ~1e-2 next to a non-coplanar junction. In 2D, curvature enters δ
-#: directly, so the threshold is higher. The paper's values (1e-9 .. 1e-4) are for its models.
+#: curves (k = 10) δ is ~1e-16 on straight parts, ~1e-6 on a helix sampled at 20 points per
+#: radius (1e-5 at 10), and above ~1e-2 next to a non-coplanar junction. In 2D, curvature
+#: enters δ directly: a circle at 20 points per radius has δ ~ 0.01 (0.045 at 10), so the 2D
+#: threshold is higher and tight 2D bends below ~15 points per radius become candidates.
+#: The paper's values (1e-9 .. 1e-4) are for its own models.
 DEFAULT_EPSILON = {2: 2e-2, 3: 1e-3}
 
-#: Default ``tau_s`` in units of the median nearest-neighbour spacing ``h``. The starting points
-#: must lie beyond the candidates removed around a node, which reach about ``k / 2`` spacings
-#: along each curve (more at acute junctions), so ``tau_s`` must exceed that.
-DEFAULT_TAU_FACTOR = 1.5  # times k * h, see _default_tau_s
+#: Default ``tau_s`` is ``DEFAULT_TAU_FACTOR * k * h``, ``h`` the median nearest-neighbour
+#: spacing. τ_S plays three parts: it groups candidates (so it must exceed the spacing between
+#: candidates, ~h), it picks the starting points of the curves around a node (so it must exceed
+#: the gap left by the removed candidates, which reach about ``k / 2`` spacings along each
+#: curve at a right-angled junction and up to ``k / (2 sin a)`` at a junction of angle ``a``),
+#: and it bounds a step. ``1.5 k h`` (15 h for k = 10) clears the gap for junction angles down
+#: to about 20 degrees; nodes must then be more than about ``2.5 k h`` apart to stay separate.
+DEFAULT_TAU_FACTOR = 1.5
 
 _CHUNK = 65536
 
