@@ -374,26 +374,39 @@ def find_cycles(
 
 
 def _inward_directions(poly, tris, owner):
-    """Mean unit vector, per curve, from the polygon edges into the spanning triangulation."""
+    """Mean unit vector, per curve, from the polygon edges into the spanning triangulation.
+
+    At each polygon edge ``e`` the inward direction is ``n x e`` with ``n`` the normal of the
+    triangle on that edge, or, where that triangle is a sliver (collinear samples of a straight
+    curve give zero-area triangles of equal cost), the normal of the polygon's vector area.
+    """
     n = len(poly)
     third = {}
     for t in tris:
         for a, b, c in ((t[0], t[1], t[2]), (t[1], t[2], t[0]), (t[2], t[0], t[1])):
             if (b - a) % n == 1:
                 third[a] = c
-            elif (a - b) % n == 1:
-                third[b] = c
+    nxt = np.roll(poly, -1, axis=0)
+    N = 0.5 * np.cross(poly, nxt).sum(axis=0)
+    lN = np.linalg.norm(N)
+    N = N / lN if lN > 0 else None
     acc = {}
     for i in range(n):
-        if i not in third:
-            continue
-        p, q, r = poly[i], poly[(i + 1) % n], poly[third[i]]
+        p, q = poly[i], nxt[i]
         e = q - p
         le = np.linalg.norm(e)
         if le == 0:
             continue
-        e /= le
-        u = (r - p) - ((r - p) @ e) * e
+        nrm = None
+        if i in third:
+            cr = np.cross(e, poly[third[i]] - p)
+            if np.linalg.norm(cr) > 0.1 * le * le:  # height > 0.1 edge length
+                nrm = cr / np.linalg.norm(cr)
+        if nrm is None:
+            nrm = N
+        if nrm is None:
+            continue
+        u = np.cross(nrm, e)
         nu = np.linalg.norm(u)
         if nu == 0:
             continue

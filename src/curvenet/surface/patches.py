@@ -73,7 +73,7 @@ def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
     return float(W[0, n - 1]), np.array(tris, dtype=np.int64)
 
 
-def is_simple_polygon(q: np.ndarray, *, chunk: int = 512) -> bool:
+def is_simple_polygon(q: np.ndarray) -> bool:
     """Whether a closed 2D polygon has no self-intersection (touching counts as one).
 
     Parameters
@@ -82,43 +82,46 @@ def is_simple_polygon(q: np.ndarray, *, chunk: int = 512) -> bool:
 
     Notes
     -----
-    All pairs of non-adjacent edges are tested: :math:`O(n^2)`, in chunks of rows.
+    Only pairs of non-adjacent edges whose midpoints are within the longest edge length can
+    meet; they are found with a k-d tree and tested exactly (orientation signs plus a box test
+    for collinear pairs), about :math:`O(n \\log n)` for evenly sampled polygons.
     """
+    from scipy.spatial import cKDTree
+
     q = np.asarray(q, dtype=float)
     n = len(q)
     if n < 3:
         return False
     a, b = q, np.roll(q, -1, axis=0)
-    scale = np.ptp(q, axis=0).max() or 1.0
-    eps = 1e-12 * scale * scale
-    if (np.linalg.norm(b - a, axis=1) <= 1e-12 * scale).any():
+    scale = float(np.ptp(q, axis=0).max()) or 1.0
+    lengths = np.linalg.norm(b - a, axis=1)
+    if (lengths <= 1e-12 * scale).any():
         return False
+    pairs = cKDTree((a + b) / 2).query_pairs(float(lengths.max()) * (1 + 1e-9), output_type="ndarray")
+    if not len(pairs):
+        return True
+    I, J = pairs.min(axis=1), pairs.max(axis=1)
+    valid = (J != I + 1) & ~((I == 0) & (J == n - 1))
+    I, J = I[valid], J[valid]
+    if not len(I):
+        return True
+    eps = 1e-12 * scale * scale
 
     def orient(p, r, s):
-        return (r[..., 0] - p[..., 0]) * (s[..., 1] - p[..., 1]) - (r[..., 1] - p[..., 1]) * (s[..., 0] - p[..., 0])
+        return (r[:, 0] - p[:, 0]) * (s[:, 1] - p[:, 1]) - (r[:, 1] - p[:, 1]) * (s[:, 0] - p[:, 0])
 
-    idx = np.arange(n)
-    for s0 in range(0, n, chunk):
-        I = idx[s0 : s0 + chunk][:, None]
-        J = idx[None, :]
-        valid = (J > I) & (J != I + 1) & ~((I == 0) & (J == n - 1))
-        if not valid.any():
-            continue
-        A, B = a[I], b[I]
-        C, D = a[J], b[J]
-        d1, d2 = orient(C, D, A), orient(C, D, B)
-        d3, d4 = orient(A, B, C), orient(A, B, D)
-        cross = (d1 * d2 <= eps) & (d3 * d4 <= eps)
-        # collinear, disjoint segments satisfy the sign test; reject them with a box test
-        box = (
-            (np.minimum(A[..., 0], B[..., 0]) <= np.maximum(C[..., 0], D[..., 0]) + 1e-12 * scale)
-            & (np.minimum(C[..., 0], D[..., 0]) <= np.maximum(A[..., 0], B[..., 0]) + 1e-12 * scale)
-            & (np.minimum(A[..., 1], B[..., 1]) <= np.maximum(C[..., 1], D[..., 1]) + 1e-12 * scale)
-            & (np.minimum(C[..., 1], D[..., 1]) <= np.maximum(A[..., 1], B[..., 1]) + 1e-12 * scale)
-        )
-        if (cross & box & valid).any():
-            return False
-    return True
+    A, B, C, D = a[I], b[I], a[J], b[J]
+    d1, d2 = orient(C, D, A), orient(C, D, B)
+    d3, d4 = orient(A, B, C), orient(A, B, D)
+    cross = (d1 * d2 <= eps) & (d3 * d4 <= eps)
+    tol = 1e-12 * scale
+    box = (
+        (np.minimum(A[:, 0], B[:, 0]) <= np.maximum(C[:, 0], D[:, 0]) + tol)
+        & (np.minimum(C[:, 0], D[:, 0]) <= np.maximum(A[:, 0], B[:, 0]) + tol)
+        & (np.minimum(A[:, 1], B[:, 1]) <= np.maximum(C[:, 1], D[:, 1]) + tol)
+        & (np.minimum(C[:, 1], D[:, 1]) <= np.maximum(A[:, 1], B[:, 1]) + tol)
+    )
+    return not bool((cross & box).any())
 
 
 def _domain(poly: np.ndarray, *, min_stretch: float = 0.2):
