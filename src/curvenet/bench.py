@@ -158,7 +158,7 @@ def _run_one(method: str, points, truth, h, params: dict) -> dict[str, Any]:
         net = reconstruct(points, method=name, **params)
     except Exception as exc:  # report, do not stop the benchmark
         row.update(error=f"{type(exc).__name__}: {exc}", time=time.perf_counter() - t0, N_n=0, N_c=0)
-        row.update(compare(synth_empty(truth), truth, h=h))
+        row.update(compare(_empty_like(truth), truth, h=h))
         row["parameters"] = dict(params)
         return row
     row["time"] = float(net.stats.get("time", {}).get("total", time.perf_counter() - t0))
@@ -169,7 +169,7 @@ def _run_one(method: str, points, truth, h, params: dict) -> dict[str, Any]:
     return row
 
 
-def synth_empty(truth):
+def _empty_like(truth):
     """An empty network of the dimension of ``truth`` (what a failed run is scored as)."""
     from .network import CurveNetwork
 
