@@ -541,10 +541,25 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
         "Euclidean minimum spanning tree split at vertices of degree other than 2 (the paper's Figure 8).",
         "- Columns as the paper's Table 1: N_n nodes, N_c curves (as output, before contraction), N_d points, "
         "the parameters used (given or estimated), time in seconds; then the quality columns.",
-        "",
-        "## Summary (means over the synthetic models)",
+        "- Reproduce: `curvenet bench --out docs` (the whole run, a few minutes on 2 cores); "
+        "`curvenet bench --quick --out DIR` is the small version CI runs; `--methods`, `--models`, "
+        "`--conditions` select parts.",
         "",
     ]
+    models = []
+    for r in rows:
+        if r["dataset"] == "synthetic" and r["model"] not in models:
+            models.append(r["model"])
+    if models:
+        L += ["## Synthetic models", "", "| Model | dim | nodes | curves | valences | h | what it tests |",
+              "|---|---|---|---|---|---|---|"]
+        for name in models:
+            t = synth.model(name)
+            vals = ", ".join(str(v) for v in sorted(set(t.valence.tolist()))) or "-"
+            L.append(f"| {name} | {t.dimension}D | {t.n_nodes} | {t.n_curves} | {vals} | {synth.h_of(t):g} | "
+                     f"{t.parameters.get('features', '')} |")
+        L.append("")
+    L += ["## Summary (means over the synthetic models)", ""]
     L += _summary_table(summary, "synthetic")
     if any(s["dataset"] == "cassie" for s in summary):
         L += ["", "## Summary (CASSIE free creations, 2 mm spacing)", ""]
@@ -571,6 +586,13 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
             "distance between two true curves that share no node: below about 3h, curves touch or nearly touch "
             "without a junction in the file, and no method can be expected to get the topology exact there. "
             "`paper-tuned` here uses a 6-point oracle grid (ε in 1e-3, 1e-2, 3e-2; τ_S in 5, 8 h; θ = 120).",
+            "",
+        ]
+        close = sorted({r["model"] for r in cas if r.get("gap_h") is not None and r["gap_h"] < 3})
+        far = sorted({r["model"] for r in cas if r.get("gap_h") is not None and r["gap_h"] >= 3})
+        L += [
+            f"Sketches whose true curves touch or come within 3h of each other without a junction "
+            f"({len(close)}): {', '.join(close) or 'none'}. Sketches without such places: {', '.join(far) or 'none'}.",
             "",
         ]
         L += _table(cas, gap=True)
