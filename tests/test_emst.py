@@ -81,3 +81,29 @@ def test_registered_and_parameters():
 def test_single_point():
     net = reconstruct_emst(np.zeros((1, 3)))
     assert net.n_nodes == 1 and net.n_curves == 0
+
+
+def test_order_invariance_random_points():
+    hyp = pytest.importorskip("hypothesis")
+    st = pytest.importorskip("hypothesis.strategies")
+    from hypothesis.extra.numpy import arrays
+
+    @hyp.settings(max_examples=25, deadline=None)
+    @hyp.given(
+        arrays(np.float64, st.tuples(st.integers(2, 40), st.sampled_from([2, 3])),
+               elements=st.integers(-20, 20).map(lambda v: v / 4.0)),
+        st.randoms(use_true_random=False),
+    )
+    def check(p, rnd):
+        perm = list(range(len(p)))
+        rnd.shuffle(perm)
+        a = reconstruct_emst(p).canonical()
+        b = reconstruct_emst(p[perm]).canonical()
+        assert np.array_equal(a.nodes, b.nodes)
+        assert [c.points.tolist() for c in a.curves] == [c.points.tolist() for c in b.curves]
+        # a spanning forest: every point lies on a curve or is a node
+        n_pts = len(np.unique(p, axis=0))
+        covered = {tuple(x) for c in a.curves for x in c.points} | {tuple(x) for x in a.nodes}
+        assert len(covered) == n_pts
+
+    check()

@@ -43,6 +43,7 @@ __all__ = [
     "write_markdown",
     "write_json",
     "machine",
+    "run_all",
     "main",
 ]
 
