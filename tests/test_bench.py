@@ -128,3 +128,18 @@ def test_figures(tmp_path):
     q = bench_figures.figure8("fig8", "emst", tmp_path / "f8.png")
     for f in (p, q):
         assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_tune_each_condition_and_extra_conditions():
+    pytest.importorskip("curvenet.paper")
+    rows = bench.run_bench(["paper-tuned", "paper"], ["crossing"], ["noise 0.2h", "outliers 2%"], quick=True,
+                           tune_on="each")
+    by = {(r["condition"], r["method"]): r for r in rows}
+    for c in ("noise 0.2h", "outliers 2%"):
+        assert by[c, "paper-tuned"]["tuned_on"] == c
+        # the defaults are among the candidates, so the oracle is never worse than the fixed setting
+        assert by[c, "paper-tuned"]["curve_f1"] >= by[c, "paper"]["curve_f1"]
+    n_clean = bench.run_bench(["emst"], ["crossing"], ["clean"], quick=True)[0]["N_d"]
+    assert by["outliers 2%", "paper"]["N_d"] == n_clean + round(0.02 * n_clean)
+    with pytest.raises(InputError):
+        bench.run_bench(["emst"], ["crossing"], quick=True, tune_on="sometimes")

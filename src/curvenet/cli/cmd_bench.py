@@ -22,7 +22,10 @@ def register(sub) -> None:
     p.add_argument("--methods", nargs="+", metavar="M", help="methods to run (default: all, and paper-tuned)")
     p.add_argument("--models", nargs="+", metavar="NAME", help="synthetic models (default: all)")
     p.add_argument("--conditions", nargs="+", metavar="C",
-                   help="sampling conditions: clean, 'noise 0.2h', 'density x3', 'noise 0.3h + density x3'")
+                   help="sampling conditions: clean, 'noise 0.2h', 'density x3', 'noise 0.3h + density x3' "
+                   "(the default four), 'outliers 2%%', 'noise 0.1h'")
+    p.add_argument("--tune-each", action="store_true",
+                   help="tune paper-tuned on every condition (default: on the clean sampling only)")
     p.add_argument("--no-cassie", action="store_true", help="skip the CASSIE real-data table")
     p.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
     p.add_argument("--out", default=".", help="output folder (default: the current folder)")
@@ -41,7 +44,7 @@ def run(args) -> int:
     for opt in ("methods", "models", "conditions"):
         if getattr(args, opt):
             cmd.append(f"--{opt} " + " ".join(repr(v) if " " in v else v for v in getattr(args, opt)))
-    cmd += ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures + [f"--out {args.out}"]
+    cmd += ["--tune-each"] * args.tune_each + ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures + [f"--out {args.out}"]
     res = run_all(
         args.out,
         quick=args.quick,
@@ -50,6 +53,7 @@ def run(args) -> int:
         conditions=args.conditions,
         cassie=not args.no_cassie,
         figures=not args.no_figures,
+        tune_on="each" if args.tune_each else "clean",
         progress=progress if getattr(args, "verbose", False) else None,
         command=" ".join(cmd),
     )
