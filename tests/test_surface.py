@@ -429,3 +429,17 @@ def test_png_not_blank(meshes):
     coloured = (np.abs(rgb - 1.0).max(axis=2) > 0.05).mean()
     assert 0.2 < coloured < 0.95  # a sphere fills part of the picture
     assert len(np.unique(np.round(rgb.reshape(-1, 3), 2), axis=0)) > 20  # shaded, several patches
+
+
+def test_reconstructed_network_surfaces():
+    """Points -> network -> mesh: a sampled cube wireframe gives a closed surface of 6 patches."""
+    from curvenet import reconstruct
+
+    truth = synth.model("cube")
+    points, _ = synth.sample(truth, rng=1)
+    net = reconstruct(points)
+    mesh = surface(net, target_edge=0.1)
+    assert mesh.n_patches == 6 and mesh.euler_characteristic == 2
+    assert len(mesh.boundary_edges()) == 0
+    assert is_manifold_and_oriented(mesh.triangles) == (True, True)
+    assert signed_volume(mesh) == pytest.approx(1.0, rel=0.05)
