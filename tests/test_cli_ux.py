@@ -1,0 +1,273 @@
+"""How the command line feels: pictures and formats from reconstruct, render and view; the summary
+table; --quiet and --verbose; progress bars only on a terminal; exit codes; the documented
+commands and API example of docs/usage-pictures.md."""
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "usage-pictures.md"
+
+
+def cli(*args, cwd=None, env=None, **kw):
+    e = dict(os.environ)
+    e.pop("CURVENET_PROGRESS", None)
+    e.pop("CURVENET_PROGRESS_DELAY", None)
+    e.update(env or {})
+    return subprocess.run([sys.executable, "-m", "curvenet.cli", *map(str, args)], capture_output=True,
+                          text=True, cwd=cwd, env=e, **kw)
+
+
+def theta_points(n=60):
+    """A 2D theta shape (circle and a diameter): 2 junctions, 3 curves."""
+    t = np.linspace(0, 2 * np.pi, 4 * n, endpoint=False)
+    circle = np.column_stack([np.cos(t), np.sin(t)])
+    x = np.linspace(-1, 1, 2 * n + 2)[1:-1]
+    return np.vstack([circle, np.column_stack([x, np.zeros_like(x)])])
+
+
+@pytest.fixture(scope="module")
+def run_all(tmp_path_factory):
+    """One reconstruct run that writes every format and a PNG (the doc test adds the viewer)."""
+    d = tmp_path_factory.mktemp("ux")
+    np.savetxt(d / "theta.xyz", theta_points())
+    outs = ["n.json", "n.obj", "n.ply", "n.dxf", "n.svg", "n.vtp", "n.graphml"]
+    args = ["reconstruct", "theta.xyz"] + [a for o in outs for a in ("-o", o)] + ["--png", "n.png", "--dpi", "40"]
+    r = cli(*args, cwd=d)
+    return d, r, outs
+
+
+def test_reconstruct_writes_every_format_and_pictures(run_all):
+    d, r, outs = run_all
+    assert r.returncode == 0, r.stderr
+    from curvenet.io import read_network
+
+    net = read_network(d / "n.json")
+    for o in outs + ["n.png"]:
+        assert (d / o).stat().st_size > 0, o
+    assert (d / "n.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "<svg" in (d / "n.svg").read_text() and "PolyData" in (d / "n.vtp").read_text()
+    assert (d / "n.dxf").read_text().count("POLYLINE") >= net.n_curves
+    assert not [p.name for p in d.iterdir() if p.name.startswith(".")]  # no temporary files left
+
+
+def test_summary_table_has_the_columns_of_the_papers_table_1(run_all):
+    d, r, outs = run_all
+    from curvenet.io import read_network
+
+    net = read_network(d / "n.json")
+    lines = r.stdout.splitlines()
+    assert lines[0].split() == ["Model", "N_n", "N_c", "N_d", "eps", "tau_S", "theta", "Time(s)"]
+    row = lines[1].split()
+    assert row[:4] == ["theta", str(net.n_nodes), str(net.n_curves), str(len(theta_points()))]
+    assert float(row[-1]) >= 0
+    assert f"Betti numbers b0={net.betti[0]} b1={net.betti[1]}" in r.stdout
+    for o in outs + ["n.png"]:
+        assert f"wrote {o}" in lines
+    # not a terminal: no progress bar, nothing on standard error
+    assert r.stderr == ""
+
+
+def test_quiet_prints_nothing_and_verbose_prints_stages(tmp_path):
+    np.savetxt(tmp_path / "t.xyz", theta_points(30))
+    r = cli("reconstruct", "t.xyz", "-o", "a.json", "--method", "emst", "-q", cwd=tmp_path)
+    assert r.returncode == 0 and r.stdout == "" and r.stderr == ""
+    assert (tmp_path / "a.json").exists()
+    r = cli("reconstruct", "t.xyz", "-o", "b.json", "-o", "b.dxf", "--smooth", "--verbose", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    params = json.loads((tmp_path / "b.json").read_text())["parameters"]
+    for stage in ("reading t.xyz", "reconstructing (auto)", "writing"):
+        assert re.search(rf"^  {re.escape(stage)}: \d+\.\d{{3}} s$", r.stderr, re.M), (stage, r.stderr)
+    assert "given parameters: smooth=True" in r.stderr
+    assert "parameters used: " in r.stderr and f"method={params['method']}" in r.stderr
+    assert "Model" in r.stdout  # the table still goes to standard output
+    # --smooth: the DXF has splines
+    text = (tmp_path / "b.dxf").read_text()
+    assert params.get("smooth") is True and "SPLINE" in text and "POLYLINE" not in text
+
+
+def test_progress_bar_when_forced_and_on_a_terminal(tmp_path, monkeypatch):
+    np.savetxt(tmp_path / "t.xyz", theta_points(20))
+    run = ["reconstruct", "t.xyz", "-o", "a.json", "--method", "emst"]
+    r = cli(*run, cwd=tmp_path, env={"CURVENET_PROGRESS": "always", "CURVENET_PROGRESS_DELAY": "0"})
+    assert r.returncode == 0, r.stderr
+    assert "reconstructing" in r.stderr and "\x1b[" in r.stderr  # a rich bar, drawn with ANSI codes
+    from curvenet.cli.progress import Stages
+
+    monkeypatch.setenv("CURVENET_PROGRESS", "always")
+    assert Stages()._bars and not Stages(quiet=True)._bars  # --quiet wins
+
+    # a real terminal on standard error: bars after the delay, none for stages quicker than it
+    import pty
+
+    def on_tty(delay):
+        master, slave = pty.openpty()
+        e = dict(os.environ, CURVENET_PROGRESS_DELAY=str(delay))
+        e.pop("CURVENET_PROGRESS", None)
+        p = subprocess.Popen([sys.executable, "-m", "curvenet.cli", *run], cwd=tmp_path,
+                             stdout=subprocess.PIPE, stderr=slave, env=e)
+        os.close(slave)
+        chunks = []
+        while True:
+            try:
+                b = os.read(master, 4096)
+            except OSError:
+                break
+            if not b:
+                break
+            chunks.append(b)
+        p.communicate(timeout=120)
+        os.close(master)
+        return p.returncode, b"".join(chunks).decode("utf-8", "replace")
+
+    code, err = on_tty(0)
+    assert code == 0 and "reconstructing" in err
+    code, err = on_tty(600)
+    assert code == 0 and err == ""
+
+
+def test_render_and_view_commands(run_all, tmp_path):
+    d, r, _ = run_all
+    r = cli("render", d / "n.json", "-o", tmp_path / "a.png", "--points", d / "theta.xyz", "--dpi", "30")
+    assert r.returncode == 0 and r.stdout.strip() == f"wrote {tmp_path / 'a.png'}", r.stderr
+    r = cli("view", d / "n.json", "-o", tmp_path / "v.html", "--points", d / "theta.xyz", "--max-points", "50", "-q")
+    assert r.returncode == 0 and r.stdout == "" and r.stderr == ""
+    html = (tmp_path / "v.html").read_text()
+    assert "Plotly.newPlot" in html and "50 shown" in html
+
+
+def test_render_options_in_process(tmp_path, capsys):
+    from curvenet import Curve, CurveNetwork
+    from curvenet.cli import main
+    from curvenet.io import write_network
+
+    t = np.linspace(0, 1, 20)[:, None]
+    net = CurveNetwork(np.array([[0.0, 0, 0], [1, 1, 1]]), [Curve(t * [1, 1, 1], 0, 1)])
+    write_network(net, tmp_path / "n.json")
+    np.savetxt(tmp_path / "p.xyz", t * [1, 1, 1] + 0.05)
+    runs = {"plain": [], "angles": ["--elev", "70", "--azim", "10"], "points": ["--points", str(tmp_path / "p.xyz")]}
+    out = {}
+    for name, extra in runs.items():
+        assert main(["render", str(tmp_path / "n.json"), "-o", str(tmp_path / f"{name}.png"), "--dpi", "30", "-q", *extra]) == 0
+        out[name] = (tmp_path / f"{name}.png").read_bytes()
+    assert len(set(out.values())) == 3
+    assert capsys.readouterr().out == ""
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["render", "{net}", "-o", "x.jpg"], "must have the extension .png"),
+        (["view", "{net}", "-o", "x.png"], "must have the extension .html"),
+        (["reconstruct", "{pts}", "--png", "x.svg"], "must have the extension .png"),
+        (["reconstruct", "{pts}", "-o", "x.xyz"], "unknown output extension"),
+        (["render", "missing.json", "-o", "x.png"], "missing.json"),
+        (["render", "{pts}", "-o", "x.png"], "not a valid JSON"),
+        (["render", "{net}", "-o", "x.png", "--points", "{pts3}"], "dimension 3 but the network has dimension 2"),
+        (["view", "{net}", "-o", "{net}"], "extension .html"),
+        (["render", "{net}", "-o", "nofolder/x.png"], "does not exist"),
+        (["view", "{net}"], "required"),
+    ],
+)
+def test_bad_usage_and_input_exit_2(run_all, tmp_path, args, message):
+    d, _, _ = run_all
+    np.savetxt(tmp_path / "p3.xyz", np.random.default_rng(0).random((10, 3)))
+    subst = {"{net}": str(d / "n.json"), "{pts}": str(d / "theta.xyz"), "{pts3}": str(tmp_path / "p3.xyz")}
+    r = cli(*[subst.get(a, a) for a in args], cwd=tmp_path)
+    assert r.returncode == 2, (r.stdout, r.stderr)
+    assert message in r.stderr
+    assert "Traceback" not in r.stderr
+    assert not list(tmp_path.glob("x.*"))
+
+
+def test_method_failure_exit_1_and_verbose_traceback(tmp_path, monkeypatch, capsys):
+    import curvenet.cli as c
+
+    rec = sys.modules["curvenet.reconstruct"]
+
+    (tmp_path / "failing_method_mod.py").write_text(
+        "from curvenet.errors import MethodError\n"
+        "def failing(points):\n    raise MethodError('no curve found')\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setitem(rec.METHODS, "failing", ("failing_method_mod", "failing"))
+    np.savetxt(tmp_path / "t.xyz", theta_points(10))
+    args = ["reconstruct", str(tmp_path / "t.xyz"), "-o", str(tmp_path / "o.json"), "--method", "failing"]
+    assert c.main(args) == 1
+    err = capsys.readouterr().err
+    assert err.strip() == "curvenet: error: no curve found"
+    assert c.main(args + ["--verbose"]) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" in err and err.strip().endswith("curvenet: error: no curve found")
+    assert not (tmp_path / "o.json").exists()
+
+
+def test_formats_lists_new_writers_and_pictures():
+    r = cli("formats")
+    assert r.returncode == 0
+    for ext in (".dxf", ".svg", ".vtp", ".graphml", ".png", ".html"):
+        assert re.search(rf"^  {re.escape(ext)} ", r.stdout, re.M), ext
+
+
+def test_help_lists_render_and_view():
+    r = cli("--help")
+    assert "render" in r.stdout and "view" in r.stdout
+    for cmd in ("render", "view"):
+        h = cli(cmd, "--help")
+        assert h.returncode == 0 and "--points" in h.stdout and "--quiet" in h.stdout
+
+
+# ----------------------------------------------------------------------------- the documentation
+def doc_blocks(lang):
+    text = DOC.read_text()
+    return re.findall(rf"```{lang}\n(.*?)```", text, re.S)
+
+
+def test_documented_commands_produce_every_format(tmp_path):
+    """Run the shell commands of docs/usage-pictures.md from a copy of the repository root."""
+    cmds = [ln.strip() for block in doc_blocks("bash") for ln in block.splitlines()
+            if ln.strip().startswith("curvenet ")]
+    assert cmds, "no curvenet commands in the doc"
+    examples = {m for c in cmds for m in re.findall(r"examples/\S+\.xyz", c)}
+    for ex in examples:
+        if not (ROOT / ex).exists():
+            pytest.skip(f"{ex} is not shipped yet")
+        (tmp_path / ex).parent.mkdir(exist_ok=True)
+        (tmp_path / ex).write_bytes((ROOT / ex).read_bytes())
+    (tmp_path / "docs" / "img").mkdir(parents=True)
+    outputs = []
+    for c in cmds:
+        args = c.split()[1:]
+        r = cli(*args, cwd=tmp_path)
+        assert r.returncode == 0, (c, r.stderr)
+        outputs += [args[i + 1] for i, a in enumerate(args) if a in ("-o", "--png", "--html")]
+    exts = {Path(o).suffix for o in outputs}
+    from curvenet.io import WRITERS
+
+    assert set(WRITERS) | {".png", ".html"} <= exts  # every format is documented and produced
+    for o in outputs:
+        assert (tmp_path / o).stat().st_size > 0, o
+    assert "Plotly.newPlot" in (tmp_path / "mug.html").read_text()
+    from curvenet.io import read_network
+
+    net = read_network(tmp_path / "mug.json")
+    assert net.n_curves > 0 and net.n_nodes > 0
+
+
+def test_documented_python_example_runs(tmp_path, monkeypatch):
+    blocks = doc_blocks("python")
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    for code in blocks:
+        exec(compile(code, str(DOC), "exec"), {"__name__": "__doc_example__"})
+    png, dxf = tmp_path / "helix.png", tmp_path / "helix.dxf"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    ezdxf = pytest.importorskip("ezdxf")
+    assert len(ezdxf.readfile(dxf).modelspace().query("POLYLINE SPLINE")) >= 1

@@ -1,0 +1,182 @@
+"""The HTML viewer: a self-contained page, checked in a real headless browser (Debian's chromium
+driven by playwright). The browser tests skip only when chromium is not installed."""
+
+import io
+import os
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+from curvenet import Curve, CurveNetwork
+
+pytest.importorskip("plotly")
+
+from curvenet import viewer  # noqa: E402
+from curvenet.plots.network_png import JUNCTION_COLOR, curve_colors  # noqa: E402
+
+CHROMIUM = "/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else shutil.which("chromium")
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run",
+]
+
+
+def theta_network(d: int = 3) -> CurveNetwork:
+    """Two junctions joined by three arcs, a free end, and a free loop."""
+    t = np.linspace(0, np.pi, 40)
+    curves = []
+    for h in (1.0, 0.0, -1.0):
+        p = np.column_stack([-np.cos(t), h * np.sin(t), 0.4 * h * np.sin(t)])
+        curves.append(Curve(p[:, :d], 0, 1))
+    s = np.linspace(0, 1, 20)[:, None]
+    b, e = np.array([1.0, 0, 0]), np.array([1.8, -0.9, 0.8])
+    curves.append(Curve((b + s * (e - b))[:, :d], 1, 2))
+    v = np.linspace(0, 2 * np.pi, 50, endpoint=False)
+    curves.append(Curve(np.column_stack([3 + 0.6 * np.cos(v), 0.6 * np.sin(v), 0 * v])[:, :d], None, None, closed=True))
+    return CurveNetwork(np.array([[-1.0, 0, 0], b, e])[:, :d], curves)
+
+
+def sample_points(net, seed=0):
+    p = np.vstack([c.points for c in net.curves])
+    return p + np.random.default_rng(seed).normal(scale=0.02, size=p.shape)
+
+
+# ----------------------------------------------------------------------------- without a browser
+def test_page_is_self_contained(tmp_path):
+    net = theta_network(3)
+    html = viewer.network_to_html(net, points=sample_points(net))
+    assert html.lstrip().lower().startswith("<html") or html.lstrip().lower().startswith("<!doctype")
+    # plotly's JavaScript is inline: no external script, stylesheet or font
+    assert not re.search(r"<script[^>]+src=", html, re.I)
+    assert not re.search(r"<link[^>]+href=", html, re.I)
+    assert len(html) > 1_000_000 and "Plotly.newPlot" in html
+
+
+def test_figure_traces_and_hover_texts():
+    net = theta_network(3)
+    fig = viewer.network_figure(net, points=sample_points(net))
+    names = [t.name for t in fig.data]
+    assert names[0].startswith("input points") and fig.data[0].legendgroup == "points"
+    curves = [t for t in fig.data if t.legendgroup == "curves"]
+    assert len(curves) == net.n_curves
+    assert [t.line.color for t in curves] == curve_colors(net)
+    for i, (t, c) in enumerate(zip(curves, net.curves)):
+        assert t.hovertext.startswith(f"curve {i}<br>")
+        assert ("free loop" in t.hovertext) == (c.start is None)
+        n = len(c.points) + (1 if c.closed else 0)
+        np.testing.assert_array_equal(t.x, np.append(c.points[:, 0], c.points[0, 0])[:n])
+    nodes = [t for t in fig.data if t.legendgroup == "nodes"]
+    texts = [s for t in nodes for s in t.hovertext]
+    assert sorted(texts) == sorted(f"node {j}<br>valence {v}" for j, v in enumerate(net.valence))
+    assert fig.layout.scene.aspectmode == "data"
+    assert [b.label for b in fig.layout.updatemenus[0].buttons] == ["all", "curves + nodes", "curves only", "points only"]
+
+
+def test_subsample_points_is_order_independent():
+    rng = np.random.default_rng(3)
+    p = rng.random((1000, 3))
+    a = viewer.subsample_points(p, 100)
+    b = viewer.subsample_points(p[rng.permutation(1000)], 100)
+    assert len(a) == 100
+    np.testing.assert_array_equal(a, b)
+    assert viewer.subsample_points(p, 5000) is p
+    fig = viewer.network_figure(theta_network(3), points=p, max_points=100)
+    assert len(fig.data[0].x) == 100 and "1000" in fig.data[0].name and "100 shown" in fig.data[0].name
+
+
+def test_2d_axes_have_equal_scale():
+    fig = viewer.network_figure(theta_network(2))
+    assert fig.layout.yaxis.scaleanchor == "x" and fig.layout.yaxis.scaleratio == 1
+
+
+# ----------------------------------------------------------------------------- in chromium
+@pytest.fixture(scope="module")
+def browser():
+    if not CHROMIUM:
+        pytest.skip("chromium is not installed (apt-get install chromium)")
+    sync_api = pytest.importorskip("playwright.sync_api")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+def open_page(browser, path):
+    """Load the page; return (page, problems) where problems collects console errors, page
+    errors and every request that is not the local file itself."""
+    page = browser.new_page(viewport={"width": 1000, "height": 760})
+    problems = []
+    page.on("console", lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
+    page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+
+    def request(r):
+        if not r.url.startswith(("file:", "data:", "blob:")):
+            problems.append(f"network request: {r.url}")
+
+    page.on("request", request)
+    page.goto(path.as_uri())
+    page.wait_for_selector("#curvenet-viewer .main-svg", timeout=30_000)
+    page.wait_for_timeout(500)
+    return page, problems
+
+
+def shot(page) -> np.ndarray:
+    from PIL import Image
+
+    png = page.locator("#curvenet-viewer").screenshot()
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+def count_color(img, hexcolor, tol=10) -> int:
+    rgb = np.array([int(hexcolor[i : i + 2], 16) for i in (1, 3, 5)])
+    return int((np.abs(img - rgb).max(axis=-1) <= tol).sum())
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("d", [3, 2])
+def test_viewer_draws_in_chromium(browser, tmp_path, d):
+    net = theta_network(d)
+    path = viewer.save_html(net, tmp_path / f"view{d}.html", points=sample_points(net))
+    page, problems = open_page(browser, path)
+    try:
+        if d == 3:
+            assert page.locator("#curvenet-viewer canvas").count() >= 1  # WebGL scene
+        img = shot(page)
+        assert img.std() > 5  # not blank
+        for c in set(curve_colors(net)):
+            assert count_color(img, c) > 0, f"curve colour {c} not drawn"
+        assert count_color(img, JUNCTION_COLOR) > 0
+
+        # the buttons toggle nodes and points
+        page.get_by_text("curves only", exact=True).click(timeout=5000)
+        page.wait_for_timeout(400)
+        vis = page.evaluate("document.getElementById('curvenet-viewer').data.map(t => [t.legendgroup, t.visible])")
+        assert {g for g, v in vis if v is True} == {"curves"}
+        assert all(v is False for g, v in vis if g != "curves")
+        img2 = shot(page)
+        assert count_color(img2, JUNCTION_COLOR) < count_color(img, JUNCTION_COLOR)
+        page.get_by_text("all", exact=True).click(timeout=5000)
+        page.wait_for_timeout(400)
+        vis = page.evaluate("document.getElementById('curvenet-viewer').data.map(t => t.visible)")
+        assert all(v is True for v in vis)
+
+        # the legend hides the points
+        item = page.locator("g.traces", has=page.locator(".legendtext", has_text="input points"))
+        item.locator(".legendtoggle").click(timeout=5000)
+        # plotly waits for a possible double click before it acts
+        page.wait_for_function("document.getElementById('curvenet-viewer').data[0].visible === 'legendonly'",
+                               timeout=5000)
+        vis = page.evaluate("document.getElementById('curvenet-viewer').data.map(t => t.visible)")
+        assert vis[0] == "legendonly" and all(v is True for v in vis[1:])
+
+        if d == 2:  # hovering a node shows its id and valence
+            k = page.evaluate("document.getElementById('curvenet-viewer').data.findIndex(t => t.name.startsWith('junctions'))")
+            page.evaluate(f"Plotly.Fx.hover('curvenet-viewer', [{{curveNumber: {k}, pointNumber: 0}}])")
+            page.wait_for_timeout(200)
+            text = page.locator(".hoverlayer").text_content()
+            assert "node 0" in text and f"valence {net.valence[0]}" in text
+        assert problems == []
+    finally:
+        page.close()
