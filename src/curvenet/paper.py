@@ -167,7 +167,7 @@ def point_variation(points: np.ndarray, k: int = DEFAULT_K, *, neighbors: np.nda
     for s in range(0, n, _CHUNK):
         e = min(n, s + _CHUNK)
         diff = p[neighbors[s:e]] - p[s:e, None, :]  # (m, k, d)
-        cov = np.einsum("mki,mkj->mij", diff, diff) / kk  # eq. (1)
+        cov = np.matmul(diff.transpose(0, 2, 1), diff) / kk  # eq. (1)
         lam = np.linalg.eigvalsh(cov)  # ascending
         lam = np.clip(lam, 0.0, None)
         tot = lam.sum(axis=1)
@@ -284,20 +284,28 @@ class _Lists:
         self.tree = build_tree(p)
         self.ub = float(np.nextafter(tau_s, np.inf))
         kq = int(min(K + 1, n))
-        dist, idx = self.tree.query(p, k=kq, distance_upper_bound=self.ub)
+        dist, idx = self.tree.query(p, k=kq, distance_upper_bound=self.ub, workers=-1)
         dist = dist.reshape(n, kq)
         idx = idx.reshape(n, kq).astype(np.int64)
         # a row is complete when the query returned fewer than kq points within the bound
         complete = ~np.isfinite(dist[:, -1]) | (kq >= n)
-        bad = (idx == np.arange(n)[:, None]) | ~(dist < tau_s)
+        last = np.where(complete, np.inf, dist[:, -1])
+        is_self = idx == np.arange(n)[:, None]
+        if is_self[:, 0].all():  # no duplicate points: the point itself comes first
+            dist, idx, is_self = dist[:, 1:], idx[:, 1:], is_self[:, 1:]
+        bad = is_self | ~(dist < tau_s)
         dist = np.where(bad, np.inf, dist)
         # ties at the end of an incomplete row may have left out an equal point: trim them
-        last = np.where(complete, np.inf, dist[:, -1])
         dist = np.where(~complete[:, None] & (dist >= last[:, None]), np.inf, dist)
-        # order by (distance, index); the tree only guarantees the distance order
-        order = np.lexsort((idx, dist), axis=-1)
-        dist = np.take_along_axis(dist, order, axis=1)
-        idx = np.take_along_axis(idx, order, axis=1)
+        # order by (distance, index): the tree orders by distance only, so re-sort the rows
+        # that hold equal distances (the removed entries, now inf, also need moving to the end)
+        fin = np.isfinite(dist)
+        fix = ((dist[:, 1:] == dist[:, :-1]) & fin[:, 1:]).any(axis=1) | (fin[:, 1:] & ~fin[:, :-1]).any(axis=1)
+        if fix.any():
+            dr, ir = dist[fix], idx[fix]
+            order = np.lexsort((ir, dr), axis=-1)
+            dist[fix] = np.take_along_axis(dr, order, axis=1)
+            idx[fix] = np.take_along_axis(ir, order, axis=1)
         idx[~np.isfinite(dist)] = -1
         self.base = np.ascontiguousarray(idx)
         self.complete = complete
@@ -569,21 +577,19 @@ def _merge_twins(curves: list[tuple[int, int, np.ndarray]]):
 
 
 def _splice(f: tuple[int, int, np.ndarray], t: tuple[int, int, np.ndarray]):
-    """Merge curve ``f`` (a -> b) with its twin ``t`` (b -> a): ``f`` next to ``a``, ``t`` next to ``b``."""
+    """Merge curve ``f`` (a -> b) with its twin ``t`` (b -> a): ``f`` next to ``a``, ``t`` next to ``b``.
+
+    The splice point is the shared inner point minimising the larger of its relative positions
+    in ``f`` (from ``a``) and in ``t`` (from ``b``); ties go to the smallest point index.
+    """
     a, b, fs = f
     ts = t[2]
     m, n = len(fs) - 1, len(ts) - 1
-    pos_t = {int(v): i for i, v in enumerate(ts[1:-1], start=1)}
-    best = None
-    for i, v in enumerate(fs[1:-1], start=1):
-        j = pos_t.get(int(v))
-        if j is None:
-            continue
-        key = (max(i / m, j / n), int(v))
-        if best is None or key < best[0]:
-            best = (key, i, j)
-    _, i, j = best
-    seq = np.concatenate([fs[:i], ts[j::-1]])
+    v, i, j = np.intersect1d(fs[1:-1], ts[1:-1], assume_unique=True, return_indices=True)
+    i += 1
+    j += 1
+    best = np.lexsort((v, np.maximum(i / m, j / n)))[0]
+    seq = np.concatenate([fs[: i[best]], ts[j[best]::-1]])
     return (a, b, seq)
 
 
