@@ -35,11 +35,12 @@ def theta_points(n=60):
 
 @pytest.fixture(scope="module")
 def run_all(tmp_path_factory):
-    """One reconstruct run that writes every format and a PNG (the doc test adds the viewer)."""
+    """One reconstruct run (default method, --smooth) that writes every format and a PNG (the doc
+    test adds the viewer)."""
     d = tmp_path_factory.mktemp("ux")
     np.savetxt(d / "theta.xyz", theta_points())
     outs = ["n.json", "n.obj", "n.ply", "n.dxf", "n.svg", "n.vtp", "n.graphml"]
-    args = ["reconstruct", "theta.xyz"] + [a for o in outs for a in ("-o", o)] + ["--png", "n.png", "--dpi", "40"]
+    args = ["reconstruct", "theta.xyz"] + [a for o in outs for a in ("-o", o)] + ["--png", "n.png", "--dpi", "40", "--smooth"]
     r = cli(*args, cwd=d)
     return d, r, outs
 
@@ -54,7 +55,10 @@ def test_reconstruct_writes_every_format_and_pictures(run_all):
         assert (d / o).stat().st_size > 0, o
     assert (d / "n.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "<svg" in (d / "n.svg").read_text() and "PolyData" in (d / "n.vtp").read_text()
-    assert (d / "n.dxf").read_text().count("POLYLINE") >= net.n_curves
+    # --smooth made smooth curves: the DXF has splines through them
+    assert net.parameters.get("smooth") is True
+    dxf = (d / "n.dxf").read_text()
+    assert dxf.count("\nSPLINE\n") == net.n_curves and "\nPOLYLINE\n" not in dxf
     assert not [p.name for p in d.iterdir() if p.name.startswith(".")]  # no temporary files left
 
 
@@ -80,67 +84,64 @@ def test_quiet_prints_nothing_and_verbose_prints_stages(tmp_path):
     r = cli("reconstruct", "t.xyz", "-o", "a.json", "--method", "emst", "-q", cwd=tmp_path)
     assert r.returncode == 0 and r.stdout == "" and r.stderr == ""
     assert (tmp_path / "a.json").exists()
-    r = cli("reconstruct", "t.xyz", "-o", "b.json", "-o", "b.dxf", "--smooth", "--verbose", cwd=tmp_path)
+    r = cli("reconstruct", "t.xyz", "-o", "b.json", "--method", "emst", "--verbose", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     params = json.loads((tmp_path / "b.json").read_text())["parameters"]
-    for stage in ("reading t.xyz", "reconstructing (auto)", "writing"):
+    for stage in ("reading t.xyz", "reconstructing (emst)", "writing"):
         assert re.search(rf"^  {re.escape(stage)}: \d+\.\d{{3}} s$", r.stderr, re.M), (stage, r.stderr)
-    assert "given parameters: smooth=True" in r.stderr
+    assert "given parameters: none" in r.stderr and "180 points, dimension 2" in r.stderr
     assert "parameters used: " in r.stderr and f"method={params['method']}" in r.stderr
     assert "Model" in r.stdout  # the table still goes to standard output
-    # --smooth: the DXF has splines
-    text = (tmp_path / "b.dxf").read_text()
-    assert params.get("smooth") is True and "SPLINE" in text and "POLYLINE" not in text
 
 
-def test_progress_bar_when_forced_and_on_a_terminal(tmp_path, monkeypatch):
+def test_progress_bars_only_for_slow_stages_on_a_terminal(tmp_path, monkeypatch):
     np.savetxt(tmp_path / "t.xyz", theta_points(20))
     run = ["reconstruct", "t.xyz", "-o", "a.json", "--method", "emst"]
-    r = cli(*run, cwd=tmp_path, env={"CURVENET_PROGRESS": "always", "CURVENET_PROGRESS_DELAY": "0"})
-    assert r.returncode == 0, r.stderr
-    assert "reconstructing" in r.stderr and "\x1b[" in r.stderr  # a rich bar, drawn with ANSI codes
+    # stages quicker than the delay draw nothing, even where drawing is forced
+    r = cli(*run, cwd=tmp_path, env={"CURVENET_PROGRESS": "always", "CURVENET_PROGRESS_DELAY": "600"})
+    assert r.returncode == 0 and r.stderr == ""
     from curvenet.cli.progress import Stages
 
     monkeypatch.setenv("CURVENET_PROGRESS", "always")
     assert Stages()._bars and not Stages(quiet=True)._bars  # --quiet wins
+    monkeypatch.delenv("CURVENET_PROGRESS")
+    assert not Stages()._bars  # standard error of pytest is not a terminal
 
-    # a real terminal on standard error: bars after the delay, none for stages quicker than it
+    # a real terminal on standard error: a rich bar once the stage runs longer than the delay
     import pty
 
-    def on_tty(delay):
-        master, slave = pty.openpty()
-        e = dict(os.environ, CURVENET_PROGRESS_DELAY=str(delay))
-        e.pop("CURVENET_PROGRESS", None)
-        p = subprocess.Popen([sys.executable, "-m", "curvenet.cli", *run], cwd=tmp_path,
-                             stdout=subprocess.PIPE, stderr=slave, env=e)
-        os.close(slave)
-        chunks = []
-        while True:
-            try:
-                b = os.read(master, 4096)
-            except OSError:
-                break
-            if not b:
-                break
-            chunks.append(b)
-        p.communicate(timeout=120)
-        os.close(master)
-        return p.returncode, b"".join(chunks).decode("utf-8", "replace")
-
-    code, err = on_tty(0)
-    assert code == 0 and "reconstructing" in err
-    code, err = on_tty(600)
-    assert code == 0 and err == ""
+    master, slave = pty.openpty()
+    e = {k: v for k, v in os.environ.items() if k != "CURVENET_PROGRESS"}
+    e["CURVENET_PROGRESS_DELAY"] = "0"
+    p = subprocess.Popen([sys.executable, "-m", "curvenet.cli", *run], cwd=tmp_path,
+                         stdout=subprocess.PIPE, stderr=slave, env=e)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            b = os.read(master, 4096)
+        except OSError:
+            break
+        if not b:
+            break
+        chunks.append(b)
+    out, _ = p.communicate(timeout=120)
+    os.close(master)
+    err = b"".join(chunks).decode("utf-8", "replace")
+    assert p.returncode == 0 and "reconstructing" in err and "\x1b[" in err
+    assert b"Model" in out  # the table on standard output, which is not a terminal: plain text
 
 
-def test_render_and_view_commands(run_all, tmp_path):
-    d, r, _ = run_all
-    r = cli("render", d / "n.json", "-o", tmp_path / "a.png", "--points", d / "theta.xyz", "--dpi", "30")
-    assert r.returncode == 0 and r.stdout.strip() == f"wrote {tmp_path / 'a.png'}", r.stderr
-    r = cli("view", d / "n.json", "-o", tmp_path / "v.html", "--points", d / "theta.xyz", "--max-points", "50", "-q")
-    assert r.returncode == 0 and r.stdout == "" and r.stderr == ""
+def test_view_in_process(run_all, tmp_path, capsys):
+    from curvenet.cli import main
+
+    d, _, _ = run_all
+    args = ["view", str(d / "n.json"), "-o", str(tmp_path / "v.html"), "--points", str(d / "theta.xyz")]
+    assert main(args + ["--max-points", "50", "-q"]) == 0
+    assert capsys.readouterr().out == ""
     html = (tmp_path / "v.html").read_text()
     assert "Plotly.newPlot" in html and "50 shown" in html
+    assert main(args + ["--max-points", "-1"]) == 2
 
 
 def test_render_options_in_process(tmp_path, capsys):
@@ -176,15 +177,29 @@ def test_render_options_in_process(tmp_path, capsys):
         (["view", "{net}"], "required"),
     ],
 )
-def test_bad_usage_and_input_exit_2(run_all, tmp_path, args, message):
+def test_bad_usage_and_input_exit_2(run_all, tmp_path, monkeypatch, capsys, args, message):
+    """In process (the subprocess path is the same main(); one case runs through it below)."""
+    from curvenet.cli import main
+
     d, _, _ = run_all
     np.savetxt(tmp_path / "p3.xyz", np.random.default_rng(0).random((10, 3)))
     subst = {"{net}": str(d / "n.json"), "{pts}": str(d / "theta.xyz"), "{pts3}": str(tmp_path / "p3.xyz")}
-    r = cli(*[subst.get(a, a) for a in args], cwd=tmp_path)
-    assert r.returncode == 2, (r.stdout, r.stderr)
-    assert message in r.stderr
-    assert "Traceback" not in r.stderr
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main([subst.get(a, a) for a in args])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capsys.readouterr()
+    assert code == 2, (out, err)
+    assert message in err and "Traceback" not in err
     assert not list(tmp_path.glob("x.*"))
+
+
+def test_bad_picture_extension_through_subprocess(run_all, tmp_path):
+    d, _, _ = run_all
+    r = cli("render", d / "n.json", "-o", tmp_path / "x.jpg")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr == f"curvenet: error: {tmp_path / 'x.jpg'}: the picture must have the extension .png\n"
 
 
 def test_method_failure_exit_1_and_verbose_traceback(tmp_path, monkeypatch, capsys):
