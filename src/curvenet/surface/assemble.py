@@ -219,7 +219,8 @@ def surface(
     # ------------------------------------------------------------------ patches
     tris, pids, domains = [], [], {"plane": 0, "circle": 0}
     Vb = np.vstack(verts)
-    for k, (cyc, dirs) in enumerate(zip(cs.cycles, cs.directions)):
+    rings = []
+    for cyc, dirs in zip(cs.cycles, cs.directions):
         ring = []
         for c, s in zip(cyc, dirs):
             ids = curve_vertices[c]
@@ -227,12 +228,21 @@ def surface(
                 ring.append(ids if s > 0 else ids[::-1])
             else:
                 ring.append(ids[:-1] if s > 0 else ids[::-1][:-1])
-        ring = np.concatenate(ring)
+        rings.append(np.concatenate(ring))
+    holes = _find_holes(cs.cycles, rings, Vb, edges)
+    for k, ring in enumerate(rings):
         if len(ring) < 3:
             continue
         poly = Vb[ring]
-        interior, T, kind = triangulate_patch(poly, target_edge=h, fair=fair, min_angle=min_angle)
+        hole_rings = [rings[j] for j in holes.get(k, [])]
+        interior, T, kind = triangulate_patch(
+            poly, target_edge=h, fair=fair, min_angle=min_angle, holes=[Vb[r] for r in hole_rings]
+        )
         domains[kind] += 1
+        if kind != "plane":
+            hole_rings = []
+            holes.pop(k, None)
+        ring = np.concatenate([ring, *hole_rings]) if hole_rings else ring
         gid = np.concatenate([ring, nv + np.arange(len(interior))])
         verts.append(interior)
         nv += len(interior)
@@ -243,8 +253,22 @@ def surface(
     P = np.concatenate(pids) if pids else np.zeros(0, dtype=np.int64)
     t2 = time.perf_counter()
 
-    # ------------------------------------------------------------------ outward on closed parts
+    # ------------------------------------------------------------------ loops cut as holes
     cycles, directions = [list(map(int, c)) for c in cs.cycles], [list(map(int, d)) for d in cs.directions]
+    if holes:
+        for k, js in holes.items():
+            for j in js:
+                a, b = int(rings[j][0]), int(rings[j][1])  # rings[j] runs along directions[j][0]
+                host_ab = _has_edge(T[P == k], a, b)
+                disk_ab = _has_edge(T[P == j], a, b)
+                host_dir = directions[j][0] if host_ab else -directions[j][0]
+                if disk_ab == host_ab:  # both run the same way: turn the disk over
+                    T[P == j] = T[P == j][:, ::-1]
+                directions[j] = [-host_dir]
+                cycles[k].append(cycles[j][0])
+                directions[k].append(host_dir)
+
+    # ------------------------------------------------------------------ outward on closed parts
     _orient_outward(V, T, P, cycles, directions)
 
     # ------------------------------------------------------------------ drop unused vertices
@@ -299,3 +323,50 @@ def _orient_outward(V, T, P, cycles, directions):
             for k in np.unique(P[sel]):
                 cycles[k] = cycles[k][::-1]
                 directions[k] = [-d for d in directions[k][::-1]]
+
+
+def _has_edge(T, a, b) -> bool:
+    """Whether one of the triangles has the directed edge ``a -> b``."""
+    return bool((((T[:, 0] == a) & (T[:, 1] == b)) | ((T[:, 1] == a) & (T[:, 2] == b)) | ((T[:, 2] == a) & (T[:, 0] == b))).any())
+
+
+def _inside(pts2, poly2) -> np.ndarray:
+    """Even-odd point-in-polygon test, vectorised over points."""
+    x, y = pts2[:, 0][:, None], pts2[:, 1][:, None]
+    a, b = poly2, np.roll(poly2, -1, axis=0)
+    cond = (a[:, 1] > y) != (b[:, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return ((cond & (x < xc)).sum(axis=1) % 2) == 1
+
+
+def _find_holes(cycles, rings, Vb, edges, *, flat: float = 0.01) -> dict:
+    """Loops without node lying flat inside another (flat) patch: patch -> list of loop patches.
+
+    Such a loop (a speaker cone on a box face) is cut out of the patch as a hole, and its own
+    disk fills the hole, instead of a disk lying on top of the patch.
+    """
+    loops = [k for k, cyc in enumerate(cycles) if len(cyc) == 1 and edges[cyc[0], 0] < 0 and len(rings[k]) >= 3]
+    if not loops:
+        return {}
+    out = {}
+    for j, ring in enumerate(rings):
+        if j in loops or len(ring) < 3:
+            continue
+        P = Vb[ring]
+        c = P.mean(axis=0)
+        _, s, vt = np.linalg.svd(P - c, full_matrices=False)
+        size = float(np.ptp(P, axis=0).max())
+        if np.abs((P - c) @ vt[2]).max() > flat * size:
+            continue
+        P2 = (P - c) @ vt[:2].T
+        for k in loops:
+            if any(k in v for v in out.values()):
+                continue
+            Q = Vb[rings[k]]
+            if np.abs((Q - c) @ vt[2]).max() > flat * size:
+                continue
+            Q2 = (Q - c) @ vt[:2].T
+            if _inside(Q2, P2).all() and not any(_inside(Q2[:1], (Vb[rings[m]] - c) @ vt[:2].T)[0] for m in out.get(j, [])):
+                out.setdefault(j, []).append(k)
+    return out

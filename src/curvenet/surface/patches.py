@@ -213,7 +213,12 @@ def _extend(L, M, xb: np.ndarray, nb: int, biharmonic: bool) -> np.ndarray:
 
 
 def triangulate_patch(
-    poly: np.ndarray, *, target_edge: float, fair: bool = True, min_angle: float = 25.0
+    poly: np.ndarray,
+    *,
+    target_edge: float,
+    fair: bool = True,
+    min_angle: float = 25.0,
+    holes: list | None = None,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """Fill a closed 3D polygon with a triangle mesh whose boundary is exactly the polygon.
 
@@ -231,13 +236,17 @@ def triangulate_patch(
         harmonic extension of the 3D boundary over a disk.
     min_angle : float
         Minimum angle (degrees) asked of Triangle's quality refinement.
+    holes : list of (m_i, 3) ndarray, optional
+        Closed polygons inside the patch, cut out as holes (used only when the patch is laid out
+        on its best-fit plane). Their points follow the outer polygon's in the vertex numbering.
 
     Returns
     -------
     interior : (k, 3) ndarray
         New interior vertices.
     triangles : (t, 3) ndarray of int
-        Indices ``< n`` refer to the polygon, ``n + i`` to ``interior[i]``. Oriented so that each
+        Indices ``< n`` refer to the polygon (then the holes' points, in order), the next ones to
+        ``interior``. Oriented so that each
         triangle's edges on the boundary run in the polygon's direction.
     domain : str
         ``"plane"`` or ``"circle"``: the 2D layout used.
@@ -255,14 +264,32 @@ def triangulate_patch(
     q, kind, frame = _domain(poly)
     segs = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
     amax = np.sqrt(3.0) / 4.0 * target_edge**2
+    signed = 0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1])
+    data = {"vertices": q, "segments": segs}
+    if holes and kind == "plane":
+        c, vt = frame
+        qs, ss, hp = [q], [segs], []
+        m = n
+        for h in holes:
+            h = np.asarray(h, dtype=float)
+            qh = (h - c) @ vt[:2].T
+            k = len(qh)
+            qs.append(qh)
+            ss.append(m + np.column_stack([np.arange(k), (np.arange(k) + 1) % k]))
+            inner = tr.triangulate({"vertices": qh, "segments": ss[-1] - m}, "pQ")
+            hp.append(inner["vertices"][inner["triangles"][0]].mean(axis=0))
+            poly = np.vstack([poly, h])
+            m += k
+        q = np.vstack(qs)
+        data = {"vertices": q, "segments": np.vstack(ss), "holes": np.array(hp)}
+        n = m
     # the domain of a circle has the polygon's arc length, a projection is no larger: same scale
-    out = tr.triangulate({"vertices": q, "segments": segs}, f"pYQq{min_angle:g}a{amax:.17g}")
+    out = tr.triangulate(data, f"pYQq{min_angle:g}a{amax:.17g}")
     Vd = out["vertices"]
     T = np.asarray(out["triangles"], dtype=np.int64)
     if len(Vd) < n or not np.allclose(Vd[:n], q):
         raise RuntimeError("triangle moved boundary points")  # never expected: flag Y
     # orientation: make the boundary run in the polygon's direction
-    signed = 0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1])
     if signed < 0:
         T = T[:, ::-1]
     if len(Vd) == n:
