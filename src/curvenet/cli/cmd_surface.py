@@ -20,7 +20,7 @@ def register(sub) -> None:
     p.add_argument("--target-edge", type=float, default=None,
                    help="edge length inside the patches (default: from the curve point spacing)")
     p.add_argument("--no-fair", action="store_true",
-                   help="harmonic instead of biharmonic placement of the patch interiors")
+                   help="flat harmonic membranes instead of patches shaped by the curvature of their curves")
     p.add_argument("--png", metavar="FILE.png", default=None, help="also draw the surface as a PNG picture")
     add_common(p)
     p.set_defaults(func=run)

@@ -137,7 +137,9 @@ def surface(
         raised if needed so that the patches hold about ``max_triangles`` triangles at most (the
         quality triangulation then grades from the boundary spacing to this length).
     fair : bool
-        Biharmonic (True) or harmonic (False) placement of the interior vertices.
+        Shape the patch interiors after the curvature of their boundary curves (a Poisson
+        equation with the boundary's mean normal curvature, see
+        :func:`curvenet.surface.patches.triangulate_patch`); ``False``: harmonic membranes.
     fold_angle : float
         Degrees: two cycles meeting a curve from the same side within this angle cannot both be
         patches (see :func:`curvenet.surface.cycles.find_cycles`).
@@ -236,7 +238,8 @@ def surface(
         poly = Vb[ring]
         hole_rings = [rings[j] for j in holes.get(k, [])]
         interior, T, kind = triangulate_patch(
-            poly, target_edge=h, fair=fair, min_angle=min_angle, holes=[Vb[r] for r in hole_rings]
+            poly, target_edge=h, fair=fair, min_angle=min_angle, holes=[Vb[r] for r in hole_rings],
+            corners=ring < len(nodes),
         )
         domains[kind] += 1
         if kind != "plane":

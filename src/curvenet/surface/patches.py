@@ -4,8 +4,12 @@ The polygon's points are the exact boundary: none is added, removed or moved. Th
 out in a 2D domain (its projection on the best-fit plane when that projection is a simple polygon,
 otherwise a circle parametrised by arc length), triangulated there by a constrained, quality
 Delaunay triangulation without boundary Steiner points (Shewchuk's Triangle, flags ``pYq``), and the
-interior vertices are placed in 3D by a harmonic or biharmonic extension of the boundary
-(cotangent weights of the domain mesh; Pinkall and Polthier 1993, Botsch and Kobbelt 2004).
+interior vertices are placed in 3D as a height field over the domain: harmonic, or (fairing) the
+solution of a Poisson equation whose constant right-hand side is twice the mean normal curvature
+of the boundary curves, i.e. a patch of about constant mean curvature (cotangent weights of the
+domain mesh; Pinkall and Polthier 1993). A biharmonic extension with positional boundary
+conditions only was tried and stays much flatter (sphere quads off the sphere by 0.11 radius
+against 0.013 here).
 
 A minimal-area triangulation of the polygon (dynamic program of Barequet and Sharir 1995 and Liepa
 2003) scores candidate cycles in :mod:`curvenet.surface.cycles`.
@@ -196,20 +200,52 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
     return L, M
 
 
-def _extend(L, M, xb: np.ndarray, nb: int, biharmonic: bool) -> np.ndarray:
-    """Interior positions of the (bi)harmonic extension of boundary values ``xb``."""
-    from scipy.sparse import diags
+def _extend(L, M, xb: np.ndarray, nb: int, laplacian: float = 0.0) -> np.ndarray:
+    """Interior values of the harmonic extension of boundary values ``xb`` (first ``nb`` rows).
+
+    With ``laplacian``, the interior solves the Poisson equation ``Laplacian(x) = laplacian``
+    instead (``L x = -laplacian * M`` on the interior rows).
+    """
     from scipy.sparse.linalg import spsolve
 
-    if biharmonic:
-        Q = (L.T @ diags(1.0 / np.maximum(M, 1e-300)) @ L).tocsr()
-    else:
-        Q = L
-    Qii = Q[nb:, nb:].tocsc()
-    Qib = Q[nb:, :nb]
+    Qii = L[nb:, nb:].tocsc()
+    Qib = L[nb:, :nb]
     rhs = -(Qib @ xb)
+    if laplacian:
+        rhs = rhs - laplacian * M[nb:, None]
     x = spsolve(Qii, rhs)
     return np.asarray(x).reshape(-1, xb.shape[1])
+
+
+def _mean_normal_curvature(poly, normal, corners, n_outer) -> float:
+    """Length-weighted mean of the boundary curves' curvature along ``normal``.
+
+    The discrete curvature vector ``2 / (a + b) * ((p+ - p) / b - (p - p-) / a)`` is taken at
+    the points that are not corners (nodes, where curves meet at an angle), on the outer polygon
+    (its first ``n_outer`` points) and on each hole.
+    """
+    pts = np.asarray(poly, dtype=float)
+    segs = [(0, n_outer)]
+    if len(pts) > n_outer:
+        segs.append((n_outer, len(pts)))  # holes are treated as one closed run each (approx.)
+    num = den = 0.0
+    for lo, hi in segs:
+        p = pts[lo:hi]
+        if len(p) < 3:
+            continue
+        pm, pp = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
+        a = np.linalg.norm(p - pm, axis=1)
+        b = np.linalg.norm(pp - p, axis=1)
+        ok = (a > 0) & (b > 0)
+        if lo == 0 and corners is not None:
+            ok &= ~np.asarray(corners, dtype=bool)
+        if not ok.any():
+            continue
+        k = 2.0 / (a[ok] + b[ok])[:, None] * ((pp[ok] - p[ok]) / b[ok][:, None] - (p[ok] - pm[ok]) / a[ok][:, None])
+        w = 0.5 * (a[ok] + b[ok])
+        num += float((k @ normal) @ w)
+        den += float(w.sum())
+    return num / den if den > 0 else 0.0
 
 
 def triangulate_patch(
@@ -219,6 +255,7 @@ def triangulate_patch(
     fair: bool = True,
     min_angle: float = 25.0,
     holes: list | None = None,
+    corners: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """Fill a closed 3D polygon with a triangle mesh whose boundary is exactly the polygon.
 
@@ -231,9 +268,14 @@ def triangulate_patch(
         triangle with this side).
     fair : bool
         When the polygon projects simply on its best-fit plane, the patch is a height field over
-        the domain mesh and the heights are a biharmonic (True: smoother, fuller patches) or
-        harmonic (False) extension of the boundary heights. Otherwise the interior is the
-        harmonic extension of the 3D boundary over a disk.
+        the domain mesh. With ``fair``, the heights solve ``Laplacian(h) = 2 H`` with ``H`` the
+        mean normal curvature of the boundary curves (away from corners): a patch of about
+        constant mean curvature, which bulges like the surface the curves were drawn on (a
+        sphere's quads, a torus's cells); without, they are harmonic (a membrane). Otherwise
+        (no simple projection) the interior is the harmonic extension of the 3D boundary over a
+        disk.
+    corners : (n,) ndarray of bool, optional
+        Outer polygon points where curves meet at an angle (nodes), left out of the curvature.
     min_angle : float
         Minimum angle (degrees) asked of Triangle's quality refinement.
     holes : list of (m_i, 3) ndarray, optional
@@ -262,6 +304,7 @@ def triangulate_patch(
     if n == 3:
         return np.zeros((0, 3)), np.array([[0, 1, 2]], dtype=np.int64), "plane"
     q, kind, frame = _domain(poly)
+    n0 = n
     segs = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
     amax = np.sqrt(3.0) / 4.0 * target_edge**2
     signed = 0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1])
@@ -300,13 +343,14 @@ def triangulate_patch(
         c, vt = frame
         L, M = cotan_laplacian(Vd, T, clip=False)
         hb = (poly - c) @ vt[2]
-        hi = _extend(L, M, hb[:, None], n, fair)[:, 0]
+        H = _mean_normal_curvature(poly, vt[2], corners, n0) if fair else 0.0
+        hi = _extend(L, M, hb[:, None], n, 2.0 * H)[:, 0]
         if not np.isfinite(hi).all():
             L, M = cotan_laplacian(Vd, T)
-            hi = _extend(L, M, hb[:, None], n, False)[:, 0]
+            hi = _extend(L, M, hb[:, None], n)[:, 0]
         X = c + Vd[n:] @ vt[:2] + hi[:, None] * vt[2]
         return X, T, kind
     # circle domain: harmonic extension of the 3D boundary (clipped weights: maximum principle)
     L, M = cotan_laplacian(Vd, T)
-    X = _extend(L, M, poly, n, False)
+    X = _extend(L, M, poly, n)
     return X, T, kind
