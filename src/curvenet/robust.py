@@ -485,6 +485,12 @@ def _assemble(P, h, chains, regions, prm):
                 regions.append(np.zeros(0, dtype=np.int64))
                 c.ends[s] = len(regions) - 1
     alive = [True] * len(chains)
+    # the chain ends at each region (chain, side), kept up to date below
+    ends_at: list[list[tuple[int, int]]] = [[] for _ in regions]
+    for i, c in enumerate(chains):
+        if not c.closed:
+            for s in (0, 1):
+                ends_at[c.ends[s]].append((i, s))
 
     def valence():
         v = np.zeros(len(regions), dtype=np.int64)
@@ -514,22 +520,23 @@ def _assemble(P, h, chains, regions, prm):
                     end_pt = c.ids[-1] if s == 1 else c.ids[0]
                     tips.append((r, np.r_[regions[r], end_pt].astype(np.int64)))
     if len(tips) >= 2:
-        for a in range(len(tips)):
-            for b in range(a + 1, len(tips)):
-                ra, ia = tips[a]
-                rb, ib = tips[b]
-                if ra == rb:
-                    continue
-                gap = np.min(np.linalg.norm(P[ia][:, None, :] - P[ib][None, :, :], axis=2))
-                if gap <= prm["link"] * 1.2 * hmed:
-                    # merge region rb into ra
-                    regions[ra] = np.r_[regions[ra], regions[rb]]
-                    regions[rb] = np.zeros(0, dtype=np.int64)
-                    for c in chains:
-                        for s in (0, 1):
-                            if c.ends[s] == rb:
-                                c.ends[s] = ra
-                    tips[b] = (ra, ib)
+        # only pairs of tips closer than the threshold can merge: found with a k-d tree, then
+        # visited in the same (a, b) order as a double loop over all pairs
+        for a, b in _close_tip_pairs(P, [ia for _, ia in tips], prm["link"] * 1.2 * hmed):
+            ra, ia = tips[a]
+            rb, ib = tips[b]
+            if ra == rb:
+                continue
+            gap = np.min(np.linalg.norm(P[ia][:, None, :] - P[ib][None, :, :], axis=2))
+            if gap <= prm["link"] * 1.2 * hmed:
+                # merge region rb into ra
+                regions[ra] = np.r_[regions[ra], regions[rb]]
+                regions[rb] = np.zeros(0, dtype=np.int64)
+                for ci, s in ends_at[rb]:
+                    chains[ci].ends[s] = ra
+                ends_at[ra].extend(ends_at[rb])
+                ends_at[rb] = []
+                tips[b] = (ra, ib)
     # prune short spurs and small isolated pieces
     for _ in range(3):
         v = valence()
@@ -537,32 +544,34 @@ def _assemble(P, h, chains, regions, prm):
         for i, c in enumerate(chains):
             if not alive[i]:
                 continue
-            hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
             if c.closed:
+                hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
                 if _polylen(P[c.ids]) < 2 * prm["min_spur"] * hl:
                     alive[i] = False
                     changed = True
                 continue
             a, b = c.ends
+            free_a, free_b = v[a] == 1, v[b] == 1
+            if not (free_a or free_b):
+                continue
+            hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
             length = _polylen(P[c.ids])
             ext = sum(_extent(P, regions[r]) for r in (a, b) if v[r] == 1)
-            free_a, free_b = v[a] == 1, v[b] == 1
-            if (free_a or free_b) and length + ext < prm["min_spur"] * hl:
+            if length + ext < prm["min_spur"] * hl:
                 if free_a and free_b or v[a] >= 3 or v[b] >= 3:
                     alive[i] = False
                     changed = True
-                    v = valence()
+                    v[a] -= 1  # the valence without chain i
+                    v[b] -= 1
         if not changed:
             break
 
-    # join chains through regions of valence 2
-    for _ in range(len(chains) + 1):
-        v = valence()
-        two = [r for r in range(len(regions)) if v[r] == 2]
-        if not two:
-            break
-        r = two[0]
-        inc = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed for s in (0, 1) if c.ends[s] == r]
+    # join chains through regions of valence 2 (in region order; a join leaves the valence of
+    # every other region unchanged)
+    v = valence()
+    for r in np.flatnonzero(v == 2).tolist():
+        inc = sorted({(i, s) for i, s in ends_at[r]
+                      if alive[i] and not chains[i].closed and chains[i].ends[s] == r})
         (i, si), (j, sj) = inc
         ci = chains[i]
         a_ids = ci.ids if si == 1 else ci.ids[::-1]
@@ -579,6 +588,9 @@ def _assemble(P, h, chains, regions, prm):
         chains[i] = _Chain(np.r_[a_ids, mid, b_ids], [a_other, b_other])
         alive[j] = False
         regions[r] = np.zeros(0, dtype=np.int64)
+        ends_at[r] = []
+        ends_at[a_other] = [e for e in ends_at[a_other] if e != (i, 1 - si)] + [(i, 0)]
+        ends_at[b_other] = [e for e in ends_at[b_other] if e != (j, 1 - sj)] + [(i, 1)]
 
     v = valence()
     live = [c for i, c in enumerate(chains) if alive[i]]
@@ -586,10 +598,15 @@ def _assemble(P, h, chains, regions, prm):
     node_of = {}
     node_pos = []
     end_ext: dict[tuple[int, int], np.ndarray] = {}
+    inc_at: dict[int, list[tuple[int, int]]] = {}
+    for ci, c in enumerate(live):
+        if not c.closed:
+            for s in (0, 1):
+                inc_at.setdefault(c.ends[s], []).append((ci, s))
     for r in range(len(regions)):
         if v[r] == 0:
             continue
-        inc = [(ci, s) for ci, c in enumerate(live) if not c.closed for s in (0, 1) if c.ends[s] == r]
+        inc = inc_at[r]
         if v[r] == 1:
             ci, s = inc[0]
             c = live[ci]
@@ -633,6 +650,20 @@ def _assemble(P, h, chains, regions, prm):
     curves.sort(key=lambda c: (-1 if c.start is None else c.start, -1 if c.end is None else c.end,
                                tuple(np.round(c.points[min(1, len(c.points) - 1)], 9))))
     return nodes, curves
+
+
+def _close_tip_pairs(P, tips, r):
+    """Pairs ``(a, b)``, ``a < b``, of point sets ``tips[a]``, ``tips[b]`` that may come within
+    ``r`` of each other (a superset: the caller checks the exact distance), sorted."""
+    from scipy.spatial import cKDTree
+
+    own = np.repeat(np.arange(len(tips)), [len(t) for t in tips])
+    pts = P[np.concatenate(tips)] if len(own) else np.zeros((0, P.shape[1]))
+    pairs = cKDTree(pts).query_pairs(r * (1 + 1e-6) + 1e-300, output_type="ndarray")
+    a, b = own[pairs[:, 0]], own[pairs[:, 1]]
+    a, b = np.minimum(a, b), np.maximum(a, b)
+    ab = np.unique(np.stack([a[a != b], b[a != b]], axis=1), axis=0)
+    return [(int(x), int(y)) for x, y in ab]
 
 
 def _extent(P, ids):
