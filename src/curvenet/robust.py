@@ -51,6 +51,10 @@ __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 SPAN = 6.0
 #: Links may stray from a tangent line by this many times the estimated noise.
 NW = 4.5
+#: The shell radii grow by this many times the estimated noise (in units of ``shell_*``).
+WIDEN = 1.5
+#: Links may be longer than ``link * h`` by this many times the estimated noise.
+GAP = 3.0
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
 _DEFAULTS = {
@@ -117,8 +121,7 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
         along = np.einsum("nkd,nd->nk", rel, t)
         perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
         w = (perp2 <= h[:, None] ** 2).astype(float)
-        t, _ = _pca_dir(Qm, w)
-    _, ev = _pca_dir(Qm[:, :9])
+        t, ev = _pca_dir(Qm, w)
     lin = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
     # RMS distance of the strip neighbours from the tangent line: the noise level
     mu = (Qm * w[..., None]).sum(axis=1) / np.maximum(w.sum(axis=1), 1)[:, None]
@@ -129,23 +132,44 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     return t, lin, rms
 
 
-def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0):
-    """Directed kNN edges kept by the distance and tangent tests: (src, dst, length)."""
+def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
+    """Directed kNN edges kept by the distance and tangent tests: (src, dst, length).
+
+    A link is at most ``link * h + gap`` long (``gap`` widens it for noise, which opens random
+    gaps along a curve). Besides, a point with a reliable tangent is linked to its nearest
+    neighbour on each side along the tangent, within the strip, up to twice that length:
+    this bridges the widest gaps of sparse, noisy sampling.
+    """
     n, k = idx.shape
     src = np.repeat(np.arange(n), k)
     dst = idx.ravel()
     dd = dist.ravel()
     hh = 0.5 * (h[src] + h[dst])
-    keep = (dd <= link * hh) & (src != dst)
-    src, dst, dd = src[keep], dst[keep], dd[keep]
+    reach = link * hh + gap
+    keep = (dd <= 2.0 * reach) & (src != dst)
+    src, dst, dd, reach = src[keep], dst[keep], dd[keep], reach[keep]
     vec = P[dst] - P[src]
-    nrm = np.maximum(dd, 1e-300)
     # distance of the far end from the line through each end along its tangent
-    ps = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[src]) ** 2, 0.0))
+    al = np.einsum("ij,ij->i", vec, t[src])
+    ps = np.sqrt(np.maximum(dd**2 - al**2, 0.0))
     pd = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[dst]) ** 2, 0.0))
-    w = np.maximum(width * hh[keep], wmin)
+    w = np.maximum(width * 0.5 * (h[src] + h[dst]), wmin)
     ok = (ps <= w) | (pd <= w) | (lin[src] < LIN) | (lin[dst] < LIN) | (dd == 0)
-    return src[ok], dst[ok], dd[ok]
+    short = dd <= link * 0.5 * (h[src] + h[dst])
+    # longer links must lie along the tangents of both ends
+    both = (ps <= w) & (pd <= w) & (lin[src] >= LIN) & (lin[dst] >= LIN)
+    near = (ok & short) | (both & (dd <= reach))
+    # nearest strip neighbour on each side along the tangent (rows are sorted by distance)
+    strip = both & (dd > 0)
+    extra = np.zeros(len(src), dtype=bool)
+    for sgn in (1.0, -1.0):
+        cand = strip & (sgn * al > 0)
+        ci = np.flatnonzero(cand)
+        if len(ci):
+            first = np.r_[True, src[ci][1:] != src[ci][:-1]]
+            extra[ci[first]] = True
+    sel = near | extra
+    return src[sel], dst[sel], dd[sel]
 
 
 def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
@@ -326,13 +350,16 @@ def reconstruct_robust(
     t, lin, rms = _tangents(P, idx, h)
     noise = float(np.median(rms))
     params_out["noise"] = noise
-    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise)
+    src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise,
+                                 GAP * noise)
     indptr, indices = _k.csr_union(N, src.astype(np.int64), dst.astype(np.int64))
     tm["graph"] = time.perf_counter() - t1
 
     # 3. shell test
     t1 = time.perf_counter()
-    groups = shell_group_counts(P, h, indptr, indices, prm["shell_inner"], prm["shell_outer"])
+    # noise blurs the junction over a few sigma: the shell grows with it
+    hs = h + WIDEN * noise
+    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"])
     tm["nodes"] = time.perf_counter() - t1
 
     # 4. regions and chains
@@ -351,7 +378,8 @@ def reconstruct_robust(
 
     # 5. network
     t1 = time.perf_counter()
-    nodes, curves = _assemble(P, h, chains, regions, prm)
+    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise)
+    nodes, curves = _assemble(P, h, chains, regions, prm_int)
     tm["assemble"] = time.perf_counter() - t1
 
     # map back to input indices
@@ -615,7 +643,7 @@ def _assemble(P, h, chains, regions, prm):
             end_ext[(ci, s)] = ext
             node_pos.append(pos)
         else:
-            node_pos.append(_junction(P, h, live, inc, regions[r]))
+            node_pos.append(_junction(P, h, live, inc, regions[r], prm))
         node_of[r] = len(node_pos) - 1
     nodes = np.asarray(node_pos, dtype=float).reshape(-1, dim)
     # canonical node order (by coordinates)
@@ -723,17 +751,76 @@ def _free_end(P, h, ids, rid):
     return ext, P[ext[-1]].copy()
 
 
-def _junction(P, h, live, inc, rid):
-    """Least-squares intersection of the tangent lines of the incident chain ends."""
+def _extend_into_region(P, h, branches, rid, prm):
+    """Walk every branch end into its junction region, in turns, along its own direction.
+
+    Each step moves a branch to the nearest unclaimed region point linked to its current end
+    that lies ahead (along the direction of the branch's last ``3 h``) and within the link
+    width of that direction. Branches take turns, so they meet where they truly join. Returns
+    the extended id lists (running towards the junction).
+    """
+    indptr, indices = prm["_graph"]
+    inreg = set(int(i) for i in rid)
+    claimed: set[int] = set()
+    out = [list(b) for b in branches]
+    active = [len(b) >= 2 for b in out]
+    noise = prm["_noise"]
+    for _ in range(len(inreg) + 1):
+        moved = False
+        for bi, ids in enumerate(out):
+            if not active[bi]:
+                continue
+            cur = ids[-1]
+            hl = float(h[cur])
+            E = _end_portion(P, h, np.asarray(ids), span=3.0)
+            u = E[0] - E[-1]
+            nu = np.linalg.norm(u)
+            if nu == 0:
+                active[bi] = False
+                continue
+            u = u / nu
+            nb = indices[indptr[cur]:indptr[cur + 1]]
+            nb = np.array([j for j in nb if j in inreg and j not in claimed], dtype=np.int64)
+            if len(nb) == 0:
+                active[bi] = False
+                continue
+            v = P[nb] - P[cur]
+            al = v @ u
+            perp = np.sqrt(np.maximum((v * v).sum(axis=1) - al**2, 0.0))
+            w = max(prm["_width"] * hl, NW * noise)
+            ok = (al > 0.25 * hl) & (perp <= w)
+            if not ok.any():
+                active[bi] = False
+                continue
+            d = np.where(ok, np.hypot(al, perp), np.inf)
+            j = int(nb[np.lexsort((nb, d))[0]])
+            ids.append(j)
+            claimed.add(j)
+            moved = True
+        if not moved:
+            break
+    return out
+
+
+def _junction(P, h, live, inc, rid, prm):
+    """Least-squares intersection of the tangent lines of the incident branches.
+
+    The branches are first extended into the junction region (:func:`_extend_into_region`),
+    so the lines are fitted close to the junction and extrapolated only a little.
+    """
     dim = P.shape[1]
     cR = P[rid].mean(axis=0) if len(rid) else None
+    branches = []
+    for ci, s in inc:
+        c = live[ci]
+        branches.append(c.ids if s == 1 else c.ids[::-1])
+    if len(rid) and "_graph" in prm:
+        branches = _extend_into_region(P, h, branches, rid, prm)
     A = np.zeros((dim, dim))
     b = np.zeros(dim)
     cs = []
-    for ci, s in inc:
-        c = live[ci]
-        ids = c.ids if s == 1 else c.ids[::-1]
-        E = _end_portion(P, h, ids, span=SPAN)
+    for ids in branches:
+        E = _end_portion(P, h, np.asarray(ids), span=SPAN)
         cc, u = _fit_line(E)
         cs.append(E[0])
         if u is None:
@@ -741,7 +828,7 @@ def _junction(P, h, live, inc, rid):
         M = np.eye(dim) - np.outer(u, u)
         A += M
         b += M @ cc
-    anchor = cR if cR is not None else np.mean(cs, axis=0)
+    anchor = np.mean(cs, axis=0) if cs else cR
     hl = float(np.median(h[rid])) if len(rid) else float(np.median([h[live[ci].ids[0]] for ci, _ in inc]))
     w = 1e-2
     A += w * np.eye(dim)
