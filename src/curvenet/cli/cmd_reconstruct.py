@@ -77,9 +77,6 @@ def run(args) -> int:
     if args.html:
         check_extension(args.html, ".html", "the --html viewer")
         check_output_path(args.html, inputs=inputs)
-    if not (outputs or args.png or args.html) and not args.quiet:
-        print("curvenet: note: no output file given (-o, --png, --html); printing the summary only", file=sys.stderr)
-
     st = Stages(quiet=args.quiet, verbose=args.verbose)
     params = collect_params(args)
     st.info(f"input: {args.input}; method: {args.method}; given parameters: "
@@ -115,4 +112,6 @@ def run(args) -> int:
             bar.advance()
     if not args.quiet:
         print_summary(net, Path(args.input).stem, written)
+        if not written:
+            print("curvenet: note: no output file given (-o, --png, --html), nothing written", file=sys.stderr)
     return 0
