@@ -204,8 +204,11 @@ def test_torus_chi0_and_close_to_torus(meshes):
     for cyc in mesh.cycles:  # the cycles are the curves: exactly on the torus
         ids = np.concatenate([mesh.curve_vertices[c] for c in cyc])
         assert dist(V[ids]).max() < 1e-6  # the model samples are interpolated: ~1e-8 off
-    # patches span 90 x 60 degrees of the tube (radius 0.4): measured deviation 0.12
-    assert dist(V).max() < 0.15
+    # patches span 90 x 60 degrees of the tube (radius 0.4): measured deviation 0.052 with
+    # fairing by the curves' curvature, 0.133 for flat (harmonic) membranes
+    assert dist(V).max() < 0.07
+    flat = surface(net, fair=False)
+    assert dist(flat.vertices).max() > 2 * dist(V).max()
     assert signed_volume(mesh) > 0
 
 
@@ -220,14 +223,11 @@ def test_sphere_with_polar_loops_closed_chi2(meshes):
     for cyc in mesh.cycles:
         ids = np.concatenate([mesh.curve_vertices[c] for c in cyc])
         assert np.abs(r[ids] - 1).max() < 1e-6
-    # flat caps at 60 degrees latitude sag by 1 - cos(30 deg) = 0.134; patches stay inside
-    assert r.max() <= 1 + 1e-9 and r.min() > 0.86
-    # quad patches are curved (fairing), not flat
-    for k, cyc in enumerate(mesh.cycles):
-        if len(cyc) == 4:
-            P = mesh.vertices[np.unique(mesh.triangles[mesh.patch == k])]
-            s = np.linalg.svd(P - P.mean(axis=0), compute_uv=False)
-            assert s[2] / s[0] > 0.05
+    # measured: within 0.015 of the sphere, caps included (flat caps would sag by
+    # 1 - cos(30 deg) = 0.134, flat membranes on the quads by 0.11)
+    assert np.abs(r - 1).max() < 0.02
+    flat = surface(net, fair=False)
+    assert np.abs(np.linalg.norm(flat.vertices, axis=1) - 1).max() > 0.1
     assert signed_volume(mesh) > 0
 
 
@@ -245,7 +245,7 @@ def test_open_sheet_boundary_is_outer_curves(meshes):
     # the surface follows the sheet (interior vertices within a small distance of z = f(x, y))
     V = mesh.vertices
     z = 0.4 * (V[:, 0] ** 2 - V[:, 1] ** 2) + 0.3 * V[:, 0]
-    assert np.abs(V[:, 2] - z).max() < 0.02
+    assert np.abs(V[:, 2] - z).max() < 0.006  # measured 0.0044
 
 
 @pytest.mark.parametrize("name", ["cube", "torus", "sphere", "sheet", "lprism", "pyramid", "wheel"])
@@ -286,6 +286,21 @@ def test_pyramid_closed(meshes):
     net, mesh = meshes["pyramid"]
     assert mesh.n_patches == 6 and mesh.euler_characteristic == 2
     assert len(mesh.boundary_edges()) == 0
+
+
+def test_loops_on_a_face_become_holes():
+    """The speaker: two circles (loops without node) on the front face of a box."""
+    net = coarsen(synth.model("speaker"))
+    mesh = surface(net)
+    assert mesh.n_patches == 8 and mesh.euler_characteristic == 2
+    assert len(mesh.boundary_edges()) == 0
+    assert is_manifold_and_oriented(mesh.triangles) == (True, True)
+    loops = [c for c in range(net.n_curves) if net.curves[c].start is None]
+    assert len(loops) == 2
+    host = [cyc for cyc in mesh.cycles if len(cyc) > 1 and set(loops) & set(cyc)]
+    assert len(host) == 1 and set(loops) <= set(host[0])  # the front face has both holes
+    assert self_intersections(mesh.vertices, mesh.triangles) == 0
+    assert signed_volume(mesh) == pytest.approx(0.6 * 0.4 * 1.0, rel=1e-6)
 
 
 def test_planar_network_has_no_outer_face(meshes):

@@ -232,6 +232,13 @@ def surface(
                 ring.append(ids[:-1] if s > 0 else ids[::-1][:-1])
         rings.append(np.concatenate(ring))
     holes = _find_holes(cs.cycles, rings, Vb, edges)
+    # at each node, the direction of every surfaced curve leaving it (for cross-boundary slopes)
+    leaving = {}
+    for c in used_curves:
+        if edges[c, 0] >= 0:
+            ch = chains[c]
+            for v, d in ((edges[c, 0], _tangent(ch)), (edges[c, 1], _tangent(ch[::-1]))):
+                leaving.setdefault(int(v), []).append((c, d))
     for k, ring in enumerate(rings):
         if len(ring) < 3:
             continue
@@ -240,6 +247,13 @@ def surface(
         interior, T, kind = triangulate_patch(
             poly, target_edge=h, fair=fair, min_angle=min_angle, holes=[Vb[r] for r in hole_rings],
             corners=ring < len(nodes),
+            cross=[
+                (i, -d)
+                for i, v in enumerate(ring)
+                if v < len(nodes)
+                for c, d in leaving.get(int(v), [])
+                if c not in cs.cycles[k]
+            ],
         )
         domains[kind] += 1
         if kind != "plane":
@@ -373,3 +387,22 @@ def _find_holes(cycles, rings, Vb, edges, *, flat: float = 0.01) -> dict:
             if _inside(Q2, P2).all() and not any(_inside(Q2[:1], (Vb[rings[m]] - c) @ vt[:2].T)[0] for m in out.get(j, [])):
                 out.setdefault(j, []).append(k)
     return out
+
+
+def _tangent(chain: np.ndarray, frac: float = 0.1) -> np.ndarray:
+    """Unit tangent at the start of a polyline.
+
+    Richardson extrapolation of the secants to the points at ``frac`` and ``2 frac`` of its
+    length: ``2 s(f) - s(2f)`` with ``s(f) = (p(f) - p(0)) / f``, exact for parabolas.
+    """
+    seg = np.linalg.norm(np.diff(chain, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    if s[-1] <= 0:
+        return np.zeros(chain.shape[1])
+
+    def at(t):
+        return np.array([np.interp(t, s, chain[:, j]) for j in range(chain.shape[1])])
+
+    t = frac * s[-1]
+    d = 2 * (at(t) - chain[0]) / t - (at(2 * t) - chain[0]) / (2 * t)
+    return d / (np.linalg.norm(d) or 1.0)

@@ -248,6 +248,43 @@ def _mean_normal_curvature(poly, normal, corners, n_outer) -> float:
     return num / den if den > 0 else 0.0
 
 
+def _slope_curvature(q, poly, c, vt, cross, max_angle: float = 45.0):
+    """Mean curvature of a height field from the slopes of curves continuing across its boundary."""
+    n = len(q)
+    area = abs(0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
+    perim = float(np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1).sum())
+    if area <= 0:
+        return None
+    slopes = []
+    for i, d in cross:
+        d = np.asarray(d, dtype=float)
+        dt = d @ vt[:2].T
+        ldt = np.linalg.norm(dt)
+        if ldt == 0 or np.degrees(np.arctan2(abs(d @ vt[2]), ldt)) > max_angle:
+            continue
+        u = dt / ldt
+        off_edges = True
+        for j in (i - 1, (i + 1) % n):
+            e = q[j] - q[i]
+            le = np.linalg.norm(e)
+            if le == 0 or u @ e / le > np.cos(np.radians(20.0)):
+                off_edges = False  # runs along the boundary, not into the patch
+        if not off_edges:
+            continue
+        probe = q[i] + 1e-3 * perim * u
+        x, y = probe
+        a, b = q, np.roll(q, -1, axis=0)
+        cond = (a[:, 1] > y) != (b[:, 1] > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+        if (cond & (x < xc)).sum() % 2 == 1:  # enters the patch
+            slopes.append((d @ vt[2]) / ldt)  # rise per unit length inward
+    if len(slopes) < 3:
+        return None
+    # outward derivative = -inward slope; Laplacian(h) * area = flux = mean(outward) * perimeter
+    return float(-np.mean(slopes) * perim / area / 2.0)
+
+
 def triangulate_patch(
     poly: np.ndarray,
     *,
@@ -256,6 +293,7 @@ def triangulate_patch(
     min_angle: float = 25.0,
     holes: list | None = None,
     corners: np.ndarray | None = None,
+    cross: list | None = None,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """Fill a closed 3D polygon with a triangle mesh whose boundary is exactly the polygon.
 
@@ -276,6 +314,12 @@ def triangulate_patch(
         disk.
     corners : (n,) ndarray of bool, optional
         Outer polygon points where curves meet at an angle (nodes), left out of the curvature.
+    cross : list of (int, (3,) ndarray), optional
+        Boundary points with the direction in which a curve leaving the patch there would
+        continue into it (the reverse of the curve's tangent). When the boundary curves are
+        about planar (no curvature to go by, e.g. a polar cap bounded by a latitude circle),
+        the slopes of the continuations that enter the patch at less than 45 degrees from its
+        plane give the curvature by the divergence theorem: ``2 H * area = flux of grad h``.
     min_angle : float
         Minimum angle (degrees) asked of Triangle's quality refinement.
     holes : list of (m_i, 3) ndarray, optional
@@ -344,6 +388,11 @@ def triangulate_patch(
         L, M = cotan_laplacian(Vd, T, clip=False)
         hb = (poly - c) @ vt[2]
         H = _mean_normal_curvature(poly, vt[2], corners, n0) if fair else 0.0
+        size = float(np.ptp(q[:n0], axis=0).max())
+        if fair and cross and abs(H) * size < 0.02:
+            Hs = _slope_curvature(q[:n0], poly[:n0], c, vt, cross)
+            if Hs is not None:
+                H = Hs
         hi = _extend(L, M, hb[:, None], n, 2.0 * H)[:, 0]
         if not np.isfinite(hi).all():
             L, M = cotan_laplacian(Vd, T)
