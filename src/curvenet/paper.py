@@ -217,8 +217,10 @@ def _select_nodes(points: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
         return out
     sizes = np.array([len(g) for g in groups])
     pad = 1 << np.ceil(np.log2(np.maximum(sizes, 1))).astype(int)
-    for m in np.unique(pad):
-        sel = np.flatnonzero(pad == m)
+    for gi in np.flatnonzero(sizes > _LARGE_GROUP):
+        out[gi] = groups[gi][_select_node_large(points[groups[gi]])]
+    for m in np.unique(pad[sizes <= _LARGE_GROUP]):
+        sel = np.flatnonzero((pad == m) & (sizes <= _LARGE_GROUP))
         G, d = len(sel), points.shape[1]
         X = np.zeros((G, m, d))
         alive = np.zeros((G, m), dtype=bool)
@@ -240,6 +242,53 @@ def _select_nodes(points: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
         for r, gi in enumerate(sel):
             out[gi] = groups[gi][j[r]]
     return out
+
+
+_LARGE_GROUP = 256
+
+
+def _select_node_large(gp: np.ndarray) -> int:
+    """:func:`_select_nodes` for one large group ((n, d) points), without the O(n^2) rescans.
+
+    Distances ``d0`` to a reference centroid ``c0`` bound the distances to the current centroid
+    ``c`` within ``|c - c0|``, so the farthest point from ``c`` is among the points with
+    ``d0 >= max(d0) - 2 |c - c0|``; only those are measured. The reference is renewed when that
+    set grows. The result is exact (the centroid is kept as a running sum).
+    """
+    n = len(gp)
+    alive = np.ones(n, dtype=bool)
+    total = gp.sum(axis=0)
+    cnt = n
+
+    def reference(c):
+        pos = np.flatnonzero(alive)
+        d0 = np.sqrt(((gp[pos] - c) ** 2).sum(axis=1))
+        o = np.argsort(-d0, kind="stable")
+        return c.copy(), pos[o], -d0[o]  # -d0 ascending
+
+    c = total / cnt
+    c0, order, nd0 = reference(c)
+    top = 0
+    while cnt > 4:
+        while not alive[order[top]]:
+            top += 1
+        lim = -nd0[top] - 2.0 * np.sqrt(((c - c0) ** 2).sum())
+        stop = int(np.searchsorted(nd0, -lim, side="right"))
+        cand = order[top:stop]
+        cand = np.sort(cand[alive[cand]])
+        if len(cand) > max(64, 4 * int(np.sqrt(cnt))):
+            c0, order, nd0 = reference(c)
+            top = 0
+            continue
+        dd = ((gp[cand] - c) ** 2).sum(axis=1)
+        j = int(cand[int(np.argmax(dd))])
+        alive[j] = False
+        total = total - gp[j]
+        cnt -= 1
+        c = total / cnt
+    pos = np.flatnonzero(alive)
+    dd = ((gp[pos] - c) ** 2).sum(axis=1)
+    return int(pos[int(np.argmin(dd))])
 
 
 def detect_nodes(points: np.ndarray, *, k: int = DEFAULT_K, epsilon: float, tau_s: float,
