@@ -715,11 +715,18 @@ def _order_between(P, ids, pa, pb):
 
 def _end_portion(P, h, ids, span=3.0):
     """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h."""
-    X = P[ids[::-1]]
-    if len(X) < 2:
-        return X
-    seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+    n = len(ids)
+    if n < 2:
+        return P[ids[::-1]]
     hl = float(h[ids[-1]])
+    # look at a growing tail only (the prefix sums, hence the result, are those of the whole list)
+    w = 32
+    while True:
+        X = P[ids[: -w - 1: -1]] if w < n else P[ids[::-1]]
+        seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+        if seg[-1] > span * hl or len(X) == n:
+            break
+        w *= 4
     m = max(int(np.searchsorted(seg, span * hl, side="right")), min(3, len(X)))
     return X[:m]
 
