@@ -211,6 +211,16 @@ def test_input_order_does_not_matter(shape, seed):
     check_consistent(b, pts[perm])
 
 
+def test_rigid_motion_and_scale_keep_the_cube():
+    pts, _, corners, _ = cube(50)
+    rot = np.linalg.qr(np.random.default_rng(2).normal(size=(3, 3)))[0]
+    moved = 3.5 * pts @ rot.T + [10.0, -4.0, 2.0]
+    net = reconstruct_paper(moved)
+    assert net.n_nodes == 8 and net.n_curves == 12 and net.betti == (1, 5)
+    back = (net.nodes - [10.0, -4.0, 2.0]) @ rot / 3.5
+    assert np.linalg.norm(back[:, None] - corners[None], axis=2).min(axis=1).max() < 2 / 50
+
+
 def test_numba_and_python_kernels_agree():
     pytest.importorskip("numba")
     for pts in (cube(30)[0], lens()[0], star([(1, 0), (-1, 0), (0, 1), (0, -1)])):
@@ -271,6 +281,26 @@ def test_groups_and_node_rule():
     from curvenet.paper import _select_nodes
 
     assert _select_nodes(few, [np.arange(3)])[0] == 0
+
+
+def test_large_group_selection_matches_the_plain_iteration():
+    from curvenet.paper import _select_node_large, _select_nodes
+
+    def plain(gp):  # the paper's loop, centroid kept as a running sum
+        alive = list(range(len(gp)))
+        total = gp.sum(axis=0)
+        while len(alive) > 4:
+            c = total / len(alive)
+            j = alive[int(np.argmax(((gp[alive] - c) ** 2).sum(axis=1)))]
+            alive.remove(j)
+            total = total - gp[j]
+        c = total / len(alive)
+        return alive[int(np.argmin(((gp[alive] - c) ** 2).sum(axis=1)))]
+
+    rng = np.random.default_rng(5)
+    for gp in (rng.normal(size=(700, 3)), np.round(rng.normal(size=(500, 2)) * 4), rng.uniform(size=(300, 3))):
+        assert _select_node_large(gp) == plain(gp)
+        assert _select_nodes(gp, [np.arange(len(gp))])[0] == plain(gp)  # routed to the large path
 
 
 def test_coplanar_junction_in_3d_is_not_a_candidate():
