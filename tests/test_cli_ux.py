@@ -79,6 +79,26 @@ def test_summary_table_has_the_columns_of_the_papers_table_1(run_all):
     assert r.stderr == ""
 
 
+def test_rich_summary_table(run_all):
+    import io
+
+    from curvenet.cli.progress import print_summary
+    from curvenet.io import read_network
+
+    d, _, _ = run_all
+    net = read_network(d / "n.json")
+    net.parameters.update(epsilon=2e-7, tau_s=0.02, theta=120.0, spacing_range=[0.0123456, 0.5])
+    buf = io.StringIO()
+    print_summary(net, "speaker", ["a.json"], file=buf, fancy=True)
+    text = buf.getvalue()
+    for head in ("Model", "N_n", "N_c", "N_d", "\u03b5", "\u03c4_S", "\u03b8(\u00b0)", "Time(s)"):
+        assert head in text
+    row = [ln for ln in text.splitlines() if "speaker" in ln][0]
+    cells = [c.strip() for c in row.strip("\u2502 ").split("\u2502")]
+    assert cells[:7] == ["speaker", str(net.n_nodes), str(net.n_curves), str(net.stats["N_d"]), "2e-07", "0.02", "120"]
+    assert "spacing_range=[0.0123, 0.5]" in text and "wrote a.json" in text
+
+
 def test_quiet_prints_nothing_and_verbose_prints_stages(tmp_path):
     np.savetxt(tmp_path / "t.xyz", theta_points(30))
     r = cli("reconstruct", "t.xyz", "-o", "a.json", "--method", "emst", "-q", cwd=tmp_path)

@@ -17,6 +17,7 @@ from curvenet import viewer  # noqa: E402
 from curvenet.plots.network_png import JUNCTION_COLOR, curve_colors  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else shutil.which("chromium")
+GD = "document.getElementById('curvenet-viewer')"
 CHROMIUM_ARGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
     "--disable-component-update", "--disable-sync", "--no-first-run",
@@ -118,7 +119,8 @@ def open_page(browser, path):
     page.on("request", request)
     page.goto(path.as_uri())
     page.wait_for_selector("#curvenet-viewer .main-svg", timeout=30_000)
-    page.wait_for_timeout(500)
+    page.wait_for_function(f"{GD}._fullLayout !== undefined", timeout=10_000)
+    page.wait_for_timeout(300)
     return page, problems
 
 
@@ -151,14 +153,15 @@ def test_viewer_draws_in_chromium(browser, tmp_path, d):
 
         # the buttons toggle nodes and points
         page.get_by_text("curves only", exact=True).click(timeout=5000)
-        page.wait_for_timeout(400)
+        page.wait_for_function(f"{GD}.data.every(t => t.visible === (t.legendgroup === 'curves'))", timeout=5000)
+        page.wait_for_timeout(150)  # let WebGL draw the frame
         vis = page.evaluate("document.getElementById('curvenet-viewer').data.map(t => [t.legendgroup, t.visible])")
         assert {g for g, v in vis if v is True} == {"curves"}
         assert all(v is False for g, v in vis if g != "curves")
         img2 = shot(page)
         assert count_color(img2, JUNCTION_COLOR) < count_color(img, JUNCTION_COLOR)
         page.get_by_text("all", exact=True).click(timeout=5000)
-        page.wait_for_timeout(400)
+        page.wait_for_function(f"{GD}.data.every(t => t.visible === true)", timeout=5000)
         vis = page.evaluate("document.getElementById('curvenet-viewer').data.map(t => t.visible)")
         assert all(v is True for v in vis)
 
