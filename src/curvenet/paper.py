@@ -52,7 +52,7 @@ Our reading of the pseudo-code, line by line:
 * A curve ends when the chosen point is a node (line 11). Points are never used twice in one
   pass; nodes are never "used", so several curves of a pass may end on the same node and a curve
   may return to its start node (a loop through one node, ``start == end``).
-* **Step bound and free ends** (not in the paper): a point farther than ``tau_s`` from the
+* **Step bound and free ends** (not in the paper): a point at ``tau_s`` or more from the
   current point is not admissible. When no admissible point remains, the curve has reached a
   *dead end*: it ends there and its last point becomes a new free-end node (valence 1). Free-end
   nodes are then traced from like the detected nodes, so that their curves also have twins;
