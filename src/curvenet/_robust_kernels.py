@@ -107,25 +107,32 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - com
                 d2 += t * t
             if d2 >= ri * ri:
                 shell[a] = p
-        # connected groups of shell points, linked among themselves
+        # connected groups of shell points, linked among themselves; a group counts only
+        # when it reaches the middle of the shell along the graph (a branch leaving p), not
+        # when it is a small cluster near the inner radius (the tip of an acute corner)
+        rmid = 0.5 * (ri + ro)
         ng = 0
         for q in range(nreach):
             a = reached[q]
             if shell[a] != p or comp[a] == p:
                 continue
-            ng += 1
             comp[a] = p
+            gmax = gd[a]
             top = 1
             stack[0] = a
             while top > 0:
                 top -= 1
                 x = stack[top]
+                if gd[x] > gmax:
+                    gmax = gd[x]
                 for e in range(indptr[x], indptr[x + 1]):
                     y = indices[e]
                     if shell[y] == p and comp[y] != p:
                         comp[y] = p
                         stack[top] = y
                         top += 1
+            if gmax >= rmid:
+                ng += 1
         groups[p] = ng
     return groups
 

@@ -372,7 +372,7 @@ def reconstruct_robust(
     reg, n_reg = _components(N, ksrc[kshort], kdst[kshort], flagged)
     chn, n_chn = _components(N, src, dst, ~flagged)
 
-    chains = _order_chains(P, h, src, dst, dd, chn, n_chn, reg)
+    chains = _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin)
     regions = [np.flatnonzero(reg == r) for r in range(n_reg)]
     tm["tracing"] = time.perf_counter() - t1
 
@@ -402,7 +402,7 @@ def reconstruct_robust(
     return net
 
 
-def _order_chains(P, h, src, dst, dd, chn, n_chn, reg):
+def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     """Order every chain by geodesic distance from one end; find the regions its ends touch."""
     N = len(P)
     chains: list[_Chain] = []
@@ -448,7 +448,7 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg):
         cr = c_reg[cb[ci]:cb[ci + 1]]
         cp = c_par[cb[ci]:cb[ci + 1]]
         if len(cr) == 0:
-            chains.append(_loop_or_piece(P, h, g, seg))
+            chains.append(_loop_or_piece(P, h, g, seg, lin))
             continue
         hl = float(np.median(h[seg]))
         reach = min(0.5 * L, 4.0 * hl)
@@ -465,17 +465,24 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg):
     return chains
 
 
-def _loop_or_piece(P, h, g, seg):
-    """A chain that touches no region: a closed loop (cut open and ordered), or an open piece."""
+def _loop_or_piece(P, h, g, seg, lin):
+    """A chain that touches no region: a closed loop (cut open and ordered), or an open piece.
+
+    The loop is cut at its straightest point (largest linearity; ties: lowest id), never at
+    a sharp corner where the tangent is undefined.
+    """
     if len(seg) < 3:
         return _Chain(seg, [-1, -1])
-    s = int(seg[0])
+    seg = np.sort(seg)
+    s0 = int(np.argmax(lin[seg]))
+    seg = np.r_[seg[s0:], seg[:s0]]
     sub = g[seg][:, seg].tocoo()
     X = P[seg]
     hl = float(np.median(h[seg]))
-    # tangent at the start point
-    near = np.linalg.norm(X - X[0], axis=1) <= 3.0 * hl
-    _, u = _fit_line(X[near])
+    # tangent at the start point; every link crossing the cut has both ends this near
+    rnear = max(3.0 * hl, 1.01 * float(sub.data.max()) if sub.nnz else 0.0)
+    near = np.linalg.norm(X - X[0], axis=1) <= rnear
+    _, u = _fit_line(X[np.linalg.norm(X - X[0], axis=1) <= 3.0 * hl])
     if u is None:
         return _Chain(seg, [-1, -1])
     side = (X - X[0]) @ u
@@ -493,7 +500,7 @@ def _loop_or_piece(P, h, g, seg):
     rest = np.flatnonzero(~finite)
     ordered = seg[o]
     last = X[o[-1]]
-    closed = np.linalg.norm(last - X[0]) <= 3.0 * hl and _polylen(X[o]) > 6.0 * hl
+    closed = np.linalg.norm(last - X[0]) <= rnear and _polylen(X[o]) > 6.0 * hl
     if len(rest):
         # unreachable points: append by their position along the tangent (rare)
         ordered = np.r_[ordered, seg[rest[np.argsort(side[rest], kind="stable")]]]
