@@ -75,6 +75,31 @@ def test_figure_traces_and_hover_texts():
     assert [b.label for b in fig.layout.updatemenus[0].buttons] == ["all", "curves + nodes", "curves only", "points only"]
 
 
+def test_many_curves_share_one_trace_per_colour():
+    rng = np.random.default_rng(5)
+    nodes = rng.random((41, 3))
+    net = CurveNetwork(nodes, [Curve(np.linspace(nodes[i], nodes[i + 1], 7), i, i + 1) for i in range(40)])
+    fig = viewer.network_figure(net, max_curve_traces=10)
+    curves = [t for t in fig.data if t.legendgroup == "curves"]
+    colors = curve_colors(net)
+    assert len(curves) == len(set(colors)) < net.n_curves
+    assert sum(t.showlegend for t in curves) == 1 and curves[0].name == "curves (40)"
+    seen = set()
+    for t in curves:
+        x = np.asarray(t.x, dtype=float)
+        gaps = np.flatnonzero(np.isnan(x))
+        starts = np.concatenate([[0], gaps[:-1] + 1])
+        for a, b in zip(starts, gaps):
+            i = int(t.hovertext[a].split("<br>")[0].split()[1])
+            assert all(h == t.hovertext[a] for h in t.hovertext[a:b])
+            np.testing.assert_array_equal(x[a:b], net.curves[i].points[:, 0])
+            assert colors[i] == t.line.color
+            seen.add(i)
+    assert seen == set(range(40))
+    # the same figure with one trace per curve
+    assert len([t for t in viewer.network_figure(net).data if t.legendgroup == "curves"]) == 40
+
+
 def test_subsample_points_is_order_independent():
     rng = np.random.default_rng(3)
     p = rng.random((1000, 3))

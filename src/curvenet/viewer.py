@@ -20,6 +20,9 @@ __all__ = ["network_figure", "network_to_html", "save_html", "subsample_points"]
 #: Input points beyond this number are thinned for the viewer (see :func:`subsample_points`).
 MAX_VIEWER_POINTS = 200_000
 
+#: Networks with more curves than this draw one trace per colour instead of one per curve.
+MAX_CURVE_TRACES = 300
+
 
 def subsample_points(points: np.ndarray, max_points: int) -> np.ndarray:
     """At most ``max_points`` of ``points``, chosen independently of their order.
@@ -46,7 +49,7 @@ def subsample_points(points: np.ndarray, max_points: int) -> np.ndarray:
 
 
 def network_figure(net: CurveNetwork, *, points=None, title: str | None = None,
-                   max_points: int = MAX_VIEWER_POINTS):
+                   max_points: int = MAX_VIEWER_POINTS, max_curve_traces: int = MAX_CURVE_TRACES):
     """A plotly Figure of the network.
 
     Parameters
@@ -58,6 +61,10 @@ def network_figure(net: CurveNetwork, *, points=None, title: str | None = None,
         Page title; by default the counts of nodes and curves.
     max_points : int
         Thin the input points to at most this many (order-independent).
+    max_curve_traces : int
+        Up to this many curves, each curve is its own plotly trace; beyond, curves of the same
+        colour share a trace (separated by gaps), which keeps large networks fast. Hovering
+        names the curve either way.
 
     Returns
     -------
@@ -104,21 +111,38 @@ def network_figure(net: CurveNetwork, *, points=None, title: str | None = None,
 
     colors = curve_colors(net)
     lengths = net.lengths
+    texts, lines = [], []
     for i, c in enumerate(net.curves):
         p = c.points
         if c.closed and len(p) > 1:
             p = np.vstack([p, p[:1]])
+        lines.append(p)
         ends = "free loop" if c.start is None else f"nodes {c.start} \u2013 {c.end}"
-        text = f"curve {i}<br>{ends}<br>{len(c.points)} points, length {lengths[i]:.4g}"
+        texts.append(f"curve {i}<br>{ends}<br>{len(c.points)} points, length {lengths[i]:.4g}")
+    if net.n_curves <= max_curve_traces:  # one trace per curve
+        groups_of_curves = [[i] for i in range(net.n_curves)]
+    else:  # one trace per colour, curves separated by gaps: fast with thousands of curves
+        order = {}
+        for i, col in enumerate(colors):
+            order.setdefault(col, []).append(i)
+        groups_of_curves = list(order.values())
+    for k, ids in enumerate(groups_of_curves):
+        if len(ids) == 1:
+            xy = lines[ids[0]]
+            hover = texts[ids[0]]
+        else:
+            gap = np.full((1, d), np.nan)
+            xy = np.vstack([b for i in ids for b in (lines[i], gap)])
+            hover = [t for i in ids for t in [texts[i]] * len(lines[i]) + [None]]
+        col = colors[ids[0]]
         traces.append(Scatter(
-            **xyz(p), mode="lines", name="curves", legendgroup="curves", showlegend=(i == 0),
-            line=dict(color=colors[i], width=5 if is3d else 2.5),
-            hovertext=text, hoverinfo="text", hoverlabel=dict(bgcolor=colors[i]),
+            **xyz(xy), mode="lines", name="curves", legendgroup="curves", showlegend=(k == 0),
+            line=dict(color=col, width=5 if is3d else 2.5), connectgaps=False,
+            hovertext=hover, hoverinfo="text", hoverlabel=dict(bgcolor=col),
         ))
         groups.append("curves")
-    if traces and groups[-1] == "curves":
-        first = groups.index("curves")
-        traces[first].name = f"curves ({net.n_curves})"
+    if "curves" in groups:
+        traces[groups.index("curves")].name = f"curves ({net.n_curves})"
 
     if net.n_nodes:
         kinds = node_kinds(net)
@@ -175,7 +199,7 @@ def network_figure(net: CurveNetwork, *, points=None, title: str | None = None,
 
 
 def network_to_html(net: CurveNetwork, *, points=None, title: str | None = None,
-                    max_points: int = MAX_VIEWER_POINTS) -> str:
+                    max_points: int = MAX_VIEWER_POINTS, max_curve_traces: int = MAX_CURVE_TRACES) -> str:
     """The viewer page: one HTML document with plotly's JavaScript embedded (works offline).
 
     Parameters are those of :func:`network_figure`.
@@ -185,7 +209,8 @@ def network_to_html(net: CurveNetwork, *, points=None, title: str | None = None,
     str
         A complete HTML document.
     """
-    fig = network_figure(net, points=points, title=title, max_points=max_points)
+    fig = network_figure(net, points=points, title=title, max_points=max_points,
+                         max_curve_traces=max_curve_traces)
     return fig.to_html(
         full_html=True,
         include_plotlyjs=True,
