@@ -99,6 +99,26 @@ def test_rich_summary_table(run_all):
     assert "spacing_range=[0.0123, 0.5]" in text and "wrote a.json" in text
 
 
+def test_plain_text_without_rich(run_all, monkeypatch):
+    import io
+
+    from curvenet.cli.progress import Stages, print_summary
+    from curvenet.io import read_network
+
+    for mod in [m for m in sys.modules if m == "rich" or m.startswith("rich.")]:
+        monkeypatch.delitem(sys.modules, mod)
+    monkeypatch.setitem(sys.modules, "rich", None)  # import rich -> ImportError
+    monkeypatch.setenv("CURVENET_PROGRESS", "always")
+    st = Stages(verbose=True, file=io.StringIO())
+    assert not st._bars
+    with st.stage("work"):
+        pass
+    assert st.file.getvalue().startswith("  work: ")
+    buf = io.StringIO()
+    print_summary(read_network(run_all[0] / "n.json"), "theta", file=buf, fancy=True)
+    assert buf.getvalue().split("\n")[0].split() == ["Model", "N_n", "N_c", "N_d", "eps", "tau_S", "theta", "Time(s)"]
+
+
 def test_quiet_prints_nothing_and_verbose_prints_stages(tmp_path):
     np.savetxt(tmp_path / "t.xyz", theta_points(30))
     r = cli("reconstruct", "t.xyz", "-o", "a.json", "--method", "emst", "-q", cwd=tmp_path)
