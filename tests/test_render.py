@@ -94,6 +94,15 @@ def test_deterministic_and_independent_of_point_order():
     assert a == b
 
 
+def test_independent_of_curve_order_and_direction():
+    net = theta_network(3)
+    perm = [3, 0, 4, 2, 1]
+    shuffled = CurveNetwork(net.nodes, [net.curves[i].reversed() if i % 2 else net.curves[i] for i in perm])
+    cols, cols2 = npng.curve_colors(net), npng.curve_colors(shuffled)
+    assert [cols[i] for i in perm] == cols2
+    assert npng.render_png(net, dpi=40) == npng.render_png(shuffled, dpi=40)
+
+
 def test_view_angles_change_3d_only():
     net3 = theta_network(3)
     a = npng.render_png(net3, dpi=30)

@@ -49,8 +49,10 @@ OTHER_NODE_COLOR = "#ffd92f"
 def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list[str]:
     """One colour per curve; curves that share a node get different colours when possible.
 
-    A greedy colouring in curve order: each curve takes the least-used palette colour that no
-    already coloured curve at its end nodes has (ties broken by palette order).
+    A greedy colouring: curves are visited in an order fixed by their geometry (not by their
+    position in ``net.curves``), and each takes the least-used palette colour that no already
+    coloured curve at its end nodes has (ties broken by palette order). So the same network
+    gets the same colours whatever the order of its curves.
 
     Parameters
     ----------
@@ -63,18 +65,29 @@ def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list
     list of str, one per curve
     """
     k = len(palette)
+    node_key = [tuple(np.round(p, 9).tolist()) for p in net.nodes]
     at_node: dict[int, list[int]] = {}
     counts = np.zeros(k, dtype=np.int64)
-    out: list[int] = []
-    for c in net.curves:
-        ends = [] if c.start is None else sorted({int(c.start), int(c.end)})
+    out = [0] * net.n_curves
+    for i in sorted(range(net.n_curves), key=lambda i: _geometry_key(net.curves[i])):
+        c = net.curves[i]
+        ends = [] if c.start is None else sorted({int(c.start), int(c.end)}, key=lambda n: node_key[n])
         taken = {j for n in ends for j in at_node.get(n, ())}
         j = min(range(k), key=lambda i: (i in taken, counts[i], i))
-        out.append(j)
+        out[i] = j
         counts[j] += 1
         for n in ends:
             at_node.setdefault(n, []).append(j)
     return [palette[j] for j in out]
+
+
+def _geometry_key(c) -> tuple:
+    """A key of a curve that does not depend on its direction or on its place in the network."""
+    p = np.round(np.asarray(c.points, dtype=float), 9)
+    if not len(p):
+        return ((), (), 0)
+    rows = p[np.lexsort(p.T[::-1])] + 0.0  # sorted points (+ 0.0 turns -0.0 into 0.0)
+    return (tuple(rows[0].tolist()), tuple(rows[-1].tolist()), len(p), rows.ravel().tolist())
 
 
 def node_kinds(net: CurveNetwork) -> np.ndarray:
@@ -168,7 +181,8 @@ def plot_network(
 
     lines = _polylines(net)
     colors = curve_colors(net)
-    keep = [i for i, p in enumerate(lines) if len(p) >= 2]
+    # drawn in an order fixed by geometry, so the picture does not depend on the curve order
+    keep = sorted((i for i, p in enumerate(lines) if len(p) >= 2), key=lambda i: _geometry_key(net.curves[i]))
     if keep:
         segs = [lines[i] for i in keep]
         cols = [colors[i] for i in keep]
