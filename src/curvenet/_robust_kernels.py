@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-__all__ = ["shell_groups", "csr_union", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - compiled
@@ -163,15 +163,44 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
     return deg, out
 
 
+def _end_count(P, ids, lim):  # pragma: no cover - compiled
+    """How many points, from the last id of ``ids`` backwards, lie within arc length ``lim``.
+
+    The count of prefix sums ``0, |x1 - x0|, ...`` of the reversed polyline that are ``<= lim``
+    (what ``searchsorted(seg, lim, side="right")`` gives), with the sums formed exactly as numpy's
+    ``cumsum(norm(diff(X), axis=1))`` forms them, so the result is the same bit for bit.
+    """
+    n = ids.shape[0]
+    d = P.shape[1]
+    if n == 0 or not lim >= 0.0:
+        return 0
+    s = 0.0
+    m = 1
+    for q in range(n - 1, 0, -1):
+        a = ids[q]
+        b = ids[q - 1]
+        sq = 0.0
+        for c in range(d):
+            t = P[b, c] - P[a, c]
+            sq = sq + t * t if c > 0 else t * t
+        s += np.sqrt(sq)
+        if not s <= lim:
+            break
+        m += 1
+    return m
+
+
 HAVE_NUMBA = False
 shell_groups = _shell_groups
 csr_union = _csr_union
+end_count = _end_count
 if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
     try:  # pragma: no cover - depends on the environment
         import numba
 
         shell_groups = numba.njit(cache=True, nogil=True)(_shell_groups)
         csr_union = numba.njit(cache=True, nogil=True)(_csr_union)
+        end_count = numba.njit(cache=True, nogil=True)(_end_count)
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass

@@ -726,16 +726,9 @@ def _end_portion(P, h, ids, span=3.0):
     if n < 2:
         return P[ids[::-1]]
     hl = float(h[ids[-1]])
-    # look at a growing tail only (the prefix sums, hence the result, are those of the whole list)
-    w = 32
-    while True:
-        X = P[ids[: -w - 1: -1]] if w < n else P[ids[::-1]]
-        seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
-        if seg[-1] > span * hl or len(X) == n:
-            break
-        w *= 4
-    m = max(int(np.searchsorted(seg, span * hl, side="right")), min(3, len(X)))
-    return X[:m]
+    # arc length summed backwards from the end, only as far as needed (compiled kernel)
+    m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(3, n))
+    return P[ids[: -m - 1: -1]]
 
 
 def _free_end(P, h, ids, rid):
