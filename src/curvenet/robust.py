@@ -49,12 +49,16 @@ __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
 #: Length (in spacings) of the chain end fitted for the tangent line at a junction.
 SPAN = 6.0
+#: The noise scale of the radii below: this many times the estimated noise std.
+NOISE = 1.2
 #: Links may stray from a tangent line by this many times the estimated noise.
 NW = 4.5
 #: The shell radii grow by this many times the estimated noise (in units of ``shell_*``).
 WIDEN = 1.5
 #: Links may be longer than ``link * h`` by this many times the estimated noise.
 GAP = 3.0
+#: Directional links (nearest along the tangent) reach this many times the link length.
+EXTRA = 2.0
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
 _DEFAULTS = {
@@ -123,12 +127,26 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
         w = (perp2 <= h[:, None] ** 2).astype(float)
         t, ev = _pca_dir(Qm, w)
     lin = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
-    # RMS distance of the strip neighbours from the tangent line: the noise level
-    mu = (Qm * w[..., None]).sum(axis=1) / np.maximum(w.sum(axis=1), 1)[:, None]
-    relc = Qm - mu[:, None, :]
-    along = np.einsum("nkd,nd->nk", relc, t)
-    perp2 = np.einsum("nkd,nkd->nk", relc, relc) - along**2
-    rms = np.sqrt((np.maximum(perp2, 0.0) * w).sum(axis=1) / np.maximum(w.sum(axis=1), 1))
+    # noise: distance of each point from the chord between its nearest strip neighbours on
+    # either side (curvature adds only h^2 / 2R there); for Gaussian noise of std sigma per
+    # coordinate its RMS is sigma * sqrt(1.5 (d - 1))
+    rel = Qm[:, 1:] - P[:, None, :]
+    along = np.einsum("nkd,nd->nk", rel, t)
+    perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
+    inside = perp2 <= h[:, None] ** 2
+    big = np.inf
+    da = np.where(inside & (along > 0), along, big)
+    db = np.where(inside & (along < 0), -along, big)
+    ia, ib = np.argmin(da, axis=1), np.argmin(db, axis=1)
+    okr = np.isfinite(da[np.arange(n), ia]) & np.isfinite(db[np.arange(n), ib])
+    A, B = Qm[np.arange(n), 1 + ia], Qm[np.arange(n), 1 + ib]
+    ab = B - A
+    lab = np.maximum(np.linalg.norm(ab, axis=1), 1e-300)
+    ap = P - A
+    cr = np.sqrt(np.maximum((ap * ap).sum(axis=1) - (np.einsum("nd,nd->n", ap, ab) / lab) ** 2, 0.0))
+    dim = P.shape[1]
+    # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
+    rms = 1.28 * np.where(okr, cr, np.nan) / np.sqrt(1.5 * max(dim - 1, 1))
     return t, lin, rms
 
 
@@ -146,7 +164,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
     dd = dist.ravel()
     hh = 0.5 * (h[src] + h[dst])
     reach = link * hh + gap
-    keep = (dd <= 2.0 * reach) & (src != dst)
+    keep = (dd <= EXTRA * reach) & (src != dst)
     src, dst, dd, reach = src[keep], dst[keep], dd[keep], reach[keep]
     vec = P[dst] - P[src]
     # distance of the far end from the line through each end along its tangent
@@ -348,8 +366,9 @@ def reconstruct_robust(
 
     # 2. linked graph
     t, lin, rms = _tangents(P, idx, h)
-    noise = float(np.median(rms))
-    params_out["noise"] = noise
+    sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+    params_out["noise"] = sigma  # estimated std of the noise per coordinate
+    noise = NOISE * sigma
     src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise,
                                  GAP * noise)
     indptr, indices = _k.csr_union(N, src.astype(np.int64), dst.astype(np.int64))
@@ -391,7 +410,7 @@ def reconstruct_robust(
         hm = float(np.median(h))
         if smoothing is None:
             # mean squared distance of a sample from the true curve, from the noise estimate
-            s = max(noise**2 * dim / max(dim - 1, 1), 1e-4 * hm**2) / hm**2
+            s = max(sigma**2 * max(dim - 1, 1), 1e-4 * hm**2) / hm**2
         else:
             s = float(smoothing)
         params_out["smoothing"] = s
