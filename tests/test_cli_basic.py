@@ -45,3 +45,29 @@ def test_info_points(tmp_path):
 def test_no_command_is_usage_error():
     assert cli().returncode == 2
     assert cli("reconstruct").returncode == 2  # missing INPUT
+
+
+def test_param_option_reaches_the_method(tmp_path):
+    import json
+
+    out = tmp_path / "a.json"
+    r = cli("reconstruct", "examples/mug.xyz", "-p", "min_spur=4", "--param", "k=20", "-q", "-o", out,
+            cwd=__import__("pathlib").Path(__file__).resolve().parents[1])
+    assert r.returncode == 0, r.stderr
+    params = json.loads(out.read_text())["parameters"]
+    assert params["k"] == 20 and params["min_spur"] == 4
+
+
+def test_unknown_param_is_usage_error(tmp_path):
+    f = tmp_path / "p.xyz"
+    np.savetxt(f, np.column_stack([np.arange(30.0), np.zeros(30), np.zeros(30)]))
+    r = cli("reconstruct", f, "-p", "nosuch=1", "-o", tmp_path / "o.json")
+    assert r.returncode == 2 and "has no parameter 'nosuch'" in r.stderr
+    assert not (tmp_path / "o.json").exists()
+    r = cli("reconstruct", f, "-p", "novalue")
+    assert r.returncode == 2 and "NAME=VALUE" in r.stderr
+
+
+def test_broken_pipe_is_quiet():
+    p = subprocess.run(f"{sys.executable} -m curvenet.cli formats | head -1", shell=True, capture_output=True, text=True)
+    assert "Traceback" not in p.stderr and "internal error" not in p.stderr

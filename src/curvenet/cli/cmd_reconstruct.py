@@ -38,6 +38,9 @@ def register(sub) -> None:
     g2 = p.add_argument_group("parameters of the default method (estimated when not given)")
     g2.add_argument("--spacing", type=float, default=None, help="sampling spacing h in input units")
     g2.add_argument("--smooth", action="store_true", help="fit smoothing splines that end at the nodes")
+    p.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE", type=_param,
+                   help="any parameter of the method, e.g. --param shell_outer=6 (repeatable); "
+                        "see the README for each method's parameters")
     p.add_argument("--columns", type=lambda s: [c.strip() for c in s.split(",") if c.strip()], default=None,
                    help="coordinate columns of a text/array input, e.g. 0,1,2 or x,y,z")
     p.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN or infinite coordinates")
@@ -50,8 +53,35 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _param(text: str):
+    """Parse ``NAME=VALUE``; the value becomes a bool, int or float where it reads as one."""
+    import argparse
+
+    name, sep, value = text.partition("=")
+    name = name.strip().replace("-", "_")
+    if not sep or not name.isidentifier():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}")
+    v = value.strip()
+    low = v.lower()
+    if low in ("true", "yes", "on"):
+        return name, True
+    if low in ("false", "no", "off"):
+        return name, False
+    if low in ("none", "auto", ""):
+        return name, None
+    for conv in (int, float):
+        try:
+            return name, conv(v)
+        except ValueError:
+            pass
+    return name, v
+
+
 def collect_params(args) -> dict:
     params = {name: getattr(args, opt) for opt, name in _PARAMS.items() if getattr(args, opt, None) is not None}
+    for name, value in getattr(args, "param", []):
+        if value is not None:
+            params[name] = value
     if getattr(args, "smooth", False):
         params["smooth"] = True
     return params
