@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-__all__ = ["shell_groups", "csr_union", "end_count", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - compiled
@@ -190,10 +190,160 @@ def _end_count(P, ids, lim):  # pragma: no cover - compiled
     return m
 
 
+def _eig_sym_py(C, V, ev):  # pragma: no cover - compiled
+    """Eigen-decomposition of a small symmetric matrix ``C`` (d, d) by cyclic Jacobi rotations.
+
+    ``C`` is overwritten; on return ``ev`` (d,) holds the eigenvalues in ascending order (ties:
+    lower index first) and the columns of ``V`` (d, d) the unit eigenvectors, in that order.
+    Only ``+ - * /`` and ``sqrt``: the compiled and the Python runs agree bit for bit.
+    """
+    d = C.shape[0]
+    for i in range(d):
+        for j in range(d):
+            V[i, j] = 1.0 if i == j else 0.0
+    for sweep in range(60):
+        off = 0.0
+        scale = 0.0
+        for p in range(d):
+            scale += abs(C[p, p])
+            for q in range(p + 1, d):
+                off += abs(C[p, q])
+        if off <= 1e-30 * scale or off == 0.0:
+            break
+        for p in range(d - 1):
+            for q in range(p + 1, d):
+                apq = C[p, q]
+                if apq == 0.0:
+                    continue
+                theta = (C[q, q] - C[p, p]) / (2.0 * apq)
+                if abs(theta) > 1e150:
+                    t = 0.5 / theta
+                else:
+                    t = 1.0 / (abs(theta) + np.sqrt(theta * theta + 1.0))
+                    if theta < 0.0:
+                        t = -t
+                c = 1.0 / np.sqrt(t * t + 1.0)
+                s = t * c
+                for r in range(d):  # C <- C J (columns p, q)
+                    crp = C[r, p]
+                    crq = C[r, q]
+                    C[r, p] = c * crp - s * crq
+                    C[r, q] = s * crp + c * crq
+                for r in range(d):  # C <- J^T C (rows p, q)
+                    cpr = C[p, r]
+                    cqr = C[q, r]
+                    C[p, r] = c * cpr - s * cqr
+                    C[q, r] = s * cpr + c * cqr
+                C[p, q] = 0.0
+                C[q, p] = 0.0
+                for r in range(d):
+                    vrp = V[r, p]
+                    vrq = V[r, q]
+                    V[r, p] = c * vrp - s * vrq
+                    V[r, q] = s * vrp + c * vrq
+    # sort ascending (insertion sort, stable), columns of V along
+    for i in range(d):
+        ev[i] = C[i, i]
+    for i in range(1, d):
+        j = i
+        while j > 0 and ev[j - 1] > ev[j]:
+            tmp = ev[j - 1]
+            ev[j - 1] = ev[j]
+            ev[j] = tmp
+            for r in range(d):
+                tmp = V[r, j - 1]
+                V[r, j - 1] = V[r, j]
+                V[r, j] = tmp
+            j -= 1
+
+
+_eig_sym = _eig_sym_py
+
+
+def _wpca(P, rows, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
+    """Weighted PCA of the points ``P[rows[:cnt]]`` with weights ``w[:cnt]``: principal
+    direction into ``t`` and ascending eigenvalues into ``ev`` (as robust._pca_dir)."""
+    d = P.shape[1]
+    sw = 0.0
+    for k in range(cnt):
+        sw += w[k]
+    if sw < 1e-300:
+        sw = 1e-300
+    for c in range(d):
+        acc = 0.0
+        for k in range(cnt):
+            acc += P[rows[k], c] * w[k]
+        mu[c] = acc / sw
+    for i in range(d):
+        for j in range(i, d):
+            acc = 0.0
+            for k in range(cnt):
+                sq = np.sqrt(w[k])
+                acc += ((P[rows[k], i] - mu[i]) * sq) * ((P[rows[k], j] - mu[j]) * sq)
+            C[i, j] = acc
+            C[j, i] = acc
+    _eig_sym(C, V, ev)
+    for c in range(d):
+        t[c] = V[c, d - 1]
+
+
+def _tangents(P, idx, h, m):  # pragma: no cover - compiled
+    """Tangent and linearity of every point (the PCA steps of robust._tangents).
+
+    A first direction from the point and its 4 nearest neighbours; twice, the point and its
+    ``m`` nearest neighbours within ``h`` of the current line are weighted 1 (others 0) and the
+    weighted PCA gives the next direction. The linearity is ``1 - l2 / l1`` of the last PCA.
+    No (N, m, d) temporaries: one point at a time.
+
+    Returns
+    -------
+    T : (N, d) ndarray
+        Unit tangents (sign arbitrary).
+    lin : (N,) ndarray
+    """
+    n = P.shape[0]
+    d = P.shape[1]
+    T = np.zeros((n, d))
+    lin = np.zeros(n)
+    rows = np.empty(m + 1, dtype=np.int64)
+    w = np.ones(m + 1)
+    C = np.zeros((d, d))
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    mu = np.zeros(d)
+    t = np.zeros(d)
+    for p in range(n):
+        rows[0] = p
+        for k in range(m):
+            rows[k + 1] = idx[p, k]
+        for k in range(5):
+            w[k] = 1.0
+        _wpca(P, rows, 5, w, C, V, ev, mu, t)
+        hp2 = h[p] * h[p]
+        for it in range(2):
+            for k in range(m + 1):
+                al = 0.0
+                r2 = 0.0
+                for c in range(d):
+                    x = P[rows[k], c] - P[p, c]
+                    al += x * t[c]
+                    r2 += x * x
+                w[k] = 1.0 if r2 - al * al <= hp2 else 0.0
+            _wpca(P, rows, m + 1, w, C, V, ev, mu, t)
+        lam = ev[d - 1]
+        if lam < 1e-300:
+            lam = 1e-300
+        lin[p] = 1.0 - ev[d - 2] / lam
+        for c in range(d):
+            T[p, c] = t[c]
+    return T, lin
+
+
 HAVE_NUMBA = False
 shell_groups = _shell_groups
 csr_union = _csr_union
 end_count = _end_count
+tangents = _tangents
 if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
     try:  # pragma: no cover - depends on the environment
         import numba
@@ -201,6 +351,10 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         shell_groups = numba.njit(cache=True, nogil=True)(_shell_groups)
         csr_union = numba.njit(cache=True, nogil=True)(_csr_union)
         end_count = numba.njit(cache=True, nogil=True)(_end_count)
+        # helpers first: the kernels resolve them by their global names when compiled
+        _eig_sym = numba.njit(cache=True, nogil=True)(_eig_sym_py)
+        _wpca = numba.njit(cache=True, nogil=True)(_wpca)
+        tangents = numba.njit(cache=True, nogil=True)(_tangents)
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass

@@ -116,17 +116,12 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     """
     n = len(P)
     self_ = np.arange(n)[:, None]
-    Q4 = P[np.concatenate([self_, idx[:, :4]], axis=1)]
-    t, _ = _pca_dir(Q4)
     m = min(m, idx.shape[1])
+    # compiled, one point at a time: the 4-neighbour PCA, then twice the PCA of the point and
+    # its m nearest within h of the current line (weights 0/1), as _pca_dir on stacked arrays
+    t, lin = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                         np.ascontiguousarray(h, dtype=np.float64), m)
     Qm = P[np.concatenate([self_, idx[:, :m]], axis=1)]
-    rel = Qm - P[:, None, :]
-    for _ in range(2):
-        along = np.einsum("nkd,nd->nk", rel, t)
-        perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
-        w = (perp2 <= h[:, None] ** 2).astype(float)
-        t, ev = _pca_dir(Qm, w)
-    lin = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
     # noise: distance of each point from the chord between its nearest strip neighbours on
     # either side (curvature adds only h^2 / 2R there); for Gaussian noise of std sigma per
     # coordinate its RMS is sigma * sqrt(1.5 (d - 1))
