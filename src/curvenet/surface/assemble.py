@@ -285,6 +285,9 @@ def surface(
                 cycles[k].append(cycles[j][0])
                 directions[k].append(host_dir)
 
+    # ------------------------------------------------------------------ shared chords
+    V, T, P, n_split = _split_shared_chords(V, T, P)
+
     # ------------------------------------------------------------------ outward on closed parts
     _orient_outward(V, T, P, cycles, directions)
 
@@ -307,6 +310,7 @@ def surface(
             "candidates": cs.n_candidates,
             "domains": domains,
             "target_edge": h,
+            "chord_splits": n_split,
         },
     )
 
@@ -406,3 +410,61 @@ def _tangent(chain: np.ndarray, frac: float = 0.1) -> np.ndarray:
     t = frac * s[-1]
     d = 2 * (at(t) - chain[0]) / t - (at(2 * t) - chain[0]) / (2 * t)
     return d / (np.linalg.norm(d) or 1.0)
+
+
+def _split_shared_chords(V, T, P, max_rounds: int = 5):
+    """Split chords that two patches share, so that no edge has more than two triangles.
+
+    Where two patches fold onto each other near a node (both run through it by the same two
+    curves), their triangulations can join the same boundary points by the same interior edge.
+    Such an edge is split in every patch but the first that has it inside, at a point moved a
+    quarter of the way toward the opposite vertices (it stays inside the patch's two triangles).
+
+    Returns the new vertices, triangles, patch ids and the number of splits.
+    """
+    count = 0
+    for _ in range(max_rounds):
+        e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+        u, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+        inv = inv.ravel()
+        bad = np.flatnonzero(cnt > 2)
+        if not len(bad):
+            break
+        f_of = np.tile(np.arange(len(T)), 3)
+        new_v, new_t, new_p, drop = [], [], [], set()
+        nv = len(V)
+        for b in bad:
+            a, c = (int(x) for x in u[b])
+            faces = [int(f) for f in f_of[inv == b] if int(f) not in drop]
+            by_patch = {}
+            for f in faces:
+                by_patch.setdefault(int(P[f]), []).append(f)
+            inside = sorted(k for k, fs in by_patch.items() if len(fs) == 2)
+            for k in inside[1:] if len(inside) == len(by_patch) else inside:
+                f1, f2 = by_patch[k]
+                opp = [int(next(x for x in T[f] if x != a and x != c)) for f in (f1, f2)]
+                mid = (V[a] + V[c]) / 2
+                m = mid + 0.25 * ((V[opp[0]] + V[opp[1]]) / 2 - mid)
+                new_v.append(m)
+                mid_id = nv
+                nv += 1
+                for f in (f1, f2):
+                    t = [int(x) for x in T[f]]
+                    # the edge (t[i], t[i+1]) or (t[i-1], t[i]) is (a, c) in some direction
+                    for j in range(3):
+                        p_, q_ = t[j], t[(j + 1) % 3]
+                        if {p_, q_} == {a, c}:
+                            r_ = t[(j + 2) % 3]
+                            new_t += [[p_, mid_id, r_], [mid_id, q_, r_]]
+                            new_p += [k, k]
+                            break
+                    drop.update((f1, f2))
+                count += 1
+        if not new_v:
+            break
+        keep = np.ones(len(T), dtype=bool)
+        keep[list(drop)] = False
+        V = np.vstack([V, np.array(new_v)])
+        T = np.vstack([T[keep], np.array(new_t, dtype=np.int64)])
+        P = np.concatenate([P[keep], np.array(new_p, dtype=np.int64)])
+    return V, T, P, count

@@ -363,8 +363,20 @@ def find_cycles(
 
     # ------------------------------------------------------------------ selection
     chosen = _select(cands, costs, inward, len(edges), fold_angle, time_limit)
-    cycles = [cands[k] for k in chosen]
-    cycles = _orient(cycles)
+    # a non-orientable choice (a Moebius-like ring of patches) cannot be oriented: drop, one at
+    # a time, the patch whose removal leaves the fewest conflicts (ties: the costliest by area
+    # per curve) among those that run the same way through a curve as a neighbour
+    cycles, bad = _orient([cands[k] for k in chosen])
+    while bad:
+        best = None
+        for i in bad:
+            rest = [k for j, k in enumerate(chosen) if j != i]
+            left = len(_orient([cands[k] for k in rest])[1])
+            key = (left, -costs[chosen[i]] / len(cands[chosen[i]]), chosen[i])
+            if best is None or key < best[0]:
+                best = (key, i)
+        chosen = [k for j, k in enumerate(chosen) if j != best[1]]
+        cycles, bad = _orient([cands[k] for k in chosen])
     return CycleSet(
         [[d // 2 for d in c] for c in cycles],
         [[1 if d % 2 == 0 else -1 for d in c] for c in cycles],
@@ -479,8 +491,12 @@ def _greedy(cands, costs, conflicts, n_curves):
     return sorted(chosen)
 
 
-def _orient(cycles: list[list[int]]) -> list[list[int]]:
-    """Reverse cycles so that two cycles sharing a curve run through it in opposite directions."""
+def _orient(cycles: list[list[int]]):
+    """Reverse cycles so that two cycles sharing a curve run through it in opposite directions.
+
+    Returns the oriented cycles and the indices of the cycles left running the same way as a
+    neighbour through a shared curve (empty when the arrangement is orientable).
+    """
     by_curve = {}
     for k, cyc in enumerate(cycles):
         for d in cyc:
@@ -499,9 +515,16 @@ def _orient(cycles: list[list[int]]) -> list[list[int]]:
                     if m == k or flip[m] is not None:
                         continue
                     dm = next(e for e in cycles[m] if e // 2 == d // 2)
-                    flip[m] = (dm == dk)  # same direction: reverse m
+                    flip[m] = dm == dk  # same direction: reverse m
                     queue.append(m)
     out = []
     for cyc, f in zip(cycles, flip):
         out.append([d ^ 1 for d in reversed(cyc)] if f else list(cyc))
-    return out
+    bad = set()
+    for c, ks in by_curve.items():
+        if len(ks) == 2:
+            d0 = next(e for e in out[ks[0]] if e // 2 == c)
+            d1 = next(e for e in out[ks[1]] if e // 2 == c)
+            if d0 == d1:
+                bad.update(ks)
+    return out, sorted(bad)

@@ -285,6 +285,30 @@ def _slope_curvature(q, poly, c, vt, cross, max_angle: float = 45.0):
     return float(-np.mean(slopes) * perim / area / 2.0)
 
 
+def _ear_points(q, n_outer, idx, sign) -> np.ndarray:
+    """Centroids of the ears ``(i - 1, i, i + 1)`` of the outer polygon at the given corners.
+
+    Only convex ears (turning like the polygon) that contain no other polygon point are kept.
+    """
+    out = []
+    for i in idx:
+        a, b, c = q[(i - 1) % n_outer], q[i], q[(i + 1) % n_outer]
+        cr = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        if cr * sign <= 1e-12 * max(np.ptp(q, axis=0).max(), 1e-300) ** 2:
+            continue
+
+        def side(p, r, s):
+            return (r[0] - p[0]) * (s[:, 1] - p[1]) - (r[1] - p[1]) * (s[:, 0] - p[0])
+
+        others = np.delete(q, [(i - 1) % n_outer, i, (i + 1) % n_outer], axis=0)
+        sg = np.sign(cr)
+        inside = (side(a, b, others) * sg > 0) & (side(b, c, others) * sg > 0) & (side(c, a, others) * sg > 0)
+        if inside.any():
+            continue
+        out.append((a + b + c) / 3.0)
+    return np.array(out).reshape(-1, 2)
+
+
 def triangulate_patch(
     poly: np.ndarray,
     *,
@@ -370,6 +394,14 @@ def triangulate_patch(
         q = np.vstack(qs)
         data = {"vertices": q, "segments": np.vstack(ss), "holes": np.array(hp)}
         n = m
+    if corners is not None and np.any(corners):
+        # an interior point in the ear at each node keeps the ear (two curve samples and the
+        # node) out of the triangulation: two patches that run through a node by the same two
+        # curves would otherwise both cut the corner by the same chord (a non-manifold edge)
+        st = _ear_points(q, n0, np.flatnonzero(np.asarray(corners, dtype=bool)[:n0]), np.sign(signed))
+        if len(st):
+            data = dict(data)
+            data["vertices"] = np.vstack([data["vertices"], st])
     # the domain of a circle has the polygon's arc length, a projection is no larger: same scale
     out = tr.triangulate(data, f"pYQq{min_angle:g}a{amax:.17g}")
     Vd = out["vertices"]
