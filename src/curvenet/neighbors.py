@@ -40,14 +40,25 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     if k == 0:
         return np.zeros((n, 0)), np.zeros((n, 0), dtype=np.int64)
     tree = tree if tree is not None else build_tree(points)
-    dist, idx = tree.query(points, k=k + 1, workers=workers)
-    dist = np.atleast_2d(dist)
-    idx = np.atleast_2d(idx).astype(np.int64)
-    # drop the point itself (it may not be in column 0 when duplicates exist)
-    self_mask = idx == np.arange(n)[:, None]
-    has_self = self_mask.any(axis=1)
-    drop = np.where(has_self[:, None], self_mask, np.arange(k + 1)[None, :] == k)
-    keep = ~drop
-    dist = dist[keep].reshape(n, k)
-    idx = idx[keep].reshape(n, k)
+    dist = np.empty((n, k))
+    idx = np.empty((n, k), dtype=np.int64)
+    # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds
+    step = max(1, (1 << 20) // (k + 1))
+    for s in range(0, n, step):
+        e = min(n, s + step)
+        d, i = tree.query(points[s:e], k=k + 1, workers=workers)
+        d = np.atleast_2d(d)
+        i = np.atleast_2d(i)
+        rows = np.arange(s, e)
+        if np.array_equal(i[:, 0], rows):  # the usual case: each point first in its own list
+            dist[s:e] = d[:, 1:]
+            idx[s:e] = i[:, 1:]
+            continue
+        # drop the point itself (it may not be in column 0 when duplicates exist)
+        self_mask = i == rows[:, None]
+        has_self = self_mask.any(axis=1)
+        drop = np.where(has_self[:, None], self_mask, np.arange(k + 1)[None, :] == k)
+        keep = ~drop
+        dist[s:e] = d[keep].reshape(e - s, k)
+        idx[s:e] = i[keep].reshape(e - s, k)
     return dist, idx
