@@ -401,34 +401,29 @@ def _inward_directions(poly, tris, owner):
     nxt = np.roll(poly, -1, axis=0)
     N = 0.5 * np.cross(poly, nxt).sum(axis=0)
     lN = np.linalg.norm(N)
-    N = N / lN if lN > 0 else None
-    acc = {}
-    for i in range(n):
-        p, q = poly[i], nxt[i]
-        e = q - p
-        le = np.linalg.norm(e)
-        if le == 0:
-            continue
-        nrm = None
-        if i in third:
-            cr = np.cross(e, poly[third[i]] - p)
-            if np.linalg.norm(cr) > 0.1 * le * le:  # height > 0.1 edge length
-                nrm = cr / np.linalg.norm(cr)
-        if nrm is None:
-            nrm = N
-        if nrm is None:
-            continue
-        u = np.cross(nrm, e)
-        nu = np.linalg.norm(u)
-        if nu == 0:
-            continue
-        acc.setdefault(int(owner[i]), []).append(le * u / nu)
+    e = nxt - poly
+    le = np.linalg.norm(e, axis=1)
+    thr = np.array([third.get(i, -1) for i in range(n)])
+    has = thr >= 0
+    cr = np.zeros_like(poly)
+    cr[has] = np.cross(e[has], poly[thr[has]] - poly[has])
+    lc = np.linalg.norm(cr, axis=1)
+    good = has & (lc > 0.1 * le * le) & (le > 0)
+    nrm = np.zeros_like(poly)
+    nrm[good] = cr[good] / lc[good, None]
+    if lN > 0:
+        nrm[~good] = N / lN
+    u = np.cross(nrm, e)
+    nu = np.linalg.norm(u, axis=1)
+    ok = (nu > 0) & (le > 0)
+    w = np.zeros_like(poly)
+    w[ok] = le[ok, None] * u[ok] / nu[ok, None]
     out = {}
-    for c, vs in acc.items():
-        s = np.sum(vs, axis=0)
+    for c in np.unique(owner[ok]):
+        s = w[ok & (owner == c)].sum(axis=0)
         ns = np.linalg.norm(s)
         if ns > 0:
-            out[c] = s / ns
+            out[int(c)] = s / ns
     return out
 
 
