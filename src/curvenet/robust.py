@@ -787,7 +787,9 @@ def _extend_into_region(P, h, branches, rid, prm):
     active = [len(b) >= 2 for b in out]
     noise = prm["_noise"]
     for _ in range(len(inreg) + 1):
-        moved = False
+        # every active branch proposes its next point; the nearest proposals win (the result
+        # does not depend on the order of the branches, hence of the input points)
+        props = []
         for bi, ids in enumerate(out):
             if not active[bi]:
                 continue
@@ -814,12 +816,16 @@ def _extend_into_region(P, h, branches, rid, prm):
                 active[bi] = False
                 continue
             d = np.where(ok, np.hypot(al, perp), np.inf)
-            j = int(nb[np.lexsort((nb, d))[0]])
-            ids.append(j)
-            claimed.add(j)
-            moved = True
-        if not moved:
+            k = np.lexsort((nb, d))[0]
+            props.append((float(d[k]), int(nb[k]), bi))
+        if not props:
             break
+        props.sort(key=lambda x: (x[0], x[1]))
+        for d, j, bi in props:
+            if j in claimed:
+                continue  # taken by a nearer branch this round: try again next round
+            out[bi].append(j)
+            claimed.add(j)
     return out
 
 
