@@ -293,6 +293,8 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
     A first direction from the point and its 4 nearest neighbours; twice, the point and its
     ``m`` nearest neighbours within ``h`` of the current line are weighted 1 (others 0) and the
     weighted PCA gives the next direction. The linearity is ``1 - l2 / l1`` of the last PCA.
+    The chord distance is that of the point from the segment joining its nearest neighbours
+    (among the ``m``) inside the strip ahead and behind along the tangent (NaN without both).
     No (N, m, d) temporaries: one point at a time.
 
     Returns
@@ -300,11 +302,13 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
     T : (N, d) ndarray
         Unit tangents (sign arbitrary).
     lin : (N,) ndarray
+    chord : (N,) ndarray
     """
     n = P.shape[0]
     d = P.shape[1]
     T = np.zeros((n, d))
     lin = np.zeros(n)
+    chord = np.zeros(n)
     rows = np.empty(m + 1, dtype=np.int64)
     w = np.ones(m + 1)
     C = np.zeros((d, d))
@@ -336,7 +340,47 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
         lin[p] = 1.0 - ev[d - 2] / lam
         for c in range(d):
             T[p, c] = t[c]
-    return T, lin
+        # chord between the nearest strip neighbours ahead and behind along the tangent
+        ia = -1
+        ib = -1
+        besta = np.inf
+        bestb = np.inf
+        for k in range(m):
+            q = idx[p, k]
+            al = 0.0
+            r2 = 0.0
+            for c in range(d):
+                x = P[q, c] - P[p, c]
+                al += x * t[c]
+                r2 += x * x
+            if r2 - al * al <= hp2:
+                if al > 0.0 and al < besta:
+                    besta = al
+                    ia = k
+                elif al < 0.0 and -al < bestb:
+                    bestb = -al
+                    ib = k
+        if ia < 0 or ib < 0:
+            chord[p] = np.nan
+            continue
+        qa = idx[p, ia]
+        qb = idx[p, ib]
+        ab2 = 0.0
+        ap2 = 0.0
+        apab = 0.0
+        for c in range(d):
+            ab = P[qb, c] - P[qa, c]
+            ap = P[p, c] - P[qa, c]
+            ab2 += ab * ab
+            ap2 += ap * ap
+            apab += ap * ab
+        lab = np.sqrt(ab2)
+        if lab < 1e-300:
+            lab = 1e-300
+        x = apab / lab
+        q2 = ap2 - x * x
+        chord[p] = np.sqrt(q2) if q2 > 0.0 else 0.0
+    return T, lin, chord
 
 
 HAVE_NUMBA = False

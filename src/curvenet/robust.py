@@ -114,34 +114,17 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     that lie within one spacing of its line (a strip that leaves out a close parallel curve).
     The linearity ``1 - l2 / l1`` is that of the plain 8-neighbour PCA.
     """
-    n = len(P)
-    self_ = np.arange(n)[:, None]
     m = min(m, idx.shape[1])
     # compiled, one point at a time: the 4-neighbour PCA, then twice the PCA of the point and
-    # its m nearest within h of the current line (weights 0/1), as _pca_dir on stacked arrays
-    t, lin = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                         np.ascontiguousarray(h, dtype=np.float64), m)
-    Qm = P[np.concatenate([self_, idx[:, :m]], axis=1)]
-    # noise: distance of each point from the chord between its nearest strip neighbours on
-    # either side (curvature adds only h^2 / 2R there); for Gaussian noise of std sigma per
-    # coordinate its RMS is sigma * sqrt(1.5 (d - 1))
-    rel = Qm[:, 1:] - P[:, None, :]
-    along = np.einsum("nkd,nd->nk", rel, t)
-    perp2 = np.einsum("nkd,nkd->nk", rel, rel) - along**2
-    inside = perp2 <= h[:, None] ** 2
-    big = np.inf
-    da = np.where(inside & (along > 0), along, big)
-    db = np.where(inside & (along < 0), -along, big)
-    ia, ib = np.argmin(da, axis=1), np.argmin(db, axis=1)
-    okr = np.isfinite(da[np.arange(n), ia]) & np.isfinite(db[np.arange(n), ib])
-    A, B = Qm[np.arange(n), 1 + ia], Qm[np.arange(n), 1 + ib]
-    ab = B - A
-    lab = np.maximum(np.linalg.norm(ab, axis=1), 1e-300)
-    ap = P - A
-    cr = np.sqrt(np.maximum((ap * ap).sum(axis=1) - (np.einsum("nd,nd->n", ap, ab) / lab) ** 2, 0.0))
+    # its m nearest within h of the current line (weights 0/1), as _pca_dir on stacked arrays;
+    # and the noise: distance of each point from the chord between its nearest strip neighbours
+    # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
+    # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
+    t, lin, cr = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                             np.ascontiguousarray(h, dtype=np.float64), m)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
-    rms = 1.28 * np.where(okr, cr, np.nan) / np.sqrt(1.5 * max(dim - 1, 1))
+    rms = 1.28 * cr / np.sqrt(1.5 * max(dim - 1, 1))
     return t, lin, rms
 
 
