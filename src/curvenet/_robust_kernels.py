@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - compiled
@@ -383,7 +383,103 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
     return T, lin, chord
 
 
+def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, lin_min):  # pragma: no cover - compiled
+    """Directed kNN edges kept by the distance and tangent tests (see robust._linked_edges).
+
+    For the edge from ``p`` to its neighbour ``q`` at distance ``d`` (rows sorted by distance):
+    ``reach = link * (h_p + h_q) / 2 + gap``; edges longer than ``extra_len * reach`` (and
+    self-pairs) are out. ``ps``, ``pd`` are the distances of the far end from the tangent lines
+    at ``p`` and ``q``; ``w = max(width * (h_p + h_q) / 2, wmin)``. An edge is kept if it is
+    short (``d <= link * (h_p + h_q) / 2``) and passes one tangent test (or an end has
+    linearity below ``lin_min``, or ``d == 0``), or if it passes both tangent tests at two
+    linear ends and ``d <= reach``, or if it is the first such two-sided strip edge of its row
+    on either side of ``p`` along its tangent.
+
+    Returns
+    -------
+    src, dst : (E,) ndarray of int64
+    dd : (E,) ndarray of float
+    """
+    n = idx.shape[0]
+    k = idx.shape[1]
+    d = P.shape[1]
+    sel = np.zeros((n, k), dtype=np.bool_)
+    total = 0
+    for p in range(n):
+        got_pos = False
+        got_neg = False
+        for j in range(k):
+            q = idx[p, j]
+            dd = dist[p, j]
+            hh = 0.5 * (h[p] + h[q])
+            reach = link * hh + gap
+            if not (dd <= extra_len * reach) or p == q:
+                continue
+            al = 0.0
+            aq = 0.0
+            for c in range(d):
+                v = P[q, c] - P[p, c]
+                al += v * t[p, c]
+                aq += v * t[q, c]
+            x = dd * dd - al * al
+            ps = np.sqrt(x if x > 0.0 else 0.0)
+            x = dd * dd - aq * aq
+            pd = np.sqrt(x if x > 0.0 else 0.0)
+            w = width * 0.5 * (h[p] + h[q])
+            if w < wmin:
+                w = wmin
+            ok = (ps <= w) or (pd <= w) or (lin[p] < lin_min) or (lin[q] < lin_min) or (dd == 0)
+            short = dd <= link * 0.5 * (h[p] + h[q])
+            both = (ps <= w) and (pd <= w) and (lin[p] >= lin_min) and (lin[q] >= lin_min)
+            keep = (ok and short) or (both and (dd <= reach))
+            if both and dd > 0:
+                if al > 0 and not got_pos:
+                    got_pos = True
+                    keep = True
+                elif -al > 0 and not got_neg:
+                    got_neg = True
+                    keep = True
+            if keep:
+                sel[p, j] = True
+                total += 1
+    src = np.empty(total, dtype=np.int64)
+    dst = np.empty(total, dtype=np.int64)
+    out_d = np.empty(total)
+    e = 0
+    for p in range(n):
+        for j in range(k):
+            if sel[p, j]:
+                src[e] = p
+                dst[e] = idx[p, j]
+                out_d[e] = dist[p, j]
+                e += 1
+    return src, dst, out_d
+
+
+def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
+    """The kNN pairs ``(p, q)`` with ``dist <= link * 0.5 * (h_p + h_q)``, in row order."""
+    n = idx.shape[0]
+    k = idx.shape[1]
+    total = 0
+    for p in range(n):
+        for j in range(k):
+            if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
+                total += 1
+    a = np.empty(total, dtype=np.int64)
+    b = np.empty(total, dtype=np.int64)
+    e = 0
+    for p in range(n):
+        for j in range(k):
+            if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
+                a[e] = p
+                b[e] = idx[p, j]
+                e += 1
+    return a, b
+
+
 HAVE_NUMBA = False
+linked_edges = _linked_edges
+short_links = _short_links
 shell_groups = _shell_groups
 csr_union = _csr_union
 end_count = _end_count
@@ -399,6 +495,8 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         _eig_sym = numba.njit(cache=True, nogil=True)(_eig_sym_py)
         _wpca = numba.njit(cache=True, nogil=True)(_wpca)
         tangents = numba.njit(cache=True, nogil=True)(_tangents)
+        linked_edges = numba.njit(cache=True, nogil=True)(_linked_edges)
+        short_links = numba.njit(cache=True, nogil=True)(_short_links)
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass

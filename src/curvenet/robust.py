@@ -136,36 +136,13 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
     neighbour on each side along the tangent, within the strip, up to twice that length:
     this bridges the widest gaps of sparse, noisy sampling.
     """
-    n, k = idx.shape
-    src = np.repeat(np.arange(n), k)
-    dst = idx.ravel()
-    dd = dist.ravel()
-    hh = 0.5 * (h[src] + h[dst])
-    reach = link * hh + gap
-    keep = (dd <= EXTRA * reach) & (src != dst)
-    src, dst, dd, reach = src[keep], dst[keep], dd[keep], reach[keep]
-    vec = P[dst] - P[src]
-    # distance of the far end from the line through each end along its tangent
-    al = np.einsum("ij,ij->i", vec, t[src])
-    ps = np.sqrt(np.maximum(dd**2 - al**2, 0.0))
-    pd = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[dst]) ** 2, 0.0))
-    w = np.maximum(width * 0.5 * (h[src] + h[dst]), wmin)
-    ok = (ps <= w) | (pd <= w) | (lin[src] < LIN) | (lin[dst] < LIN) | (dd == 0)
-    short = dd <= link * 0.5 * (h[src] + h[dst])
-    # longer links must lie along the tangents of both ends
-    both = (ps <= w) & (pd <= w) & (lin[src] >= LIN) & (lin[dst] >= LIN)
-    near = (ok & short) | (both & (dd <= reach))
-    # nearest strip neighbour on each side along the tangent (rows are sorted by distance)
-    strip = both & (dd > 0)
-    extra = np.zeros(len(src), dtype=bool)
-    for sgn in (1.0, -1.0):
-        cand = strip & (sgn * al > 0)
-        ci = np.flatnonzero(cand)
-        if len(ci):
-            first = np.r_[True, src[ci][1:] != src[ci][:-1]]
-            extra[ci[first]] = True
-    sel = near | extra
-    return src[sel], dst[sel], dd[sel]
+    # compiled, one kNN row at a time (the tests are spelled out in _robust_kernels.linked_edges):
+    # links at most EXTRA * (link * h + gap) long; the far end's distance from the tangent
+    # line through either end within max(width * h, wmin) (or an end not linear, LIN); short
+    # links need one tangent test, longer ones (up to link * h + gap) both; plus the nearest
+    # strip neighbour on each side along the tangent (rows are sorted by distance)
+    return _k.linked_edges(P, np.ascontiguousarray(h, dtype=np.float64), dist, idx, t, lin, float(link),
+                           float(width), float(wmin), float(gap), float(EXTRA), float(LIN))
 
 
 def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
@@ -363,10 +340,8 @@ def reconstruct_robust(
     t1 = time.perf_counter()
     flagged = groups != 2
     # regions: flagged points joined by plain short links (any direction)
-    ksrc = np.repeat(np.arange(N), idx.shape[1])
-    kdst = idx.ravel()
-    kshort = dist.ravel() <= prm["link"] * 0.5 * (h[ksrc] + h[kdst])
-    reg, n_reg = _components(N, ksrc[kshort], kdst[kshort], flagged)
+    ka, kb = _k.short_links(h, dist, idx, float(prm["link"]))  # kNN pairs within link * h
+    reg, n_reg = _components(N, ka, kb, flagged)
     chn, n_chn = _components(N, src, dst, ~flagged)
 
     chains = _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin)
