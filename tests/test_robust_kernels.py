@@ -1,0 +1,136 @@
+"""The compiled kernels of the robust method agree with their plain-Python runs and with numpy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curvenet import _robust_kernels as K
+from curvenet import robust as R
+from curvenet import synth
+from curvenet.neighbors import knn
+
+
+def _pca_dir(Q, w=None):
+    """Principal direction and eigenvalues of stacked point sets Q (n, m, d), weights w (n, m)."""
+    if w is None:
+        w = np.ones(Q.shape[:2])
+    sw = np.maximum(w.sum(axis=1, keepdims=True), 1e-300)
+    mu = (Q * w[..., None]).sum(axis=1, keepdims=True) / sw[..., None]
+    Z = (Q - mu) * np.sqrt(w)[..., None]
+    ev, v = np.linalg.eigh(np.einsum("nki,nkj->nij", Z, Z))
+    return v[:, :, -1], ev
+
+
+@pytest.fixture(scope="module")
+def cloud():
+    P, _ = synth.sample(synth.model("cube"), noise=0.2, outliers=0.02, rng=4)
+    P = P[np.lexsort(P.T[::-1])]
+    dist, idx = knn(P, 16)
+    h = R.local_spacing(dist, idx)
+    return P, dist, idx, h
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_eig_sym_matches_lapack(d):
+    rng = np.random.default_rng(d)
+    for _ in range(200):
+        A = rng.normal(size=(d, 5))
+        C = A @ A.T
+        if rng.uniform() < 0.2:  # rank-deficient
+            C = np.outer(A[:, 0], A[:, 0])
+        V = np.zeros((d, d))
+        ev = np.zeros(d)
+        K._eig_sym_py(C.copy(), V, ev)
+        ref, vref = np.linalg.eigh(C)
+        scale = max(abs(ref).max(), 1e-300)
+        assert np.allclose(ev, ref, atol=1e-12 * scale)
+        assert np.all(np.diff(ev) >= 0)
+        assert np.allclose(V.T @ V, np.eye(d), atol=1e-12)
+        if ref[-1] - ref[-2] > 1e-6 * scale:  # a well-defined principal direction
+            assert abs(abs(V[:, -1] @ vref[:, -1]) - 1) < 1e-10
+
+
+def test_end_count_matches_numpy_prefix_sums():
+    rng = np.random.default_rng(0)
+    P = rng.normal(size=(100, 3))
+    for _ in range(300):
+        ids = rng.integers(0, 100, size=int(rng.integers(2, 40)))
+        X = P[ids[::-1]]
+        seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+        lim = float(rng.choice([rng.uniform(0, seg[-1] * 1.2), seg[rng.integers(len(seg))]]))
+        ref = int(np.searchsorted(seg, lim, side="right"))
+        assert K.end_count(P, ids, lim) == ref
+        assert K._end_count(P, ids, lim) == ref
+
+
+def test_tangents_match_the_numpy_pca(cloud):
+    P, dist, idx, h = cloud
+    t, lin, chord = K.tangents(P, idx, h, 12)
+    # numpy reference: the stacked-array PCA
+    n = len(P)
+    self_ = np.arange(n)[:, None]
+    t4, _ = _pca_dir(P[np.concatenate([self_, idx[:, :4]], axis=1)])
+    Qm = P[np.concatenate([self_, idx[:, :12]], axis=1)]
+    rel = Qm - P[:, None, :]
+    tr = t4
+    for _ in range(2):
+        along = np.einsum("nkd,nd->nk", rel, tr)
+        w = (np.einsum("nkd,nkd->nk", rel, rel) - along**2 <= h[:, None] ** 2).astype(float)
+        tr, ev = _pca_dir(Qm, w)
+    lin_ref = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
+    assert np.allclose(np.abs((t * tr).sum(axis=1)), 1.0, atol=1e-9)
+    assert np.allclose(lin, lin_ref, atol=1e-9)
+    assert np.isfinite(chord).mean() > 0.8 and np.nanmin(chord) >= 0
+
+
+def test_compiled_and_python_runs_agree(cloud):
+    if not K.HAVE_NUMBA:
+        pytest.skip("numba not installed: only the Python run exists")
+    P, dist, idx, h = cloud
+    a = K.tangents(P, idx, h, 12)
+    b = K._tangents(P, idx, h, 12)
+    for x, y in zip(a, b):
+        assert np.array_equal(x, y, equal_nan=True)
+    t, lin = a[0], a[1]
+    args = (P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+    for x, y in zip(K.linked_edges(*args), K._linked_edges(*args)):
+        assert np.array_equal(x, y)
+    for x, y in zip(K.short_links(h, dist, idx, 2.5), K._short_links(h, dist, idx, 2.5)):
+        assert np.array_equal(x, y)
+
+
+def test_linked_edges_match_the_array_formulas(cloud):
+    P, dist, idx, h = cloud
+    t, lin, _ = K.tangents(P, idx, h, 12)
+    link, width, wmin, gap, extra_len, lmin = 2.5, 1.0, 0.004, 0.002, 2.0, 0.3
+    got = K.linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, lmin)
+    # the same tests on flat arrays
+    n, k = idx.shape
+    src = np.repeat(np.arange(n), k)
+    dst = idx.ravel()
+    dd = dist.ravel()
+    reach = link * (0.5 * (h[src] + h[dst])) + gap
+    keep = (dd <= extra_len * reach) & (src != dst)
+    src, dst, dd, reach = src[keep], dst[keep], dd[keep], reach[keep]
+    vec = P[dst] - P[src]
+    al = np.einsum("ij,ij->i", vec, t[src])
+    ps = np.sqrt(np.maximum(dd**2 - al**2, 0.0))
+    pd = np.sqrt(np.maximum(dd**2 - np.einsum("ij,ij->i", vec, t[dst]) ** 2, 0.0))
+    w = np.maximum(width * 0.5 * (h[src] + h[dst]), wmin)
+    ok = (ps <= w) | (pd <= w) | (lin[src] < lmin) | (lin[dst] < lmin) | (dd == 0)
+    short = dd <= link * 0.5 * (h[src] + h[dst])
+    both = (ps <= w) & (pd <= w) & (lin[src] >= lmin) & (lin[dst] >= lmin)
+    sel = (ok & short) | (both & (dd <= reach))
+    strip = both & (dd > 0)
+    for sgn in (1.0, -1.0):
+        ci = np.flatnonzero(strip & (sgn * al > 0))
+        if len(ci):
+            sel[ci[np.r_[True, src[ci][1:] != src[ci][:-1]]]] = True
+    assert np.array_equal(got[0], src[sel])
+    assert np.array_equal(got[1], dst[sel])
+    assert np.array_equal(got[2], dd[sel])
+    a, b = K.short_links(h, dist, idx, link)
+    ks = np.repeat(np.arange(n), k)
+    m = dist.ravel() <= link * 0.5 * (h[ks] + h[idx.ravel()])
+    assert np.array_equal(a, ks[m]) and np.array_equal(b, idx.ravel()[m])
