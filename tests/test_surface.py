@@ -13,6 +13,8 @@ import pytest
 from curvenet import Curve, CurveNetwork, InputError
 from curvenet.surface import SurfaceMesh, min_area_triangulation, surface
 from curvenet.surface.mesh_io import mesh_to_obj, mesh_to_ply
+from curvenet.surface.assemble import _split_shared_chords
+from curvenet.surface.cycles import _orient
 from curvenet.surface.patches import is_simple_polygon
 
 synth = pytest.importorskip("curvenet.synth")
@@ -377,6 +379,37 @@ def test_is_simple_polygon():
     assert is_simple_polygon(np.c_[np.cos(t), np.sin(t)])
     assert not is_simple_polygon(np.c_[np.cos(t), np.sin(2 * t)])  # figure eight
     assert not is_simple_polygon(np.array([[0, 0], [1, 0], [0, 1], [1, 1.0]]))  # bow tie
+
+
+def test_split_shared_chords():
+    """Two patches covering the same square by the same diagonal: split it in the second."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0.1], [0, 1, 0.0]])
+    T = np.array([[0, 1, 2], [0, 2, 3], [2, 1, 0], [3, 2, 0]])
+    P = np.array([0, 0, 1, 1])
+    V2, T2, P2, n = _split_shared_chords(V, T, P)
+    assert n == 1 and len(V2) == 5 and len(T2) == 6
+    assert is_manifold_and_oriented(T2) == (True, True)
+    assert sorted(P2.tolist()) == [0, 0, 1, 1, 1, 1]
+    assert (T2[P2 == 0] < 4).all()  # the first patch is untouched
+
+
+def test_orient_reports_non_orientable_rings():
+    # darts 2c (along curve c) and 2c + 1 (against it); three cycles pairwise sharing a curve
+    ring = [[0, 2], [3, 4], [5, 1]]  # each curve is run once each way: orientable
+    out, bad = _orient(ring)
+    assert bad == []
+    twisted = [[0, 2], [2, 4], [4, 0]]  # every shared curve run the same way: odd ring
+    out, bad = _orient(twisted)
+    assert bad  # no orientation makes all three pairs opposite
+
+
+@pytest.mark.skipif(not synth.cassie.available(), reason="CASSIE dataset not found")
+def test_cassie_sketch_is_manifold_and_oriented():
+    net = synth.cassie.load("computer-mouse")
+    mesh = surface(net, max_triangles=20000)
+    assert mesh.n_patches >= 20
+    assert is_manifold_and_oriented(mesh.triangles) == (True, True)
+    assert triangle_areas(mesh).min() > 0
 
 
 @pytest.mark.parametrize("bad", ["net", None, np.zeros((3, 3))])
