@@ -418,10 +418,17 @@ def test_bad_network(bad):
         surface(bad)
 
 
-@pytest.mark.parametrize("h", [0.0, -1.0, np.nan])
+@pytest.mark.parametrize("h", [0.0, -1.0, np.nan, 1e-5])
 def test_bad_target_edge(h):
     with pytest.raises(InputError, match="target_edge"):
         surface(prism(L_OUTLINE), target_edge=h)
+
+
+def test_non_finite_curve_points():
+    net = prism(L_OUTLINE)
+    net.curves[3].points[2, 1] = np.nan
+    with pytest.raises(InputError, match="curve 3 has non-finite"):
+        surface(net)
 
 
 # ---------------------------------------------------------------------------------------------

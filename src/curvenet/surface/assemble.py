@@ -29,7 +29,8 @@ class SurfaceMesh:
     patch : (T,) ndarray of int
         The patch (index into ``cycles``) of each triangle.
     cycles : list of list of int
-        Curve ids around each patch, in order.
+        Curve ids around each patch, in order; for a patch with holes (loops without node lying
+        on it), the loops follow the outer cycle.
     directions : list of list of int
         ``+1`` where the patch boundary runs along a curve from its start to its end (the
         boundary of each patch runs counter-clockwise seen from the side its normals point to),
@@ -39,7 +40,8 @@ class SurfaceMesh:
         for a dangling curve no patch uses, whose points are not in the mesh).
     stats : dict
         ``time`` (seconds per stage), ``candidates`` (cycles scored), ``domains`` (count of
-        patches laid out on their best-fit plane or on a circle), ``target_edge``.
+        patches laid out on their best-fit plane or on a circle), ``target_edge``,
+        ``chord_splits`` (interior edges split because two patches shared them).
     """
 
     vertices: np.ndarray
@@ -184,6 +186,11 @@ def surface(
         raise InputError(f"target_edge must be a positive number, got {target_edge!r}")
     t0 = time.perf_counter()
     allpts = [np.asarray(c.points, dtype=float) for c in network.curves if len(c.points)]
+    for i, p in enumerate(allpts):
+        if not np.isfinite(p).all():
+            raise InputError(f"curve {i} has non-finite coordinates (NaN or infinity)")
+    if not np.isfinite(network.nodes).all():
+        raise InputError("the network has nodes with non-finite coordinates (NaN or infinity)")
     scale = max((float(np.ptp(p, axis=0).max()) for p in allpts), default=1.0) or 1.0
     tol = 1e-9 * scale
     nodes, chains = _chains(network, tol)
@@ -191,12 +198,18 @@ def surface(
     seg = np.concatenate([np.linalg.norm(np.diff(ch, axis=0), axis=1) for ch in chains] or [np.zeros(0)])
     seg = seg[seg > 0]
     cs = find_cycles(chains, edges, nodes, fold_angle=fold_angle, time_limit=time_limit)
+    area = float(sum(cs.costs or []))
     if target_edge is not None:
         h = float(target_edge)
+        estimate = area / (np.sqrt(3.0) / 4.0 * h * h)
+        if estimate > 50 * max(int(max_triangles), 1) and estimate > 1e7:
+            raise InputError(
+                f"target_edge={target_edge:g} would make about {estimate:.3g} triangles "
+                f"(patch area {area:.3g}); give a larger target_edge"
+            )
     else:
         h = float(np.median(seg)) if len(seg) else scale / 10
         # equilateral triangles of side h cover sqrt(3)/4 h^2 each
-        area = float(sum(cs.costs or []))
         h = max(h, np.sqrt(area / (np.sqrt(3.0) / 4.0 * max(int(max_triangles), 1))))
     t1 = time.perf_counter()
 

@@ -16,7 +16,8 @@ so the cycles here are chosen globally:
    e.g. the outer boundary of an open sheet against the sheet's own cells) may not both be chosen;
    this is what keeps an open network open while a closed network gets every curve used twice.
 4. *Orientation*: the chosen cycles are oriented so that two patches run through a shared curve in
-   opposite directions.
+   opposite directions. Should the choice be non-orientable (an odd ring of patches), the patch
+   whose removal leaves the fewest conflicts is dropped, until none is left.
 
 References
 ----------
