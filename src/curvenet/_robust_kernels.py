@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - compiled
@@ -477,7 +477,75 @@ def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
     return a, b
 
 
+def _chain_ends(h, ids_o, par_o, bounds, c_reg, c_par, cb):  # pragma: no cover - compiled
+    """The region each end of every chain touches (see robust._order_chains).
+
+    Chain ``ci`` is ``ids_o[bounds[ci]:bounds[ci + 1]]`` with positions ``par_o`` (ascending,
+    its length ``L`` the last one); its contacts ``cb[ci]:cb[ci + 1]`` give a region
+    ``c_reg`` (ascending within the chain) and a position ``c_par``. With ``hl`` the median
+    spacing of the chain and ``reach = min(L / 2, 4 hl)``, the start end takes the most frequent
+    region among contacts at ``c_par <= reach`` and the far end among ``c_par >= L - reach``
+    (for a chain shorter than ``2 reach``: ``<= L / 2`` and ``> L / 2``); ties: the lowest
+    region; none: -1.
+
+    Returns
+    -------
+    ends : (n_chains, 2) ndarray of int64
+    touch : (n_chains,) ndarray of bool
+        Whether the chain has any contact.
+    """
+    nc = bounds.shape[0] - 1
+    ends = np.full((nc, 2), -1, dtype=np.int64)
+    touch = np.zeros(nc, dtype=np.bool_)
+    for ci in range(nc):
+        a0 = bounds[ci]
+        a1 = bounds[ci + 1]
+        b0 = cb[ci]
+        b1 = cb[ci + 1]
+        if b1 <= b0:
+            continue
+        touch[ci] = True
+        L = par_o[a1 - 1] if a1 > a0 else 0.0
+        hs = np.sort(h[ids_o[a0:a1]])
+        m = hs.shape[0]
+        if m % 2 == 1:
+            hl = hs[m // 2]
+        else:
+            hl = (hs[m // 2 - 1] + hs[m // 2]) / 2.0
+        reach = 0.5 * L
+        if 4.0 * hl < reach:
+            reach = 4.0 * hl
+        short = L <= 2 * reach
+        for side in range(2):
+            best = -1
+            best_cnt = 0
+            cur = -1
+            cnt = 0
+            for e in range(b0, b1):
+                cp = c_par[e]
+                if side == 0:
+                    ok = (cp <= 0.5 * L) if short else (cp <= reach)
+                else:
+                    ok = (cp > 0.5 * L) if short else (cp >= L - reach)
+                if not ok:
+                    continue
+                r = c_reg[e]
+                if r != cur:
+                    if cnt > best_cnt:
+                        best = cur
+                        best_cnt = cnt
+                    cur = r
+                    cnt = 0
+                cnt += 1
+            if cnt > best_cnt:
+                best = cur
+                best_cnt = cnt
+            ends[ci, side] = best
+    return ends, touch
+
+
 HAVE_NUMBA = False
+chain_ends = _chain_ends
 linked_edges = _linked_edges
 short_links = _short_links
 shell_groups = _shell_groups
@@ -497,6 +565,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         tangents = numba.njit(cache=True, nogil=True)(_tangents)
         linked_edges = numba.njit(cache=True, nogil=True)(_linked_edges)
         short_links = numba.njit(cache=True, nogil=True)(_short_links)
+        chain_ends = numba.njit(cache=True, nogil=True)(_chain_ends)
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass

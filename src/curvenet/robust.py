@@ -413,27 +413,17 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     c_chain, c_reg, c_par, c_pt = c_chain[corder], c_reg[corder], c_par[corder], c_pt[corder]
     cb = np.searchsorted(c_chain, np.arange(n_chn + 1))
 
+    # compiled: for each chain with contacts, the most frequent region among the contacts
+    # within reach = min(L / 2, 4 h) of each end (h: the chain's median spacing; a chain
+    # shorter than 2 reach is split at L / 2); ties: the lowest region id
+    ends, touch = _k.chain_ends(np.ascontiguousarray(h, dtype=np.float64), ids_o, par_o, bounds,
+                                c_reg, c_par, cb)
     for ci in range(n_chn):
         seg = ids_o[bounds[ci]:bounds[ci + 1]]
-        pseg = par_o[bounds[ci]:bounds[ci + 1]]
-        L = pseg[-1] if len(pseg) else 0.0
-        cr = c_reg[cb[ci]:cb[ci + 1]]
-        cp = c_par[cb[ci]:cb[ci + 1]]
-        if len(cr) == 0:
+        if not touch[ci]:
             chains.append(_loop_or_piece(P, h, g, seg, lin))
             continue
-        hl = float(np.median(h[seg]))
-        reach = min(0.5 * L, 4.0 * hl)
-        ends = [-1, -1]
-        for side, sel in ((0, cp <= reach), (1, cp >= L - reach)):
-            if side == 1 and L <= 2 * reach:
-                sel = cp > 0.5 * L
-            if side == 0 and L <= 2 * reach:
-                sel = cp <= 0.5 * L
-            if sel.any():
-                r, cnt = np.unique(cr[sel], return_counts=True)
-                ends[side] = int(r[np.argmax(cnt)])
-        chains.append(_Chain(seg, ends))
+        chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
     return chains
 
 
