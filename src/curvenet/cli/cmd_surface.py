@@ -26,36 +26,61 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
+def check_outputs(outputs, *, png=None, inputs=()) -> None:
+    """Fail early on mesh outputs that cannot be written (bad extension, missing folder...)."""
     from ..errors import FormatError
-    from ..io import atomic_write, check_output_path, extension, read_network
-    from ..surface import MESH_WRITERS, surface
+    from ..io import check_output_path, extension
+    from ..surface import MESH_WRITERS
 
-    inputs = [args.network]
-    for out in args.output:
+    for out in outputs:
         check_output_path(out, inputs=inputs)
         if extension(out) not in MESH_WRITERS:
             raise FormatError(f"{out}: unknown mesh extension {extension(out)!r}; writable: "
                               + ", ".join(sorted(MESH_WRITERS)))
-    if args.png:
-        if extension(args.png) != ".png":
-            raise FormatError(f"{args.png}: the --png picture must end in .png")
-        check_output_path(args.png, inputs=inputs)
-    net = read_network(args.network)
+    if png:
+        if extension(png) != ".png":
+            raise FormatError(f"{png}: the --png picture must end in .png")
+        check_output_path(png, inputs=inputs)
+
+
+def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=True):
+    """Surface ``net`` and write the mesh files (format by extension) and an optional PNG.
+
+    For ``curvenet surface`` and for ``curvenet reconstruct --surface MESH``: call
+    :func:`check_outputs` before the work, then this. Returns ``(mesh, seconds)``.
+    """
+    from ..io import atomic_write, extension
+    from ..surface import MESH_WRITERS, surface
+
     t0 = time.perf_counter()
-    mesh = surface(net, target_edge=args.target_edge, fair=not args.no_fair)
+    mesh = surface(net, target_edge=target_edge, fair=fair)
     dt = time.perf_counter() - t0
-    for out in args.output:
+    for out in outputs:
         atomic_write(out, MESH_WRITERS[extension(out)][0](mesh), inputs=inputs)
-    if args.png:
+    if png:
         from ..plots.surface_png import render_surface_png
 
-        atomic_write(args.png, render_surface_png(mesh, network=net), inputs=inputs)
+        atomic_write(png, render_surface_png(mesh, network=net), inputs=inputs)
+    return mesh, dt
+
+
+def summary(mesh, seconds: float) -> str:
+    """One line: patches, vertices, triangles, Euler characteristic, closed or not, time."""
+    closed = len(mesh.triangles) > 0 and len(mesh.boundary_edges()) == 0
+    return (f"{mesh.n_patches} patches, {len(mesh.vertices)} vertices, {len(mesh.triangles)} triangles, "
+            f"Euler characteristic {mesh.euler_characteristic}{', closed' if closed else ''} ({seconds:.2f} s)")
+
+
+def run(args) -> int:
+    from ..io import read_network
+
+    inputs = [args.network]
+    check_outputs(args.output, png=args.png, inputs=inputs)
+    net = read_network(args.network)
+    mesh, dt = write_surface(net, args.output, png=args.png, inputs=inputs,
+                             target_edge=args.target_edge, fair=not args.no_fair)
     if not args.quiet:
-        closed = len(mesh.triangles) > 0 and len(mesh.boundary_edges()) == 0
-        print(f"{args.network}: {mesh.n_patches} patches, {len(mesh.vertices)} vertices, "
-              f"{len(mesh.triangles)} triangles, Euler characteristic {mesh.euler_characteristic}"
-              f"{', closed' if closed else ''} ({dt:.2f} s)")
+        print(f"{args.network}: {summary(mesh, dt)}")
         if args.verbose:
             print("  time: " + ", ".join(f"{k} {v:.3f} s" for k, v in mesh.stats["time"].items())
                   + f"; candidate cycles {mesh.stats['candidates']}; target edge {mesh.stats['target_edge']:.4g}")
