@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import require
+from ..errors import MethodError, require
 
 __all__ = ["min_area_triangulation", "triangulate_patch", "is_simple_polygon", "cotan_laplacian"]
 
@@ -419,7 +419,7 @@ def triangulate_patch(
     Vd = out["vertices"]
     T = np.asarray(out["triangles"], dtype=np.int64)
     if len(Vd) < n or not np.allclose(Vd[:n], q):
-        raise RuntimeError("triangle moved boundary points")  # never expected: flag Y
+        raise MethodError("the triangulation moved boundary points of a patch")  # not expected: flag Y
     # orientation: make the boundary run in the polygon's direction
     if signed < 0:
         T = T[:, ::-1]
