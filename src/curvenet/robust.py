@@ -534,6 +534,9 @@ def _assemble(P, h, chains, regions, prm):
                 ends_at[ra].extend(ends_at[rb])
                 ends_at[rb] = []
                 tips[b] = (ra, ib)
+    # a free end that stops short of another curve is a junction whose link was lost to
+    # noise or sparse sampling (a T whose stem does not reach the bar): split that curve there
+    _attach_dangling(P, h, chains, regions, alive, ends_at, valence(), prm)
     # prune short spurs and small isolated pieces
     for _ in range(3):
         v = valence()
@@ -661,6 +664,108 @@ def _close_tip_pairs(P, tips, r):
     a, b = np.minimum(a, b), np.maximum(a, b)
     ab = np.unique(np.stack([a[a != b], b[a != b]], axis=1), axis=0)
     return [(int(x), int(y)) for x, y in ab]
+
+
+ATT = 1.5
+
+
+def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
+    """Join free ends lying within a link reach ahead of another chain to it (in place).
+
+    The other chain is split at its nearest point, which becomes a new junction region
+    holding the free end's region too; near an end of the other chain, the free end joins
+    the region there instead. Tips are handled in chain order; each moves at most once.
+    """
+    from scipy.spatial import cKDTree
+
+    N = len(P)
+    owner = np.full(N, -1, dtype=np.int64)
+    for i, c in enumerate(chains):
+        if alive[i]:
+            owner[c.ids] = i
+    pts = np.flatnonzero(owner >= 0)
+    if len(pts) == 0:
+        return
+    tree = cKDTree(P[pts])
+    noise = prm.get("_noise", 0.0)
+    tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
+            for s in (0, 1) if v[c.ends[s]] == 1]
+    for i, s in tips:
+        c = chains[i]
+        if not alive[i] or c.closed or v[c.ends[s]] != 1:
+            continue
+        r = c.ends[s]
+        ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
+        e = int(ids[-1])
+        hl = float(h[e])
+        E = _end_portion(P, h, ids, span=3.0)
+        u = E[0] - E[-1]
+        nu = np.linalg.norm(u)
+        if nu == 0:
+            continue
+        u = u / nu
+        reach = ATT * prm["link"] * hl + GAP * noise
+        tip_pts = np.r_[regions[r], e].astype(np.int64)
+        best = None
+        for tp in tip_pts:
+            for k in tree.query_ball_point(P[tp], reach):
+                q = int(pts[k])
+                j = int(owner[q])
+                if j < 0 or j == i or not alive[j]:
+                    continue
+                vq = P[q] - P[e]
+                d = float(np.linalg.norm(P[q] - P[tp]))
+                if vq @ u < -0.5 * hl:
+                    continue
+                key = (d, q)
+                if best is None or key < best[0]:
+                    best = (key, q, j)
+        if best is None:
+            continue
+        _, q, j = best
+        cj = chains[j]
+        k = int(np.flatnonzero(cj.ids == q)[0])
+        m = len(cj.ids)
+        if not cj.closed and (k < 2 or k > m - 3):
+            # near an end of the other chain: join its region there
+            sj = 0 if k < 2 else 1
+            rr = cj.ends[sj]
+            if rr == r:
+                continue
+            regions[rr] = np.r_[regions[rr], regions[r]]
+            regions[r] = np.zeros(0, dtype=np.int64)
+            c.ends[s] = rr
+            ends_at[rr].append((i, s))
+            ends_at[r] = []
+            v[rr] += 1
+            v[r] = 0
+            continue
+        # split chain j at q: q and its two chain neighbours form the new junction region
+        lo, hi = max(k - 1, 0), min(k + 2, m)
+        core = cj.ids[lo:hi]
+        regions.append(np.r_[core, regions[r]].astype(np.int64))
+        nr = len(regions) - 1
+        ends_at.append([(i, s)])
+        regions[r] = np.zeros(0, dtype=np.int64)
+        ends_at[r] = []
+        c.ends[s] = nr
+        v[r] = 0
+        v = np.r_[v, 1]
+        owner[core] = -1
+        if cj.closed:
+            chains[j] = _Chain(np.r_[cj.ids[hi:], cj.ids[:lo]], [nr, nr])
+            ends_at[nr] += [(j, 0), (j, 1)]
+            v[nr] += 2
+        else:
+            a, b = cj.ends
+            chains[j] = _Chain(cj.ids[:lo], [a, nr])
+            chains.append(_Chain(cj.ids[hi:], [nr, b]))
+            alive.append(True)
+            jn = len(chains) - 1
+            owner[chains[jn].ids] = jn
+            ends_at[nr] += [(j, 1), (jn, 0)]
+            ends_at[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ends_at[b]]
+            v[nr] += 2
 
 
 def _extent(P, ids):
