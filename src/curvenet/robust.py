@@ -42,7 +42,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from . import _robust_kernels as _k
 from .errors import InputError
 from .network import Curve, CurveNetwork
-from .neighbors import build_tree, knn
+from .neighbors import knn
 from .validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
@@ -305,8 +305,7 @@ def reconstruct_robust(
         return net
 
     # 1. neighbours and spacing
-    tree = build_tree(P)
-    dist, idx = knn(P, prm["k"], tree=tree)
+    dist, idx = knn(P, prm["k"])
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     if spacing is None:
@@ -342,10 +341,14 @@ def reconstruct_robust(
     # regions: flagged points joined by plain short links (any direction)
     ka, kb = _k.short_links(h, dist, idx, float(prm["link"]))  # kNN pairs within link * h
     reg, n_reg = _components(N, ka, kb, flagged)
+    del ka, kb, dist, idx  # memory: the kNN lists are not needed below
     chn, n_chn = _components(N, src, dst, ~flagged)
 
     chains = _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin)
-    regions = [np.flatnonzero(reg == r) for r in range(n_reg)]
+    # the points of each region, ascending (one stable sort, not one pass over N per region)
+    o = np.argsort(reg, kind="stable")
+    cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
+    regions = [o[cut[r]:cut[r + 1]] for r in range(n_reg)]
     tm["tracing"] = time.perf_counter() - t1
 
     # 5. network
