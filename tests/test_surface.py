@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from curvenet import Curve, CurveNetwork, InputError
-from curvenet.surface import SurfaceMesh, min_area_triangulation, surface
-from curvenet.surface.mesh_io import mesh_to_obj, mesh_to_ply
-from curvenet.surface.assemble import _split_shared_chords
-from curvenet.surface.cycles import _orient
-from curvenet.surface.patches import is_simple_polygon
+from curvenet.surfacing import SurfaceMesh, min_area_triangulation, surface
+from curvenet.surfacing.mesh_io import mesh_to_obj, mesh_to_ply
+from curvenet.surfacing.assemble import _split_shared_chords
+from curvenet.surfacing.cycles import _orient
+from curvenet.surfacing.patches import is_simple_polygon
 
 synth = pytest.importorskip("curvenet.synth")
 pytest.importorskip("triangle")
@@ -506,3 +506,30 @@ def test_reconstructed_network_surfaces():
     assert len(mesh.boundary_edges()) == 0
     assert is_manifold_and_oriented(mesh.triangles) == (True, True)
     assert signed_volume(mesh) == pytest.approx(1.0, rel=0.05)
+
+
+def test_reconstruct_surface_option_and_top_level_function(tmp_path):
+    """`curvenet reconstruct ... --surface MESH` and `curvenet.surface(network)` (issue 4, item 1)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import curvenet
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "mug.obj"
+    r = subprocess.run([sys.executable, "-m", "curvenet.cli", "reconstruct", str(root / "examples" / "mug.xyz"),
+                        "-o", str(tmp_path / "mug.json"), "--surface", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "surface:" in r.stdout and "Euler characteristic" in r.stdout
+    trimesh = pytest.importorskip("trimesh")
+    m = trimesh.load(str(out), process=False)
+    assert len(m.faces) > 0
+    from curvenet.io import read_network
+
+    net = read_network(tmp_path / "mug.json")
+    mesh = curvenet.surface(net)
+    assert len(mesh.triangles) == len(m.faces)
+    bad = subprocess.run([sys.executable, "-m", "curvenet.cli", "reconstruct", str(root / "examples" / "mug.xyz"),
+                          "-o", str(tmp_path / "b.json"), "--surface", str(tmp_path / "m.stl")], capture_output=True, text=True)
+    assert bad.returncode == 2 and "unknown mesh extension" in bad.stderr and not (tmp_path / "b.json").exists()

@@ -48,6 +48,8 @@ def register(sub) -> None:
                    help="also draw the result (input points faint, curves coloured) as a PNG picture")
     p.add_argument("--html", metavar="FILE.html", default=None,
                    help="also write the interactive viewer (one offline HTML file)")
+    p.add_argument("--surface", metavar="MESH", action="append", default=[],
+                   help="also surface the network into a triangle mesh (.obj or .ply; extra surface); repeatable")
     add_picture_options(p, points=False)
     add_common(p)
     p.set_defaults(func=run)
@@ -107,6 +109,10 @@ def run(args) -> int:
     if args.html:
         check_extension(args.html, ".html", "the --html viewer")
         check_output_path(args.html, inputs=inputs)
+    if args.surface:
+        from .cmd_surface import check_outputs
+
+        check_outputs(args.surface, inputs=inputs)
     st = Stages(quiet=args.quiet, verbose=args.verbose)
     params = collect_params(args)
     st.info(f"input: {args.input}; method: {args.method}; given parameters: "
@@ -140,8 +146,16 @@ def run(args) -> int:
             save_html(net, args.html, inputs=inputs, points=points)
             written.append(args.html)
             bar.advance()
+    if args.surface:
+        from .cmd_surface import summary, write_surface
+
+        with st.stage("surfacing"):
+            mesh, seconds = write_surface(net, args.surface, inputs=inputs)
+        written.extend(args.surface)
     if not args.quiet:
         print_summary(net, Path(args.input).stem, written)
+        if args.surface:
+            print("surface: " + summary(mesh, seconds))
         if not written:
             print("curvenet: note: no output file given (-o, --png, --html), nothing written", file=sys.stderr)
     return 0

@@ -30,7 +30,7 @@ def check_outputs(outputs, *, png=None, inputs=()) -> None:
     """Fail early on mesh outputs that cannot be written (bad extension, missing folder...)."""
     from ..errors import FormatError
     from ..io import check_output_path, extension
-    from ..surface import MESH_WRITERS
+    from ..surfacing import MESH_WRITERS
 
     for out in outputs:
         check_output_path(out, inputs=inputs)
@@ -50,7 +50,7 @@ def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=T
     :func:`check_outputs` before the work, then this. Returns ``(mesh, seconds)``.
     """
     from ..io import atomic_write, extension
-    from ..surface import MESH_WRITERS, surface
+    from ..surfacing import MESH_WRITERS, surface
 
     t0 = time.perf_counter()
     mesh = surface(net, target_edge=target_edge, fair=fair)

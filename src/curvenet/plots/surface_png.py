@@ -35,7 +35,7 @@ def render_surface_png(
     azim: float = -60.0,
     title: str | None = None,
 ) -> bytes:
-    """Draw a :class:`~curvenet.surface.SurfaceMesh` and return the PNG bytes.
+    """Draw a :class:`~curvenet.surfacing.SurfaceMesh` and return the PNG bytes.
 
     Parameters
     ----------

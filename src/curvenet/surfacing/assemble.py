@@ -141,10 +141,10 @@ def surface(
     fair : bool
         Shape the patch interiors after the curvature of their boundary curves (a Poisson
         equation with the boundary's mean normal curvature, see
-        :func:`curvenet.surface.patches.triangulate_patch`); ``False``: harmonic membranes.
+        :func:`curvenet.surfacing.patches.triangulate_patch`); ``False``: harmonic membranes.
     fold_angle : float
         Degrees: two cycles meeting a curve from the same side within this angle cannot both be
-        patches (see :func:`curvenet.surface.cycles.find_cycles`).
+        patches (see :func:`curvenet.surfacing.cycles.find_cycles`).
     min_angle : float
         Minimum triangle angle asked of the 2D quality triangulation.
     time_limit : float

@@ -12,7 +12,7 @@ conditions only was tried and stays much flatter (sphere quads off the sphere by
 against 0.013 here).
 
 A minimal-area triangulation of the polygon (dynamic program of Barequet and Sharir 1995 and Liepa
-2003) scores candidate cycles in :mod:`curvenet.surface.cycles`.
+2003) scores candidate cycles in :mod:`curvenet.surfacing.cycles`.
 """
 
 from __future__ import annotations
