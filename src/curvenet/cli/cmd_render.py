@@ -54,12 +54,14 @@ def check_extension(path, ext: str, what: str) -> None:
         raise FormatError(f"{path}: {what} must have the extension {ext}")
 
 
-def run(args) -> int:
+def open_network(args):
+    """Shared by ``render`` and ``view``: check the output, read the network and the optional points.
+
+    Returns ``(stages, network, points or None, input paths)``.
+    """
     from ..io import check_output_path, read_network, read_points
-    from ..plots.network_png import save_png
     from .progress import Stages
 
-    check_extension(args.output, ".png", "the picture")
     inputs = [args.network] + ([args.points] if args.points else [])
     check_output_path(args.output, inputs=inputs)
     st = Stages(quiet=args.quiet, verbose=args.verbose)
@@ -67,6 +69,14 @@ def run(args) -> int:
         net = read_network(args.network)
         pts = read_points(args.points, columns=args.columns) if args.points else None
     st.info(f"network: {net!r}" + ("" if pts is None else f"; {len(pts)} points"))
+    return st, net, pts, inputs
+
+
+def run(args) -> int:
+    from ..plots.network_png import save_png
+
+    check_extension(args.output, ".png", "the picture")
+    st, net, pts, inputs = open_network(args)
     with st.stage("drawing"):
         save_png(net, args.output, inputs=inputs, points=pts, **picture_options(args))
     if not args.quiet:

@@ -35,21 +35,13 @@ def viewer_options(args) -> dict:
 
 def run(args) -> int:
     from ..errors import InputError
-    from ..io import check_output_path, read_network, read_points
     from ..viewer import save_html
-    from .cmd_render import check_extension
-    from .progress import Stages
+    from .cmd_render import check_extension, open_network
 
     check_extension(args.output, ".html", "the viewer")
     if args.max_points is not None and args.max_points < 0:
         raise InputError(f"--max-points must be >= 0, got {args.max_points}")
-    inputs = [args.network] + ([args.points] if args.points else [])
-    check_output_path(args.output, inputs=inputs)
-    st = Stages(quiet=args.quiet, verbose=args.verbose)
-    with st.stage("reading"):
-        net = read_network(args.network)
-        pts = read_points(args.points, columns=args.columns) if args.points else None
-    st.info(f"network: {net!r}" + ("" if pts is None else f"; {len(pts)} points"))
+    st, net, pts, inputs = open_network(args)
     with st.stage("writing viewer"):
         save_html(net, args.output, inputs=inputs, points=pts, **viewer_options(args))
     if not args.quiet:
