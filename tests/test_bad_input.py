@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from curvenet import FormatError, InputError
+from curvenet import InputError
 from curvenet.io import read_points
 
 
