@@ -501,6 +501,9 @@ def _assemble(P, h, chains, regions, prm):
         return v
 
     hmed = float(np.median(h))
+    # a region passed through by one curve (valence 2) right next to a junction region is a
+    # piece of that junction cut off by noise (a crossing split in two): merge it
+    _merge_near_pass_through(P, h, chains, regions, alive, ends_at, valence(), prm)
     # a short chain leaving a region and coming back to it lies inside the junction: absorb it
     for i, c in enumerate(chains):
         if not c.closed and c.ends[0] == c.ends[1] and len(regions[c.ends[0]]):
@@ -509,6 +512,9 @@ def _assemble(P, h, chains, regions, prm):
             if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm["shell_outer"] * hl:
                 alive[i] = False
                 regions[c.ends[0]] = np.r_[regions[c.ends[0]], c.ids]
+    # a flagged clump touching no chain, just beyond a free end, is the rest of that end (the
+    # link between them was lost to noise): it joins the free end's region
+    _absorb_orphans(P, h, chains, regions, alive, ends_at, valence(), prm)
     # two free ends facing each other across a small gap are one curve broken by noise: join
     v = valence()
     tips = []
@@ -635,8 +641,14 @@ def _assemble(P, h, chains, regions, prm):
         ids = c.ids
         ext0 = end_ext.get((ci, 0), np.zeros(0, dtype=np.int64))
         ext1 = end_ext.get((ci, 1), np.zeros(0, dtype=np.int64))
-        ids = np.r_[ext0[::-1], ids, ext1]
         a, b = int(new_id[node_of[c.ends[0]]]), int(new_id[node_of[c.ends[1]]])
+        # at a junction, chain points lying behind the node (the chain overshot it into
+        # another branch) are dropped
+        if not len(ext0) and v[c.ends[0]] >= 2:
+            ids = _trim_behind(P, h, ids, nodes[a])
+        if not len(ext1) and v[c.ends[1]] >= 2:
+            ids = _trim_behind(P, h, ids[::-1], nodes[b])[::-1]
+        ids = np.r_[ext0[::-1], ids, ext1]
         pts = P[ids]
         ind = ids.astype(np.int64)
         # the curve ends exactly at its nodes (a free end's node is its extreme point)
@@ -670,6 +682,80 @@ def _close_tip_pairs(P, tips, r):
 
 
 ATT = 1.5
+
+
+def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
+    """Merge every valence-2 region into the nearest region of valence >= 2 within a gap."""
+    from scipy.spatial import cKDTree
+
+    cand = [r for r in range(len(regions)) if v[r] >= 2 and len(regions[r])]
+    two = [r for r in cand if v[r] == 2]
+    if not two or len(cand) < 2:
+        return
+    noise = prm.get("_noise", 0.0)
+    lab = np.concatenate([np.full(len(regions[r]), r) for r in cand])
+    ids = np.concatenate([regions[r] for r in cand])
+    tree = cKDTree(P[ids])
+    for r in two:
+        pts = regions[r]
+        if len(pts) == 0 or v[r] != 2:
+            continue
+        gap = prm["link"] * 1.2 * float(np.median(h[pts])) + GAP * noise
+        best = None
+        for k_list, p_ in zip(tree.query_ball_point(P[pts], gap), pts):
+            for k in k_list:
+                t = int(lab[k])
+                if t == r or len(regions[t]) == 0:
+                    continue
+                d = float(np.linalg.norm(P[ids[k]] - P[p_]))
+                if best is None or (d, t) < best:
+                    best = (d, t)
+        if best is None:
+            continue
+        t = best[1]
+        regions[t] = np.r_[regions[t], pts]
+        regions[r] = np.zeros(0, dtype=np.int64)
+        lab[lab == r] = t
+        for i, s in ends_at[r]:
+            if alive[i] and chains[i].ends[s] == r:
+                chains[i].ends[s] = t
+                ends_at[t].append((i, s))
+        ends_at[r] = []
+        v[t] += v[r]
+        v[r] = 0
+
+
+def _absorb_orphans(P, h, chains, regions, alive, ends_at, v, prm):
+    """Merge regions without chain ends into the nearest free-end region within a gap (in place)."""
+    from scipy.spatial import cKDTree
+
+    tips = [r for r in range(len(regions)) if v[r] == 1]
+    orphans = [r for r in range(len(regions)) if v[r] == 0 and len(regions[r]) and not ends_at[r]]
+    if not tips or not orphans:
+        return
+    tip_pts, tip_of = [], []
+    for r in tips:
+        ids = list(regions[r])
+        for i, s in ends_at[r]:
+            if alive[i] and chains[i].ends[s] == r:
+                ids.append(int(chains[i].ids[-1] if s == 1 else chains[i].ids[0]))
+        tip_pts += ids
+        tip_of += [r] * len(ids)
+    tip_pts = np.asarray(tip_pts, dtype=np.int64)
+    tip_of = np.asarray(tip_of, dtype=np.int64)
+    tree = cKDTree(P[tip_pts])
+    noise = prm.get("_noise", 0.0)
+    for r in orphans:
+        ids = regions[r]
+        gap = prm["link"] * 1.2 * float(np.median(h[ids])) + GAP * noise
+        d, k = tree.query(P[ids], distance_upper_bound=gap)
+        ok = np.isfinite(d)
+        if not ok.any():
+            continue
+        o = np.lexsort((tip_pts[k[ok]], d[ok]))[0]
+        t = int(tip_of[k[ok][o]])
+        regions[t] = np.r_[regions[t], ids]
+        regions[r] = np.zeros(0, dtype=np.int64)
 
 
 def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
@@ -769,6 +855,29 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
             ends_at[nr] += [(j, 1), (jn, 0)]
             ends_at[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ends_at[b]]
             v[nr] += 2
+
+
+def _trim_behind(P, h, ids, x):
+    """Drop the leading ids lying behind the node ``x`` (ids run away from it).
+
+    The direction of the chain is that from ``x`` to the chain point about ``SPAN`` spacings
+    along; leading points whose offset from ``x`` has a negative component along it go. At
+    least 2 points are kept.
+    """
+    if len(ids) < 4:
+        return ids
+    X = P[ids]
+    seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+    k = int(min(np.searchsorted(seg, SPAN * float(h[ids[0]])), len(ids) - 1))
+    u = X[k] - x
+    nu = np.linalg.norm(u)
+    if nu == 0:
+        return ids
+    behind = (X[:k] - x) @ (u / nu) <= 0
+    j = 0
+    while j < len(behind) and behind[j]:
+        j += 1
+    return ids[min(j, len(ids) - 2):]
 
 
 def _extent(P, ids):
