@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - compiled
@@ -544,7 +544,138 @@ def _chain_ends(h, ids_o, par_o, bounds, c_reg, c_par, cb):  # pragma: no cover 
     return ends, touch
 
 
+def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  # pragma: no cover - compiled
+    """Walk every branch end into its junction region, in turns (see robust._extend_into_region).
+
+    Branch ``b`` is ``flat[off[b]:off[b + 1]]`` (running towards the junction); ``rs`` the sorted
+    unique region points. Each round, every active branch (at least 2 points) proposes the
+    nearest unclaimed region point linked to its end ``cur`` (CSR ``indptr``, ``indices``) that
+    lies ahead, ``al > h_cur / 4`` along the unit direction from the point ``3 h_cur`` back
+    along the branch (as ``robust._end_portion``) to ``cur``, and within
+    ``max(width * h_cur, wnoise)`` of that line; distance ``hypot(al, perp)``, ties: lowest id.
+    A branch with no such point stops. Proposals are taken by increasing (distance, id), a
+    point claimed once only. Rounds stop when nothing is proposed.
+
+    Returns
+    -------
+    buf : (n_branches, cap) ndarray of int64
+    cnt : (n_branches,) ndarray of int64
+        Branch ``b`` extended is ``buf[b, :cnt[b]]``.
+    """
+    nbr = off.shape[0] - 1
+    nr = rs.shape[0]
+    d = P.shape[1]
+    cap = 1
+    for b in range(nbr):
+        if off[b + 1] - off[b] > cap:
+            cap = off[b + 1] - off[b]
+    cap += nr + 1
+    buf = np.zeros((nbr, cap), dtype=np.int64)
+    cnt = np.zeros(nbr, dtype=np.int64)
+    active = np.zeros(nbr, dtype=np.bool_)
+    for b in range(nbr):
+        n = off[b + 1] - off[b]
+        for i in range(n):
+            buf[b, i] = flat[off[b] + i]
+        cnt[b] = n
+        active[b] = n >= 2
+    claimed = np.zeros(nr, dtype=np.bool_)
+    pd_ = np.empty(nbr)
+    pj = np.empty(nbr, dtype=np.int64)
+    pb = np.empty(nbr, dtype=np.int64)
+    u = np.empty(d)
+    for it in range(nr + 1):
+        npr = 0
+        for bi in range(nbr):
+            if not active[bi]:
+                continue
+            n = cnt[bi]
+            cur = buf[bi, n - 1]
+            hl = h[cur]
+            # the end portion over 3 h: prefix sums of the reversed branch
+            lim = 3.0 * hl
+            s = 0.0
+            m = 1
+            for q in range(n - 1, 0, -1):
+                a = buf[bi, q]
+                c2 = buf[bi, q - 1]
+                sq = 0.0
+                for c in range(d):
+                    t = P[c2, c] - P[a, c]
+                    sq = sq + t * t if c > 0 else t * t
+                s += np.sqrt(sq)
+                if not s <= lim:
+                    break
+                m += 1
+            if m < 3 and n >= 3:
+                m = 3
+            elif m < n and n < 3:
+                m = n
+            far = buf[bi, n - m]
+            nu2 = 0.0
+            for c in range(d):
+                u[c] = P[cur, c] - P[far, c]
+                nu2 += u[c] * u[c]
+            nu = np.sqrt(nu2)
+            if nu == 0:
+                active[bi] = False
+                continue
+            for c in range(d):
+                u[c] = u[c] / nu
+            w = width * hl
+            if wnoise > w:
+                w = wnoise
+            any_nb = False
+            best_d = np.inf
+            best_j = -1
+            for e in range(indptr[cur], indptr[cur + 1]):
+                j = indices[e]
+                pos = np.searchsorted(rs, j)
+                if pos >= nr or rs[pos] != j or claimed[pos]:
+                    continue
+                any_nb = True
+                al = 0.0
+                vv = 0.0
+                for c in range(d):
+                    v = P[j, c] - P[cur, c]
+                    al += v * u[c]
+                    vv = vv + v * v if c > 0 else v * v
+                x = vv - al * al
+                perp = np.sqrt(x if x > 0.0 else 0.0)
+                if al > 0.25 * hl and perp <= w:
+                    dj = np.hypot(al, perp)
+                    if dj < best_d or (dj == best_d and j < best_j):
+                        best_d = dj
+                        best_j = j
+            if not any_nb or best_j < 0:
+                active[bi] = False
+                continue
+            # insert the proposal, sorted by (distance, id), stable
+            i = npr
+            while i > 0 and (pd_[i - 1] > best_d or (pd_[i - 1] == best_d and pj[i - 1] > best_j)):
+                pd_[i] = pd_[i - 1]
+                pj[i] = pj[i - 1]
+                pb[i] = pb[i - 1]
+                i -= 1
+            pd_[i] = best_d
+            pj[i] = best_j
+            pb[i] = bi
+            npr += 1
+        if npr == 0:
+            break
+        for i in range(npr):
+            pos = np.searchsorted(rs, pj[i])
+            if claimed[pos]:
+                continue
+            bi = pb[i]
+            buf[bi, cnt[bi]] = pj[i]
+            cnt[bi] += 1
+            claimed[pos] = True
+    return buf, cnt
+
+
 HAVE_NUMBA = False
+extend_into_region = _extend_into_region
 chain_ends = _chain_ends
 linked_edges = _linked_edges
 short_links = _short_links
@@ -566,6 +697,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         linked_edges = numba.njit(cache=True, nogil=True)(_linked_edges)
         short_links = numba.njit(cache=True, nogil=True)(_short_links)
         chain_ends = numba.njit(cache=True, nogil=True)(_chain_ends)
+        extend_into_region = numba.njit(cache=True, nogil=True)(_extend_into_region)
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass

@@ -946,52 +946,18 @@ def _extend_into_region(P, h, branches, rid, prm):
     the extended id lists (running towards the junction).
     """
     indptr, indices = prm["_graph"]
-    inreg = set(int(i) for i in rid)
-    claimed: set[int] = set()
-    out = [list(b) for b in branches]
-    active = [len(b) >= 2 for b in out]
-    noise = prm["_noise"]
-    for _ in range(len(inreg) + 1):
-        # every active branch proposes its next point; the nearest proposals win (the result
-        # does not depend on the order of the branches, hence of the input points)
-        props = []
-        for bi, ids in enumerate(out):
-            if not active[bi]:
-                continue
-            cur = ids[-1]
-            hl = float(h[cur])
-            E = _end_portion(P, h, np.asarray(ids), span=3.0)
-            u = E[0] - E[-1]
-            nu = np.linalg.norm(u)
-            if nu == 0:
-                active[bi] = False
-                continue
-            u = u / nu
-            nb = indices[indptr[cur]:indptr[cur + 1]]
-            nb = np.array([j for j in nb if j in inreg and j not in claimed], dtype=np.int64)
-            if len(nb) == 0:
-                active[bi] = False
-                continue
-            v = P[nb] - P[cur]
-            al = v @ u
-            perp = np.sqrt(np.maximum((v * v).sum(axis=1) - al**2, 0.0))
-            w = max(prm["_width"] * hl, NW * noise)
-            ok = (al > 0.25 * hl) & (perp <= w)
-            if not ok.any():
-                active[bi] = False
-                continue
-            d = np.where(ok, np.hypot(al, perp), np.inf)
-            k = np.lexsort((nb, d))[0]
-            props.append((float(d[k]), int(nb[k]), bi))
-        if not props:
-            break
-        props.sort(key=lambda x: (x[0], x[1]))
-        for d, j, bi in props:
-            if j in claimed:
-                continue  # taken by a nearer branch this round: try again next round
-            out[bi].append(j)
-            claimed.add(j)
-    return out
+    # compiled (_robust_kernels.extend_into_region): each round every active branch proposes
+    # the nearest unclaimed linked region point ahead of its end (along its last 3 h, within
+    # max(width h, NW noise) of that line); the nearest proposals win, so the result does not
+    # depend on the order of the branches, hence of the input points
+    lens = [len(b) for b in branches]
+    off = np.r_[0, np.cumsum(lens)].astype(np.int64)
+    flat = (np.concatenate([np.asarray(b, dtype=np.int64) for b in branches]) if branches
+            else np.zeros(0, dtype=np.int64))
+    buf, cnt = _k.extend_into_region(P, np.ascontiguousarray(h, dtype=np.float64), indptr, indices, flat,
+                                     off, np.unique(np.asarray(rid, dtype=np.int64)),
+                                     float(prm["_width"]), float(NW * prm["_noise"]))
+    return [buf[i, :cnt[i]] for i in range(len(branches))]
 
 
 def _junction(P, h, live, inc, rid, prm):
