@@ -312,7 +312,7 @@ def report(rows, comp, mach, args, img_rel: str) -> str:
         f"(load average at the end {mach['load']}); Python {mach['python']}, numpy {mach['numpy']}, "
         f"scipy {mach['scipy']}, numba {mach['numba']}.",
         "",
-        f"Command: `python benchmarks/perf.py {' '.join(args.argv)}`".rstrip() + ". Times in seconds, warm "
+        f"Command(s): `python benchmarks/perf.py {' '.join(args.argv)}`".replace(" + ", "` then `python benchmarks/perf.py ") + ". Times in seconds, warm "
         "(numba kernels compiled or loaded before the timed run), best of "
         f"{args.repeat_desc}. *method total* is the `curvenet.reconstruct` call on points in memory; "
         "*end to end* adds reading the `.xyz` text file and writing the JSON network. *k=16 query* "
@@ -378,6 +378,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(ROOT / "docs" / "performance.md"))
     ap.add_argument("--img", default=None, help="plot path (default: img/performance.png beside --out)")
     ap.add_argument("--no-compile", action="store_true", help="skip the cold-compile measurement")
+    ap.add_argument("--merge", action="store_true",
+                    help="keep the rows of the previous run (the .json beside --out) for other sizes/methods")
     ap.add_argument("--tmp", default=None, help="folder for the temporary clouds")
     # worker mode (internal)
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
@@ -429,6 +431,7 @@ def main(argv=None) -> int:
                 res = json.loads([ln for ln in r.stdout.splitlines() if ln.startswith("RESULT ")][-1][7:])
                 res["true_nodes"], res["true_curves"] = truth["nodes"], truth["curves"]
                 res["repeat"] = rep
+                res["n_target"] = n
                 rows.append(res)
                 st = ", ".join(f"{k} {v:.3f}" for k, v in res["stages"].items())
                 print(f"  {m:7s} N={res['n']:>10,}  total {res['method_total']:.3f} s ({st}); "
@@ -439,6 +442,16 @@ def main(argv=None) -> int:
             xyz.unlink()
             ply.unlink()
     args.argv = argv
+    store = out.with_suffix(".json")
+    if args.merge and store.exists():
+        old = json.loads(store.read_text())
+        have = {(r["n_target"], r["method"]) for r in rows}
+        rows = [r for r in old["rows"] if (r["n_target"], r["method"]) not in have] + rows
+        rows.sort(key=lambda r: (r["n_target"], r["method"] != "robust", r["method"]))
+        comp = comp or old.get("compile", {})
+        args.argv = old.get("argv", []) + ["+"] + argv
+    out.parent.mkdir(parents=True, exist_ok=True)
+    store.write_text(json.dumps({"rows": rows, "compile": comp, "argv": args.argv, "machine": machine()}, indent=1))
     reps = sorted({r["repeat"] for r in rows})
     args.repeat_desc = "/".join(map(str, reps)) + " runs (more for the small sizes)" if len(reps) > 1 else f"{reps[0]} run(s)"
     plot(rows, img)
