@@ -49,6 +49,10 @@ __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
 #: Length (in spacings) of the chain end fitted for the tangent line at a junction.
 SPAN = 6.0
+#: Length (in spacings) of the walked branch end fitted for the junction node.
+JSPAN = 4.0
+#: ... plus this many times the noise scale.
+JN = 6.0
 #: The noise scale of the radii below: this many times the estimated noise std.
 NOISE = 1.2
 #: Links may stray from a tangent line by this many times the estimated noise.
@@ -126,6 +130,29 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
     rms = 1.28 * cr / np.sqrt(1.5 * max(dim - 1, 1))
     return t, lin, rms
+
+
+VOTE_COS = np.cos(np.radians(10.0))
+VOTE_COH = 0.6
+
+
+def _vote_tangents(t, lin, idx, m=8):
+    """Tangents by a vote of the point and its ``m`` nearest neighbours (tensor sum of t t^T).
+
+    A tangent thrown across close parallel curves by noise is outvoted by its neighbours'.
+    The linearity becomes the smaller of the point's own and the vote's coherence
+    ``1 - l2 / l1`` (low at junctions, where neighbours vote for different branches).
+    """
+    m = min(m, idx.shape[1])
+    T = t[np.concatenate([np.arange(len(t))[:, None], idx[:, :m]], axis=1)]  # (n, m+1, d)
+    C = np.einsum("nki,nkj->nij", T, T)
+    ev, V = np.linalg.eigh(C)
+    u = V[:, :, -1]
+    coh = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
+    # only a tangent clearly at odds with a coherent vote is replaced
+    swap = (np.abs(np.einsum("nd,nd->n", u, t)) < VOTE_COS) & (coh >= VOTE_COH)
+    t = np.where(swap[:, None], u, t)
+    return t, np.where(swap, np.minimum(lin, coh), lin)
 
 
 def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
@@ -320,6 +347,7 @@ def reconstruct_robust(
 
     # 2. linked graph
     t, lin, rms = _tangents(P, idx, h)
+    t, lin = _vote_tangents(t, lin, idx)
     sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
     params_out["noise"] = sigma  # estimated std of the noise per coordinate
     noise = NOISE * sigma
@@ -978,7 +1006,8 @@ def _junction(P, h, live, inc, rid, prm):
     b = np.zeros(dim)
     cs = []
     for ids in branches:
-        E = _end_portion(P, h, np.asarray(ids), span=SPAN)
+        # longer under noise: the fitted direction's error shrinks with the span
+        E = _end_portion(P, h, np.asarray(ids), span=JSPAN + JN * prm.get("_noise", 0.0) / float(h[ids[-1]]))
         cc, u = _fit_line(E)
         cs.append(E[0])
         if u is None:
