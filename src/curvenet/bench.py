@@ -276,7 +276,7 @@ def run_cassie(
     *,
     h: float = 0.002,
     tune: bool = True,
-    max_points: int | None = 20000,
+    max_points: int | None = 50000,
     progress=None,
 ) -> list[dict[str, Any]]:
     """Run methods on the CASSIE free creations sampled cleanly at spacing ``h`` (metres).
