@@ -51,6 +51,8 @@ __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 SPAN = 6.0
 #: Length (in spacings) of the walked branch end fitted for the junction node.
 JSPAN = 4.0
+#: A walk into a junction stops where it strays this many link widths from its line.
+WALK_DEV = 1.5
 #: ... plus this many times the noise scale.
 JN = 6.0
 #: The noise scale of the radii below: this many times the estimated noise std.
@@ -1001,7 +1003,25 @@ def _junction(P, h, live, inc, rid, prm):
         c = live[ci]
         branches.append(c.ids if s == 1 else c.ids[::-1])
     if len(rid) and "_graph" in prm:
-        branches = _extend_into_region(P, h, branches, rid, prm)
+        walked = _extend_into_region(P, h, branches, rid, prm)
+        # a walk that strays from the branch's own line (onto another branch, led by noise)
+        # is cut where it leaves a strip of WALK_DEV link widths around that line
+        noise = prm.get("_noise", 0.0)
+        for bi, (b0, b) in enumerate(zip(branches, walked)):
+            n0 = len(b0)
+            if len(b) <= n0 or n0 < 2:
+                branches[bi] = b
+                continue
+            E = _end_portion(P, h, np.asarray(b0), span=JSPAN + JN * noise / float(h[b0[-1]]))
+            cc, u = _fit_line(E)
+            if u is None:
+                branches[bi] = b
+                continue
+            X = P[np.asarray(b[n0:])] - cc
+            dev = np.sqrt(np.maximum((X * X).sum(axis=1) - (X @ u) ** 2, 0.0))
+            lim = WALK_DEV * max(prm["_width"] * float(h[b0[-1]]), NW * noise)
+            bad = np.flatnonzero(dev > lim)
+            branches[bi] = b[:n0 + (bad[0] if len(bad) else len(dev))]
     A = np.zeros((dim, dim))
     b = np.zeros(dim)
     cs = []
