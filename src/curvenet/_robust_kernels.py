@@ -11,6 +11,8 @@ import os
 
 import numpy as np
 
+prange = range  # numba.prange when compiled (parallel loops over independent blocks)
+
 __all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "HAVE_NUMBA"]
 
 
@@ -260,10 +262,10 @@ def _eig_sym_py(C, V, ev):  # pragma: no cover - compiled
 _eig_sym = _eig_sym_py
 
 
-def _wpca(P, rows, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
-    """Weighted PCA of the points ``P[rows[:cnt]]`` with weights ``w[:cnt]``: principal
-    direction into ``t`` and ascending eigenvalues into ``ev`` (as robust._pca_dir)."""
-    d = P.shape[1]
+def _pca01(Q, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
+    """PCA of the rows ``Q[:cnt]`` with weights ``w[:cnt]`` of 0 or 1 (as robust._pca_dir):
+    principal direction into ``t``, ascending eigenvalues into ``ev``."""
+    d = Q.shape[1]
     sw = 0.0
     for k in range(cnt):
         sw += w[k]
@@ -272,14 +274,15 @@ def _wpca(P, rows, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
     for c in range(d):
         acc = 0.0
         for k in range(cnt):
-            acc += P[rows[k], c] * w[k]
+            if w[k] != 0.0:
+                acc += Q[k, c]
         mu[c] = acc / sw
     for i in range(d):
         for j in range(i, d):
             acc = 0.0
             for k in range(cnt):
-                sq = np.sqrt(w[k])
-                acc += ((P[rows[k], i] - mu[i]) * sq) * ((P[rows[k], j] - mu[j]) * sq)
+                if w[k] != 0.0:
+                    acc += (Q[k, i] - mu[i]) * (Q[k, j] - mu[j])
             C[i, j] = acc
             C[j, i] = acc
     _eig_sym(C, V, ev)
@@ -287,15 +290,91 @@ def _wpca(P, rows, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
         t[c] = V[c, d - 1]
 
 
+def _tangents_block(P, idx, h, m, p0, p1, T, lin, chord):  # pragma: no cover - compiled
+    """Points ``p0 <= p < p1`` of :func:`_tangents` (own scratch arrays)."""
+    d = P.shape[1]
+    Q = np.empty((m + 1, d))
+    w = np.ones(m + 1)
+    C = np.zeros((d, d))
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    mu = np.zeros(d)
+    t = np.zeros(d)
+    for p in range(p0, p1):
+        for c in range(d):
+            Q[0, c] = P[p, c]
+        for k in range(m):
+            q = idx[p, k]
+            for c in range(d):
+                Q[k + 1, c] = P[q, c]
+        for k in range(5):
+            w[k] = 1.0
+        _pca01(Q, 5, w, C, V, ev, mu, t)
+        hp2 = h[p] * h[p]
+        for it in range(2):
+            for k in range(m + 1):
+                al = 0.0
+                r2 = 0.0
+                for c in range(d):
+                    x = Q[k, c] - Q[0, c]
+                    al += x * t[c]
+                    r2 += x * x
+                w[k] = 1.0 if r2 - al * al <= hp2 else 0.0
+            _pca01(Q, m + 1, w, C, V, ev, mu, t)
+        lam = ev[d - 1]
+        if lam < 1e-300:
+            lam = 1e-300
+        lin[p] = 1.0 - ev[d - 2] / lam
+        for c in range(d):
+            T[p, c] = t[c]
+        # chord between the nearest strip neighbours ahead and behind along the tangent
+        ia = -1
+        ib = -1
+        besta = np.inf
+        bestb = np.inf
+        for k in range(1, m + 1):
+            al = 0.0
+            r2 = 0.0
+            for c in range(d):
+                x = Q[k, c] - Q[0, c]
+                al += x * t[c]
+                r2 += x * x
+            if r2 - al * al <= hp2:
+                if al > 0.0 and al < besta:
+                    besta = al
+                    ia = k
+                elif al < 0.0 and -al < bestb:
+                    bestb = -al
+                    ib = k
+        if ia < 0 or ib < 0:
+            chord[p] = np.nan
+            continue
+        ab2 = 0.0
+        ap2 = 0.0
+        apab = 0.0
+        for c in range(d):
+            ab = Q[ib, c] - Q[ia, c]
+            ap = Q[0, c] - Q[ia, c]
+            ab2 += ab * ab
+            ap2 += ap * ap
+            apab += ap * ab
+        lab = np.sqrt(ab2)
+        if lab < 1e-300:
+            lab = 1e-300
+        x = apab / lab
+        q2 = ap2 - x * x
+        chord[p] = np.sqrt(q2) if q2 > 0.0 else 0.0
+
+
 def _tangents(P, idx, h, m):  # pragma: no cover - compiled
-    """Tangent and linearity of every point (the PCA steps of robust._tangents).
+    """Tangent, linearity and strip chord distance of every point (see robust._tangents).
 
     A first direction from the point and its 4 nearest neighbours; twice, the point and its
     ``m`` nearest neighbours within ``h`` of the current line are weighted 1 (others 0) and the
     weighted PCA gives the next direction. The linearity is ``1 - l2 / l1`` of the last PCA.
     The chord distance is that of the point from the segment joining its nearest neighbours
     (among the ``m``) inside the strip ahead and behind along the tangent (NaN without both).
-    No (N, m, d) temporaries: one point at a time.
+    No (N, m, d) temporaries: one point at a time, blocks of points on all cores.
 
     Returns
     -------
@@ -309,77 +388,11 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
     T = np.zeros((n, d))
     lin = np.zeros(n)
     chord = np.zeros(n)
-    rows = np.empty(m + 1, dtype=np.int64)
-    w = np.ones(m + 1)
-    C = np.zeros((d, d))
-    V = np.zeros((d, d))
-    ev = np.zeros(d)
-    mu = np.zeros(d)
-    t = np.zeros(d)
-    for p in range(n):
-        rows[0] = p
-        for k in range(m):
-            rows[k + 1] = idx[p, k]
-        for k in range(5):
-            w[k] = 1.0
-        _wpca(P, rows, 5, w, C, V, ev, mu, t)
-        hp2 = h[p] * h[p]
-        for it in range(2):
-            for k in range(m + 1):
-                al = 0.0
-                r2 = 0.0
-                for c in range(d):
-                    x = P[rows[k], c] - P[p, c]
-                    al += x * t[c]
-                    r2 += x * x
-                w[k] = 1.0 if r2 - al * al <= hp2 else 0.0
-            _wpca(P, rows, m + 1, w, C, V, ev, mu, t)
-        lam = ev[d - 1]
-        if lam < 1e-300:
-            lam = 1e-300
-        lin[p] = 1.0 - ev[d - 2] / lam
-        for c in range(d):
-            T[p, c] = t[c]
-        # chord between the nearest strip neighbours ahead and behind along the tangent
-        ia = -1
-        ib = -1
-        besta = np.inf
-        bestb = np.inf
-        for k in range(m):
-            q = idx[p, k]
-            al = 0.0
-            r2 = 0.0
-            for c in range(d):
-                x = P[q, c] - P[p, c]
-                al += x * t[c]
-                r2 += x * x
-            if r2 - al * al <= hp2:
-                if al > 0.0 and al < besta:
-                    besta = al
-                    ia = k
-                elif al < 0.0 and -al < bestb:
-                    bestb = -al
-                    ib = k
-        if ia < 0 or ib < 0:
-            chord[p] = np.nan
-            continue
-        qa = idx[p, ia]
-        qb = idx[p, ib]
-        ab2 = 0.0
-        ap2 = 0.0
-        apab = 0.0
-        for c in range(d):
-            ab = P[qb, c] - P[qa, c]
-            ap = P[p, c] - P[qa, c]
-            ab2 += ab * ab
-            ap2 += ap * ap
-            apab += ap * ab
-        lab = np.sqrt(ab2)
-        if lab < 1e-300:
-            lab = 1e-300
-        x = apab / lab
-        q2 = ap2 - x * x
-        chord[p] = np.sqrt(q2) if q2 > 0.0 else 0.0
+    bs = 2048
+    nb = (n + bs - 1) // bs
+    for b in prange(nb):
+        p1 = (b + 1) * bs
+        _tangents_block(P, idx, h, m, b * bs, p1 if p1 < n else n, T, lin, chord)
     return T, lin, chord
 
 
@@ -692,8 +705,10 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         end_count = numba.njit(cache=True, nogil=True)(_end_count)
         # helpers first: the kernels resolve them by their global names when compiled
         _eig_sym = numba.njit(cache=True, nogil=True)(_eig_sym_py)
-        _wpca = numba.njit(cache=True, nogil=True)(_wpca)
-        tangents = numba.njit(cache=True, nogil=True)(_tangents)
+        _pca01 = numba.njit(cache=True, nogil=True)(_pca01)
+        _tangents_block = numba.njit(cache=True, nogil=True)(_tangents_block)
+        prange = numba.prange
+        tangents = numba.njit(cache=True, nogil=True, parallel=True)(_tangents)
         linked_edges = numba.njit(cache=True, nogil=True)(_linked_edges)
         short_links = numba.njit(cache=True, nogil=True)(_short_links)
         chain_ends = numba.njit(cache=True, nogil=True)(_chain_ends)
