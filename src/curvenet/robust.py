@@ -453,7 +453,8 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
                                 c_reg, c_par, cb)
     for ci in range(n_chn):
         seg = ids_o[bounds[ci]:bounds[ci + 1]]
-        if not touch[ci]:
+        if not touch[ci] or (ends[ci, 0] < 0 and ends[ci, 1] < 0):
+            # no region at either end (a contact in the middle only: a clump beside a loop)
             chains.append(_loop_or_piece(P, h, g, seg, lin))
             continue
         chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
@@ -496,6 +497,17 @@ def _loop_or_piece(P, h, g, seg, lin):
     ordered = seg[o]
     last = X[o[-1]]
     closed = np.linalg.norm(last - X[0]) <= rnear and _polylen(X[o]) > 6.0 * hl
+    if not closed:
+        # an open piece: ordered from one end to the other (double sweep on the uncut graph)
+        g0 = coo_matrix((sub.data, (a, b)), shape=(n, n)).tocsr()
+        d0 = dijkstra(g0, directed=False, indices=0)
+        f0 = np.isfinite(d0)
+        e1 = int(np.lexsort((np.arange(n), -np.where(f0, d0, -1.0)))[0])
+        d1 = dijkstra(g0, directed=False, indices=e1)
+        f1 = np.isfinite(d1)
+        o = np.lexsort((np.arange(n), d1))
+        o = o[f1[o]]
+        return _Chain(np.r_[seg[o], seg[np.flatnonzero(~f1)]], [-1, -1], closed=False)
     if len(rest):
         # unreachable points: append by their position along the tangent (rare)
         ordered = np.r_[ordered, seg[rest[np.argsort(side[rest], kind="stable")]]]
