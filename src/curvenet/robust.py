@@ -910,7 +910,7 @@ def _trim_behind(P, h, ids, x):
         return ids
     X = P[ids]
     seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
-    k = int(min(np.searchsorted(seg, SPAN * float(h[ids[0]])), len(ids) - 1))
+    k = int(min(np.searchsorted(seg, 2.0 * SPAN * float(h[ids[0]])), len(ids) - 1))
     u = X[k] - x
     nu = np.linalg.norm(u)
     if nu == 0:
