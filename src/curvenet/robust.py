@@ -557,6 +557,8 @@ def _assemble(P, h, chains, regions, prm):
     # a flagged clump touching no chain, just beyond a free end, is the rest of that end (the
     # link between them was lost to noise): it joins the free end's region
     _absorb_orphans(P, h, chains, regions, alive, ends_at, valence(), prm)
+    # a free end right next to a junction region belongs to it (its link was lost to noise)
+    _tips_to_junctions(P, h, chains, regions, alive, ends_at, valence(), prm)
     # two free ends facing each other across a small gap are one curve broken by noise: join
     v = valence()
     tips = []
@@ -758,6 +760,43 @@ def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
         regions[t] = np.r_[regions[t], pts]
         regions[r] = np.zeros(0, dtype=np.int64)
         lab[lab == r] = t
+        for i, s in ends_at[r]:
+            if alive[i] and chains[i].ends[s] == r:
+                chains[i].ends[s] = t
+                ends_at[t].append((i, s))
+        ends_at[r] = []
+        v[t] += v[r]
+        v[r] = 0
+
+
+def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
+    """Merge every free-end region into the nearest region of valence >= 2 within a gap."""
+    from scipy.spatial import cKDTree
+
+    big = [r for r in range(len(regions)) if v[r] >= 2 and len(regions[r])]
+    tips = [r for r in range(len(regions)) if v[r] == 1]
+    if not big or not tips:
+        return
+    lab = np.concatenate([np.full(len(regions[r]), r) for r in big])
+    ids = np.concatenate([regions[r] for r in big])
+    tree = cKDTree(P[ids])
+    noise = prm.get("_noise", 0.0)
+    for r in tips:
+        inc = [(i, s) for i, s in ends_at[r] if alive[i] and chains[i].ends[s] == r]
+        if len(inc) != 1:
+            continue
+        i, s = inc[0]
+        cids = chains[i].ids if s == 1 else chains[i].ids[::-1]  # running towards the tip
+        _, tip = _free_end(P, h, cids, regions[r])  # where the free end's node would be
+        gap = prm["link"] * 1.2 * float(h[cids[-1]]) + GAP * noise
+        d, k = tree.query(tip, distance_upper_bound=gap)
+        if not np.isfinite(d):
+            continue
+        t = int(lab[k])
+        if chains[i].ends[1 - s] == t:
+            continue  # a short spur of that very junction: left to the pruning
+        regions[t] = np.r_[regions[t], regions[r]]
+        regions[r] = np.zeros(0, dtype=np.int64)
         for i, s in ends_at[r]:
             if alive[i] and chains[i].ends[s] == r:
                 chains[i].ends[s] = t
