@@ -52,7 +52,7 @@ SPAN = 6.0
 #: Length (in spacings) of the walked branch end fitted for the junction node.
 JSPAN = 4.0
 #: A walk into a junction stops where it strays this many link widths from its line.
-WALK_DEV = 1.5
+WALK_DEV = 1.25
 #: ... plus this many times the noise scale.
 JN = 6.0
 #: The noise scale of the radii below: this many times the estimated noise std.
