@@ -1,34 +1,56 @@
 """The robust, parameter-free default method ("robust").
 
-Outline (every radius is in units of the *local* sampling spacing ``h_i``):
+Outline (every radius is in units of the *local* sampling spacing ``h_i``; "noise" below is
+``NOISE`` times the estimated noise standard deviation, 0 on clean data):
 
 1. **Spacing.** ``h_i`` is the mean distance to the 4 nearest neighbours divided by 1.5 (on a
    uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h), smoothed by the median over the
    point and its 8 nearest neighbours. Density may vary along the curves.
-2. **Linked graph.** Each point is joined to those of its ``k`` nearest neighbours closer than
-   ``link * h``, unless both ends are clearly on a curve (linearity of the local PCA above 0.3) and
-   its far end lies more than ``link_width * h`` (or 4.5 times the estimated noise) from the
-   tangent line through either end. This keeps two
-   close parallel curves, and the two sides of an acute angle, apart.
-3. **Shell test.** Around each point, the points reached through the linked graph within a
-   geodesic distance of ``shell_outer * h`` are collected; those at least ``shell_inner * h``
-   away, both along the graph and in space, form the shell, and the number of connected groups of the shell is counted: 1 at a free end,
-   2 on a curve (a sharp corner included), 3 or more near a junction, 0 for an isolated clump.
-4. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
+2. **Tangents and noise.** A first direction from the 4 nearest neighbours is refined twice by
+   the PCA of the 12 nearest lying within one spacing of its line (a strip that leaves out a
+   close parallel curve); the linearity ``1 - l2 / l1`` is that of the strip. A tangent at odds
+   (over 10 degrees) with a coherent vote of its 8 neighbours' tangents is replaced by the vote
+   (noise can throw a tangent across close parallel curves). The noise standard deviation is the
+   median distance of a point from the chord of its nearest strip neighbours on either side,
+   scaled for Gaussian noise (curvature adds only h^2 / 2R there; reported as ``noise``).
+3. **Linked graph.** A link up to ``link * h`` long is kept when its far end lies within
+   ``max(link_width * h, NW * noise)`` of the tangent line through one of its ends (or an end has
+   no reliable tangent); links up to ``link * h + GAP * noise`` long must lie along both tangents;
+   each point is also linked to its nearest strip neighbour on either side along its tangent
+   (this bridges the random gaps of sparse, noisy sampling). Two close parallel curves and the
+   two sides of an acute angle stay apart.
+4. **Shell test.** Around each point, the points reached through the linked graph within a
+   geodesic distance of ``shell_outer * (h + WIDEN * noise)`` are collected; those at least
+   ``shell_inner * (h + WIDEN * noise)`` away, both along the graph and in space, form the shell;
+   its connected groups that reach the middle of the shell along the graph are counted: 1 at a
+   free end, 2 on a curve (a sharp or acute corner included), 3 or more near a junction.
+5. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
    ``link * h``) into regions; the remaining points fall apart into chains, one per curve
    segment. Each chain is ordered by geodesic distance from one end (Dijkstra on the linked
-   graph) and attached to the regions its two ends touch.
-5. **Network.** A region touched by one chain end is a free end: its points extend the chain and
+   graph) and attached to the regions its two ends touch; a chain with no region at either end
+   is a closed loop (cut open at its straightest point) or an open piece.
+6. **Repairs** (what noise and sparse sampling break): a region passed through by one curve
+   right next to a junction region joins it (a crossing split in two); a short chain leaving a
+   region and coming back is absorbed; a flagged clump touching no chain joins the free end beside
+   it; a free end whose node would sit within a gap of a junction region joins that junction;
+   two facing free ends are one curve; a free end stopping within a link reach ahead of another
+   chain splits it into a junction (a T whose stem lost its link). Short spurs (a chain from a
+   junction to a free end shorter than ``min_spur * h``) and small isolated clumps are dropped.
+7. **Network.** A region touched by one chain end is a free end: its points extend the chain and
    the node is the extreme point. A region touched by 2 ends is no node (the chains are joined
    through it; a chain joined to itself is a closed loop). A region touched by 3 or more is a
-   junction; its node is the least-squares intersection of the tangent lines of the incident
-   chains, fitted on their first ``3 h``. Short spurs (a chain from a junction to a free end shorter
-   than ``min_spur * h``) and small isolated clumps are dropped: they are what a few outliers make.
-6. **Smoothing** (``smooth=True``): each curve is replaced by a smoothing spline (scipy
+   junction: every incident branch is walked into the region (each round, the nearest proposals
+   first, so the order of the branches does not matter; a walk stops where it strays
+   ``WALK_DEV`` link widths from its branch's line), its line is fitted on its last
+   ``JSPAN h + JN noise``, and the node is the least-squares intersection of those lines. Chain
+   points lying behind their junction node (an overshoot into another branch) are trimmed, and
+   every curve ends exactly at its nodes.
+8. **Smoothing** (``smooth=True``): each curve is replaced by a smoothing spline (scipy
    ``splprep``) pinned at its end nodes and evaluated densely.
 
 The result does not depend on the order of the input points: they are sorted by coordinates
-first and every tie is broken by that order.
+first and every tie is broken by that order. The module constants below are fixed (not tuned
+per input); every user-facing radius is a keyword of :func:`reconstruct_robust`.
 """
 
 from __future__ import annotations
@@ -47,14 +69,14 @@ from .validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 
-#: Length (in spacings) of the chain end fitted for the tangent line at a junction.
+#: Length (in spacings) of the chain end that gives a chain's direction (trim, old fits).
 SPAN = 6.0
 #: Length (in spacings) of the walked branch end fitted for the junction node.
 JSPAN = 4.0
+#: ... plus this many times the noise scale (a longer fit averages the noise out).
+JN = 6.0
 #: A walk into a junction stops where it strays this many link widths from its line.
 WALK_DEV = 1.25
-#: ... plus this many times the noise scale.
-JN = 6.0
 #: The noise scale of the radii below: this many times the estimated noise std.
 NOISE = 1.2
 #: Links may stray from a tangent line by this many times the estimated noise.
