@@ -376,3 +376,21 @@ def test_noise_is_estimated_not_curvature():
     pts, _, h = _sampled("sphere", 0, noise=0.2)
     assert 0.14 * h < reconstruct_robust(pts).parameters["noise"] < 0.26 * h
     del synth
+
+
+def test_t_junction_whose_stem_stops_short_of_the_bar():
+    # the stem's last sample is 3h from the bar: no link crosses the gap, yet it is a T
+    bar = _seg([-20, 0, 0], [20, 0, 0])
+    stem = _seg([0, 3, 0], [0, 25, 0])
+    net = reconstruct_robust(np.vstack([bar, stem]))
+    assert net.n_curves == 3
+    assert _contracted_valences(net) == [1, 1, 1, 3]
+    assert np.linalg.norm(net.nodes[net.valence == 3][0]) < 0.5 * H
+
+
+@pytest.mark.parametrize("name", ["pyramid", "window", "wheel"])
+def test_sampled_noise_0_3h_and_density_ratio_3_junctions(name):
+    # junctions whose links are broken by noise in sparse places (seed 1)
+    m = _score(name, seed=1, noise=0.3, ratio=3.0)
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
