@@ -85,6 +85,8 @@ NW = 4.5
 WIDEN = 1.5
 #: Links may be longer than ``link * h`` by this many times the estimated noise.
 GAP = 3.0
+#: Junctions joined by a chain at most this many spacings long may be one junction.
+MERGE_LEN = 8.0
 #: Directional links (nearest along the tangent) reach this many times the link length.
 EXTRA = 2.0
 #: Below this linearity a point has no reliable tangent and its links are kept.
@@ -667,6 +669,9 @@ def _assemble(P, h, chains, regions, prm):
         ends_at[a_other] = [e for e in ends_at[a_other] if e != (i, 1 - si)] + [(i, 0)]
         ends_at[b_other] = [e for e in ends_at[b_other] if e != (j, 1 - sj)] + [(i, 1)]
 
+    # two junctions joined by a short chain, the other branches of one pointing at the other,
+    # are one junction (two of its branches ran together for a while): merge them
+    _merge_close_junctions(P, h, chains, regions, alive, ends_at, valence(), prm)
     v = valence()
     live = [c for i, c in enumerate(chains) if alive[i]]
     # node positions
@@ -826,6 +831,59 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
         ends_at[r] = []
         v[t] += v[r]
         v[r] = 0
+
+
+def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
+    """Merge junction b into junction a when a chain a-b is short and b's other branches aim at a.
+
+    "Short": at most ``MERGE_LEN`` spacings. "Aim at a": a's node (least-squares intersection)
+    lies within ``link_width * h + NW * noise`` of the line fitted on each of b's other branches.
+    """
+    noise = prm.get("_noise", 0.0)
+    for ci in range(len(chains)):
+        c = chains[ci]
+        if not alive[ci] or c.closed:
+            continue
+        a, b = c.ends
+        if a == b or v[a] < 3 or v[b] < 3:
+            continue
+        hl = float(np.median(h[c.ids])) if len(c.ids) else float(np.median(h))
+        if _polylen(P[c.ids]) > MERGE_LEN * hl:
+            continue
+        for x_r, y_r in ((a, b), (b, a)):
+            inc_x = [(i, s) for i, s in ends_at[x_r] if alive[i] and chains[i].ends[s] == x_r]
+            inc_y = [(i, s) for i, s in ends_at[y_r] if alive[i] and chains[i].ends[s] == y_r and i != ci]
+            if len(inc_y) < 2:
+                continue
+            xpos = _junction(P, h, chains, inc_x, regions[x_r], prm)
+            ok = True
+            for i, s in inc_y:
+                ids = chains[i].ids if s == 1 else chains[i].ids[::-1]
+                E = _end_portion(P, h, np.asarray(ids), span=JSPAN + JN * noise / float(h[ids[-1]]))
+                cc, u = _fit_line(E)
+                if u is None:
+                    ok = False
+                    break
+                r = xpos - cc
+                d = np.sqrt(max(float(r @ r) - float(r @ u) ** 2, 0.0))
+                if d > max(prm["_width"] * float(h[ids[-1]]), NW * noise) or float((E[0] - cc) @ u) * float((xpos - cc) @ u) < 0:
+                    ok = False
+                    break
+            if not ok:
+                continue
+            # merge y into x, the short chain included
+            alive[ci] = False
+            v[x_r] -= 1
+            v[y_r] -= 1
+            regions[x_r] = np.r_[regions[x_r], regions[y_r], c.ids].astype(np.int64)
+            regions[y_r] = np.zeros(0, dtype=np.int64)
+            for i, s in inc_y:
+                chains[i].ends[s] = x_r
+                ends_at[x_r].append((i, s))
+            ends_at[y_r] = []
+            v[x_r] += v[y_r]
+            v[y_r] = 0
+            break
 
 
 def _absorb_orphans(P, h, chains, regions, alive, ends_at, v, prm):
