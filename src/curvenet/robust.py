@@ -34,7 +34,9 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
    region and coming back is absorbed; a flagged clump touching no chain joins the free end beside
    it; a free end whose node would sit within a gap of a junction region joins that junction;
    two facing free ends are one curve; a free end stopping within a link reach ahead of another
-   chain splits it into a junction (a T whose stem lost its link). Short spurs (a chain from a
+   chain splits it into a junction (a T whose stem lost its link); two junctions joined by a
+   chain under ``MERGE_LEN`` spacings merge when the other branches of one aim at the other's node
+   (two branches of one junction that ran together for a while). Short spurs (a chain from a
    junction to a free end shorter than ``min_spur * h``) and small isolated clumps are dropped.
 7. **Network.** A region touched by one chain end is a free end: its points extend the chain and
    the node is the extreme point. A region touched by 2 ends is no node (the chains are joined
@@ -170,15 +172,28 @@ def _vote_tangents(t, lin, idx, m=8):
     ``1 - l2 / l1`` (low at junctions, where neighbours vote for different branches).
     """
     m = min(m, idx.shape[1])
-    T = t[np.concatenate([np.arange(len(t))[:, None], idx[:, :m]], axis=1)]  # (n, m+1, d)
-    C = np.einsum("nki,nkj->nij", T, T)
-    ev, V = np.linalg.eigh(C)
+    n = len(t)
+    T = t[np.concatenate([np.arange(n)[:, None], idx[:, :m]], axis=1)]  # (n, m+1, d)
+    # only a tangent clearly at odds with a coherent vote is replaced. With C = sum T_k T_k^T,
+    # eigenvalues l1 >= l2 and l1 <= m + 1: a swap needs |u.t| < c (u the top eigenvector) and
+    # l2 <= (1 - VOTE_COH) l1, hence t^T C t <= (m + 1) (c^2 + (1 - VOTE_COH) (1 - c^2)); the
+    # eigen-decomposition is computed only for the points below that bound (few on clean data)
+    agree = (np.einsum("nkd,nd->nk", T, t) ** 2).sum(axis=1)
+    bound = (m + 1) * (VOTE_COS**2 + (1.0 - VOTE_COH) * (1.0 - VOTE_COS**2))
+    cand = np.flatnonzero(agree <= bound * (1 + 1e-9))
+    if len(cand) == 0:
+        return t, lin
+    Tc = T[cand]
+    ev, V = np.linalg.eigh(np.einsum("nki,nkj->nij", Tc, Tc))
     u = V[:, :, -1]
     coh = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
-    # only a tangent clearly at odds with a coherent vote is replaced
-    swap = (np.abs(np.einsum("nd,nd->n", u, t)) < VOTE_COS) & (coh >= VOTE_COH)
-    t = np.where(swap[:, None], u, t)
-    return t, np.where(swap, np.minimum(lin, coh), lin)
+    swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < VOTE_COS) & (coh >= VOTE_COH)
+    sw = cand[swap]
+    t = t.copy()
+    lin = lin.copy()
+    t[sw] = u[swap]
+    lin[sw] = np.minimum(lin[sw], coh[swap])
+    return t, lin
 
 
 def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
