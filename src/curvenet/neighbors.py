@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["knn", "build_tree"]
+__all__ = ["knn", "build_tree", "locality_order"]
 
 
 def build_tree(points: np.ndarray) -> cKDTree:
@@ -42,23 +42,56 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     tree = tree if tree is not None else build_tree(points)
     dist = np.empty((n, k))
     idx = np.empty((n, k), dtype=np.int64)
-    # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds
+    # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds; the
+    # rows are visited in spatial order (each query is independent: the result is the same, but
+    # consecutive queries touch the same parts of the tree, which is much faster for large N)
+    order = locality_order(points) if n > 100_000 else None
     step = max(1, (1 << 20) // (k + 1))
     for s in range(0, n, step):
         e = min(n, s + step)
-        d, i = tree.query(points[s:e], k=k + 1, workers=workers)
+        rows = np.arange(s, e) if order is None else order[s:e]
+        d, i = tree.query(points[rows] if order is not None else points[s:e], k=k + 1, workers=workers)
         d = np.atleast_2d(d)
         i = np.atleast_2d(i)
-        rows = np.arange(s, e)
         if np.array_equal(i[:, 0], rows):  # the usual case: each point first in its own list
-            dist[s:e] = d[:, 1:]
-            idx[s:e] = i[:, 1:]
+            dist[rows] = d[:, 1:]
+            idx[rows] = i[:, 1:]
             continue
         # drop the point itself (it may not be in column 0 when duplicates exist)
         self_mask = i == rows[:, None]
         has_self = self_mask.any(axis=1)
         drop = np.where(has_self[:, None], self_mask, np.arange(k + 1)[None, :] == k)
         keep = ~drop
-        dist[s:e] = d[keep].reshape(e - s, k)
-        idx[s:e] = i[keep].reshape(e - s, k)
+        dist[rows] = d[keep].reshape(e - s, k)
+        idx[rows] = i[keep].reshape(e - s, k)
     return dist, idx
+
+
+def locality_order(points: np.ndarray, per_cell: int = 512) -> np.ndarray:
+    """A permutation that visits the points cell by cell of a regular grid.
+
+    The grid has about ``per_cell`` points per cell on average; cells are taken in row-major
+    order, points within a cell in index order. Used only to order independent per-point work
+    for cache locality: results never depend on it.
+
+    Parameters
+    ----------
+    points : (N, d) ndarray
+
+    Returns
+    -------
+    (N,) ndarray of int64
+    """
+    n, d = points.shape
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    lo = points.min(axis=0)
+    span = float((points.max(axis=0) - lo).max())
+    if not span > 0:
+        return np.arange(n, dtype=np.int64)
+    g = max(1, int(round((n / per_cell) ** (1.0 / d))))
+    code = np.zeros(n, dtype=np.int64)
+    for c in range(d):
+        q = np.minimum(((points[:, c] - lo[c]) * (g / span)).astype(np.int64), g - 1)
+        code = code * g + q
+    return np.argsort(code, kind="stable").astype(np.int64)
