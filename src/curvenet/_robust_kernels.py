@@ -16,7 +16,7 @@ prange = range  # numba.prange when compiled (parallel loops over independent bl
 __all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "HAVE_NUMBA"]
 
 
-def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - compiled
+def _shell_groups(P, h, indptr, indices, r_in, r_out, order):  # pragma: no cover - compiled
     """Groups of the geodesic shell around every point (see robust.shell_group_counts)."""
     n = P.shape[0]
     d = P.shape[1]
@@ -31,7 +31,7 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out):  # pragma: no cover - com
     heap_v = np.empty(n + 1, dtype=np.int64)
     cap = n + 1
     stack = np.empty(n, dtype=np.int64)
-    for p in range(n):
+    for p in order:  # any order gives the same result; a spatial one is cache-friendly
         ro = r_out * h[p]
         ri = r_in * h[p]
         nreach = 0
@@ -290,8 +290,8 @@ def _pca01(Q, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
         t[c] = V[c, d - 1]
 
 
-def _tangents_block(P, idx, h, m, p0, p1, T, lin, chord):  # pragma: no cover - compiled
-    """Points ``p0 <= p < p1`` of :func:`_tangents` (own scratch arrays)."""
+def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no cover - compiled
+    """Points ``order[p0:p1]`` of :func:`_tangents` (own scratch arrays)."""
     d = P.shape[1]
     Q = np.empty((m + 1, d))
     w = np.ones(m + 1)
@@ -300,7 +300,8 @@ def _tangents_block(P, idx, h, m, p0, p1, T, lin, chord):  # pragma: no cover - 
     ev = np.zeros(d)
     mu = np.zeros(d)
     t = np.zeros(d)
-    for p in range(p0, p1):
+    for ii in range(p0, p1):
+        p = order[ii]
         for c in range(d):
             Q[0, c] = P[p, c]
         for k in range(m):
@@ -366,7 +367,7 @@ def _tangents_block(P, idx, h, m, p0, p1, T, lin, chord):  # pragma: no cover - 
         chord[p] = np.sqrt(q2) if q2 > 0.0 else 0.0
 
 
-def _tangents(P, idx, h, m):  # pragma: no cover - compiled
+def _tangents(P, idx, h, m, order):  # pragma: no cover - compiled
     """Tangent, linearity and strip chord distance of every point (see robust._tangents).
 
     A first direction from the point and its 4 nearest neighbours; twice, the point and its
@@ -374,7 +375,8 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
     weighted PCA gives the next direction. The linearity is ``1 - l2 / l1`` of the last PCA.
     The chord distance is that of the point from the segment joining its nearest neighbours
     (among the ``m``) inside the strip ahead and behind along the tangent (NaN without both).
-    No (N, m, d) temporaries: one point at a time, blocks of points on all cores.
+    No (N, m, d) temporaries: one point at a time, in the given ``order`` (any permutation:
+    the result does not depend on it), blocks of points on all cores.
 
     Returns
     -------
@@ -392,7 +394,7 @@ def _tangents(P, idx, h, m):  # pragma: no cover - compiled
     nb = (n + bs - 1) // bs
     for b in prange(nb):
         p1 = (b + 1) * bs
-        _tangents_block(P, idx, h, m, b * bs, p1 if p1 < n else n, T, lin, chord)
+        _tangents_block(P, idx, h, m, order, b * bs, p1 if p1 < n else n, T, lin, chord)
     return T, lin, chord
 
 
@@ -687,20 +689,39 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  #
     return buf, cnt
 
 
+def _order(P):
+    """A cache-friendly visiting order of the points (results never depend on it)."""
+    if P.shape[0] <= 100_000:
+        return np.arange(P.shape[0], dtype=np.int64)
+    from .neighbors import locality_order
+
+    return locality_order(P)
+
+
+def tangents(P, idx, h, m):
+    """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`."""
+    return _tangents_c(P, idx, h, m, _order(P))
+
+
+def shell_groups(P, h, indptr, indices, r_in, r_out):
+    """Shell group count of every point: see :func:`_shell_groups`."""
+    return _shell_groups_c(P, h, indptr, indices, r_in, r_out, _order(P))
+
+
 HAVE_NUMBA = False
 extend_into_region = _extend_into_region
 chain_ends = _chain_ends
 linked_edges = _linked_edges
 short_links = _short_links
-shell_groups = _shell_groups
+_shell_groups_c = _shell_groups
 csr_union = _csr_union
 end_count = _end_count
-tangents = _tangents
+_tangents_c = _tangents
 if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
     try:  # pragma: no cover - depends on the environment
         import numba
 
-        shell_groups = numba.njit(cache=True, nogil=True)(_shell_groups)
+        _shell_groups_c = numba.njit(cache=True, nogil=True)(_shell_groups)
         csr_union = numba.njit(cache=True, nogil=True)(_csr_union)
         end_count = numba.njit(cache=True, nogil=True)(_end_count)
         # helpers first: the kernels resolve them by their global names when compiled
@@ -708,7 +729,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         _pca01 = numba.njit(cache=True, nogil=True)(_pca01)
         _tangents_block = numba.njit(cache=True, nogil=True)(_tangents_block)
         prange = numba.prange
-        tangents = numba.njit(cache=True, nogil=True, parallel=True)(_tangents)
+        _tangents_c = numba.njit(cache=True, nogil=True, parallel=True)(_tangents)
         linked_edges = numba.njit(cache=True, nogil=True)(_linked_edges)
         short_links = numba.njit(cache=True, nogil=True)(_short_links)
         chain_ends = numba.njit(cache=True, nogil=True)(_chain_ends)
