@@ -394,7 +394,7 @@ def reconstruct_robust(
     noise = NOISE * sigma
     src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise,
                                  GAP * noise)
-    indptr, indices = _k.csr_union(N, src.astype(np.int64), dst.astype(np.int64))
+    indptr, indices = _k.csr_union(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64))
     tm["graph"] = time.perf_counter() - t1
 
     # 3. shell test
