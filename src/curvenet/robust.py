@@ -980,7 +980,7 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
                     continue
                 vq = P[q] - P[e]
                 d = float(np.linalg.norm(P[q] - P[tp]))
-                if vq @ u < -0.5 * hl:
+                if vq @ u < np.cos(np.radians(45.0)) * np.linalg.norm(vq):
                     continue
                 key = (d, q)
                 if best is None or key < best[0]:
