@@ -91,6 +91,10 @@ GAP = 3.0
 MERGE_LEN = 8.0
 #: Directional links (nearest along the tangent) reach this many times the link length.
 EXTRA = 2.0
+#: A region point beyond this fraction of the shell radius from its junction node, in a
+#: direction no incident branch takes (cosine under SWALLOW_COS), is a swallowed branch's tip.
+SWALLOW = 0.8
+SWALLOW_COS = float(np.cos(np.radians(25.0)))
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
 _DEFAULTS = {
@@ -694,6 +698,7 @@ def _assemble(P, h, chains, regions, prm):
     node_pos = []
     end_ext: dict[tuple[int, int], np.ndarray] = {}
     inc_at: dict[int, list[tuple[int, int]]] = {}
+    extra: list[tuple[int, np.ndarray]] = []
     for ci, c in enumerate(live):
         if not c.closed:
             for s in (0, 1):
@@ -711,7 +716,15 @@ def _assemble(P, h, chains, regions, prm):
             node_pos.append(pos)
         else:
             node_pos.append(_junction(P, h, live, inc, regions[r], prm))
+            for br in _swallowed_branches(P, h, live, inc, regions[r], node_pos[-1], prm):
+                extra.append((len(node_pos) - 1, br))
         node_of[r] = len(node_pos) - 1
+    # a short free branch lying wholly inside its junction's region (sparse sampling: its
+    # length is under the shell radius) gets its own curve to a free end at its tip
+    extra_ids = []
+    for j, br in extra:
+        node_pos.append(P[br[-1]])
+        extra_ids.append((j, len(node_pos) - 1, br))
     nodes = np.asarray(node_pos, dtype=float).reshape(-1, dim)
     # canonical node order (by coordinates)
     if len(nodes):
@@ -745,6 +758,12 @@ def _assemble(P, h, chains, regions, prm):
             pts = np.vstack([pts, nodes[b]])
             ind = np.r_[ind, -1]
         cv = Curve(pts, a, b, False, ind)
+        if a > b:
+            cv = cv.reversed()
+        curves.append(cv)
+    for j, t, br in extra_ids:
+        a, b = int(new_id[j]), int(new_id[t])
+        cv = Curve(np.vstack([nodes[a], P[br]]), a, b, False, np.r_[-1, br].astype(np.int64))
         if a > b:
             cv = cv.reversed()
         curves.append(cv)
@@ -1193,6 +1212,48 @@ def _junction(P, h, live, inc, rid, prm):
     if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > 3.0 * _DEFAULTS["shell_outer"] * hl:
         x = anchor
     return x
+
+
+def _swallowed_branches(P, h, live, inc, rid, x, prm):
+    """Free branches wholly inside a junction region, as id lists ordered from node ``x`` out.
+
+    A region point far from the node (over ``SWALLOW`` shell radii) in a direction no incident
+    branch takes is the tip of a branch shorter than the shell radius (a free end in a sparse
+    place): the region points along the segment from the node to it, without a gap, form it.
+    """
+    if len(rid) < 3:
+        return []
+    hl = float(np.median(h[rid]))
+    noise = prm.get("_noise", 0.0)
+    hs = hl + WIDEN * noise
+    dirs = []
+    for ci, s in inc:
+        c = live[ci]
+        ids = c.ids if s == 1 else c.ids[::-1]
+        E = _end_portion(P, h, np.asarray(ids), span=JSPAN)
+        u = E.mean(axis=0) - x
+        nu = np.linalg.norm(u)
+        if nu > 0:
+            dirs.append(u / nu)
+    if not dirs:
+        return []
+    X = P[rid] - x
+    d = np.linalg.norm(X, axis=1)
+    cosb = (X @ np.asarray(dirs).T).max(axis=1) / np.maximum(d, 1e-300)
+    cand = np.flatnonzero((d > SWALLOW * prm["shell_outer"] * hs) & (cosb < SWALLOW_COS))
+    if not len(cand):
+        return []
+    tip = cand[np.lexsort((np.arange(len(cand)), -d[cand]))[0]]
+    u = X[tip] / d[tip]
+    proj = X @ u
+    perp = np.sqrt(np.maximum(d * d - proj * proj, 0.0))
+    lim = max(prm["_width"] * hl, NW * noise) * WALK_DEV
+    on = np.flatnonzero((proj > 0) & (proj <= d[tip]) & (perp <= lim))
+    on = on[np.argsort(proj[on], kind="stable")]
+    steps = np.diff(np.r_[0.0, proj[on]])
+    if not len(on) or steps.max() > prm["link"] * hl + GAP * noise:
+        return []
+    return [rid[on]]
 
 
 def _smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
