@@ -95,6 +95,9 @@ EXTRA = 2.0
 #: direction no incident branch takes (cosine under SWALLOW_COS), is a swallowed branch's tip.
 SWALLOW = 0.8
 SWALLOW_COS = float(np.cos(np.radians(25.0)))
+#: A free end's region holds a fork when a point lies this many shell radii from the path
+#: to its farthest point.
+FORK = 0.6
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
 _DEFAULTS = {
@@ -669,6 +672,12 @@ def _assemble(P, h, chains, regions, prm):
         inc = sorted({(i, s) for i, s in ends_at[r]
                       if alive[i] and not chains[i].closed and chains[i].ends[s] == r})
         (i, si), (j, sj) = inc
+        if i != j and len(regions[r]) >= 3:
+            # a short free branch hidden in the region (a fork passed through by one curve in
+            # a sparse place): the region stays a junction
+            x = _junction(P, h, chains, inc, regions[r], prm)
+            if _swallowed_branches(P, h, chains, inc, regions[r], x, prm):
+                continue
         ci = chains[i]
         a_ids = ci.ids if si == 1 else ci.ids[::-1]
         a_other = ci.ends[1 - si]
@@ -711,6 +720,16 @@ def _assemble(P, h, chains, regions, prm):
             ci, s = inc[0]
             c = live[ci]
             ids = c.ids if s == 1 else c.ids[::-1]  # ids run towards the region
+            fork = _hidden_fork(P, h, ids, regions[r], prm)
+            if fork is not None:
+                # a whole fork (junction and two short free branches) inside one free end's
+                # region (sparse sampling): a junction node and two free branches
+                ext, pos, leaves = fork
+                end_ext[(ci, s)] = ext
+                node_pos.append(pos)
+                extra.extend((len(node_pos) - 1, lf) for lf in leaves)
+                node_of[r] = len(node_pos) - 1
+                continue
             ext, pos = _free_end(P, h, ids, regions[r])
             end_ext[(ci, s)] = ext
             node_pos.append(pos)
@@ -1212,6 +1231,95 @@ def _junction(P, h, live, inc, rid, prm):
     if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > 3.0 * _DEFAULTS["shell_outer"] * hl:
         x = anchor
     return x
+
+
+def _region_paths(P, rid, entry, prm):
+    """Dijkstra on the linked graph restricted to ``entry`` and the region points ``rid``.
+
+    Returns the point ids ``S`` (``S[0] = entry``), the geodesic distances from the entry and
+    the predecessor of each (-9999 for none).
+    """
+    from scipy.sparse import csr_matrix
+    indptr, indices = prm["_graph"]
+    S = np.r_[entry, np.setdiff1d(rid, [entry])].astype(np.int64)
+    srt = np.argsort(S, kind="stable")
+    Ss = S[srt]
+    cnt = indptr[S + 1] - indptr[S]
+    rows = np.repeat(np.arange(len(S)), cnt)
+    starts = np.repeat(indptr[S] - np.r_[0, np.cumsum(cnt)[:-1]], cnt)
+    nb = indices[np.arange(len(rows)) + starts]
+    pos = np.searchsorted(Ss, nb)
+    pos = np.minimum(pos, len(Ss) - 1)
+    ok = Ss[pos] == nb
+    a, b = rows[ok], srt[pos[ok]]
+    w = np.linalg.norm(P[S[a]] - P[S[b]], axis=1) + 1e-300
+    G = csr_matrix((w, (a, b)), shape=(len(S), len(S)))
+    g, pred = dijkstra(G, directed=False, indices=0, return_predecessors=True)
+    return S, g, pred
+
+
+def _path_to(pred, j):
+    out = [j]
+    while pred[out[-1]] >= 0:
+        out.append(int(pred[out[-1]]))
+    return np.asarray(out[::-1], dtype=np.int64)
+
+
+def _hidden_fork(P, h, ids, rid, prm):
+    """A fork (junction and two free branches) hidden in a free end's region, or None.
+
+    The region is searched from the chain's last point ``ids[-1]``: the geodesically farthest
+    point is one tip; a second tip lies over ``FORK`` shell radii away from that path, both
+    branches from the point where the paths part are over ``min_spur`` spacings long. Returns
+    the chain's extension (ids, outward, up to the fork), the node (least-squares intersection
+    of the three branches' lines) and the two branches (ids ordered from the node out).
+    """
+    if len(rid) < 6 or "_graph" not in prm:
+        return None
+    hl = float(np.median(h[rid]))
+    noise = prm.get("_noise", 0.0)
+    hs = hl + WIDEN * noise
+    S, g, pred = _region_paths(P, rid, int(ids[-1]), prm)
+    fin = np.isfinite(g)
+    if fin.sum() < 6:
+        return None
+    gg = np.where(fin, g, -1.0)
+    t1 = int(np.argmax(gg))
+    p1 = _path_to(pred, t1)
+    X = P[S]
+    d1 = np.min(np.linalg.norm(X[:, None, :] - X[p1][None, :, :], axis=2), axis=1)
+    d1[~fin] = -1.0
+    t2 = int(np.argmax(d1))
+    if d1[t2] <= FORK * prm["shell_outer"] * hs:
+        return None
+    p2 = _path_to(pred, t2)
+    m = min(len(p1), len(p2))
+    k = int(np.flatnonzero(np.r_[p1[:m] != p2[:m], True])[0])  # first index where they differ
+    if k == 0:
+        return None
+    f = k - 1  # the fork point: last common one
+    l1, l2 = S[p1[f:]], S[p2[f:]]
+    if min(_polylen(P[l1]), _polylen(P[l2])) < prm["min_spur"] * hl:
+        return None
+    stem = np.r_[np.asarray(ids), S[p1[1:f + 1]]]
+    dim = P.shape[1]
+    A = np.zeros((dim, dim))
+    bb = np.zeros(dim)
+    span = JSPAN + JN * noise / hl
+    for br in (stem, l1[::-1], l2[::-1]):
+        cc, u = _fit_line(_end_portion(P, h, br, span=span))
+        if u is None:
+            continue
+        M = np.eye(dim) - np.outer(u, u)
+        A += M
+        bb += M @ cc
+    anchor = P[S[p1[f]]]
+    A += 1e-2 * np.eye(dim)
+    bb += 1e-2 * anchor
+    x = np.linalg.solve(A, bb)
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm["shell_outer"] * hs:
+        x = anchor
+    return S[p1[1:f]], x, [l1[1:], l2[1:]]
 
 
 def _swallowed_branches(P, h, live, inc, rid, x, prm):
