@@ -7,7 +7,9 @@ results; the Python path is only slow.
 
 from __future__ import annotations
 
+import contextvars
 import os
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -698,42 +700,101 @@ def _order(P):
     return locality_order(P)
 
 
+#: Inputs with fewer points than this run the plain-Python kernels even when numba is there:
+#: they take about a millisecond per point, less than loading compiled kernels from numba's
+#: cache (about 1 s) and far less than compiling them on a first run (15 to 20 s).
+NUMBA_MIN_POINTS = 2000
+
+_COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
+
+# the plain-Python functions, kept under their own names (the compiled ones replace some globals)
+_PY = {
+    "extend_into_region": _extend_into_region,
+    "chain_ends": _chain_ends,
+    "linked_edges": _linked_edges,
+    "short_links": _short_links,
+    "shell_groups": _shell_groups,
+    "csr_union": _csr_union,
+    "end_count": _end_count,
+    "tangents": _tangents,
+}
+_PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range}
+_JIT: dict = {}
+_JIT_HELPERS: dict = {}
+
+
+@contextmanager
+def compiled_for(n: int):
+    """Run the kernels of the enclosed block compiled when numba is there and ``n`` (the number
+    of points) is at least :data:`NUMBA_MIN_POINTS`, as plain Python otherwise (same results)."""
+    use = HAVE_NUMBA and n >= NUMBA_MIN_POINTS
+    token = _COMPILED.set(use)
+    helpers = _JIT_HELPERS if use else _PY_HELPERS
+    saved = {k: globals()[k] for k in helpers}
+    globals().update(helpers)  # the Python kernels call these helpers by their global names
+    try:
+        yield use
+    finally:
+        globals().update(saved)
+        _COMPILED.reset(token)
+
+
+def _kernel(name):
+    if HAVE_NUMBA and _COMPILED.get():
+        return _JIT[name]
+    return _PY[name]
+
+
+def extend_into_region(*args):
+    return _kernel("extend_into_region")(*args)
+
+
+def chain_ends(*args):
+    return _kernel("chain_ends")(*args)
+
+
+def linked_edges(*args):
+    return _kernel("linked_edges")(*args)
+
+
+def short_links(*args):
+    return _kernel("short_links")(*args)
+
+
+def csr_union(*args):
+    return _kernel("csr_union")(*args)
+
+
+def end_count(*args):
+    return _kernel("end_count")(*args)
+
+
 def tangents(P, idx, h, m):
     """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`."""
-    return _tangents_c(P, idx, h, m, _order(P))
+    return _kernel("tangents")(P, idx, h, m, _order(P))
 
 
 def shell_groups(P, h, indptr, indices, r_in, r_out):
     """Shell group count of every point: see :func:`_shell_groups`."""
-    return _shell_groups_c(P, h, indptr, indices, r_in, r_out, _order(P))
+    return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, _order(P))
 
 
 HAVE_NUMBA = False
-extend_into_region = _extend_into_region
-chain_ends = _chain_ends
-linked_edges = _linked_edges
-short_links = _short_links
-_shell_groups_c = _shell_groups
-csr_union = _csr_union
-end_count = _end_count
-_tangents_c = _tangents
 if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
     try:  # pragma: no cover - depends on the environment
         import numba
 
-        _shell_groups_c = numba.njit(cache=True, nogil=True)(_shell_groups)
-        csr_union = numba.njit(cache=True, nogil=True)(_csr_union)
-        end_count = numba.njit(cache=True, nogil=True)(_end_count)
+        _jit = numba.njit(cache=True, nogil=True)
         # helpers first: the kernels resolve them by their global names when compiled
-        _eig_sym = numba.njit(cache=True, nogil=True)(_eig_sym_py)
-        _pca01 = numba.njit(cache=True, nogil=True)(_pca01)
-        _tangents_block = numba.njit(cache=True, nogil=True)(_tangents_block)
-        prange = numba.prange
-        _tangents_c = numba.njit(cache=True, nogil=True, parallel=True)(_tangents)
-        linked_edges = numba.njit(cache=True, nogil=True)(_linked_edges)
-        short_links = numba.njit(cache=True, nogil=True)(_short_links)
-        chain_ends = numba.njit(cache=True, nogil=True)(_chain_ends)
-        extend_into_region = numba.njit(cache=True, nogil=True)(_extend_into_region)
+        _JIT_HELPERS = {
+            "_eig_sym": _jit(_eig_sym_py),
+            "_pca01": _jit(_pca01),
+            "_tangents_block": _jit(_tangents_block),
+            "prange": numba.prange,
+        }
+        globals().update(_JIT_HELPERS)
+        _JIT = {name: _jit(f) for name, f in _PY.items() if name != "tangents"}
+        _JIT["tangents"] = numba.njit(cache=True, nogil=True, parallel=True)(_tangents)
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass
