@@ -57,6 +57,7 @@ per input); every user-facing radius is a keyword of :func:`reconstruct_robust`.
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -299,7 +300,7 @@ class _Chain:
 
 
 # ---------------------------------------------------------------------------------- method
-def reconstruct_robust(
+def _reconstruct_robust(
     points,
     *,
     spacing: float | None = None,
@@ -1400,3 +1401,10 @@ def _smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
         Y[0] = c.points[0]
         Y[-1] = c.points[-1]
     return Curve(Y, c.start, c.end, c.closed, np.full(len(Y), -1, dtype=np.int64))
+
+
+@functools.wraps(_reconstruct_robust)
+def reconstruct_robust(points, **params) -> CurveNetwork:
+    # small inputs run the plain-Python kernels: no numba compile or cache load (same results)
+    with _k.compiled_for(len(points)):
+        return _reconstruct_robust(points, **params)
