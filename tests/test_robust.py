@@ -394,3 +394,12 @@ def test_sampled_noise_0_3h_and_density_ratio_3_junctions(name):
     m = _score(name, seed=1, noise=0.3, ratio=3.0)
     assert m["exact_topology"]
     assert m["curve_f1"] == 1.0
+
+
+@pytest.mark.parametrize("name, seed", [("crossing", 0), ("tree", 7)])
+def test_sampled_noise_0_3h_and_density_ratio_3_short_free_branches(name, seed):
+    # free branches about 15h long in sparse places lie wholly inside their junction's region
+    # (crossing) or a whole fork inside one region (tree): each still gets its own curve
+    m = _score(name, seed=seed, noise=0.3, ratio=3.0)
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
