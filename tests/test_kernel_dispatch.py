@@ -31,3 +31,15 @@ def test_python_and_compiled_paths_agree(monkeypatch):
     monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 0)
     b = curvenet.reconstruct(pts)
     assert _sig(a) == _sig(b)
+
+
+@pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed")
+def test_small_inputs_use_compiled_kernels_once_loaded(monkeypatch):
+    truth = synth.model("cube")
+    pts, _ = synth.sample(truth, rng=1)
+    monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 0)
+    curvenet.reconstruct(pts)  # compiles or loads every kernel that runs
+    monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 10**9)
+    assert K._compiled_already()
+    with K.compiled_for(10) as use:
+        assert use is True

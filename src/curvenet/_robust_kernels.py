@@ -700,9 +700,10 @@ def _order(P):
     return locality_order(P)
 
 
-#: Inputs with fewer points than this run the plain-Python kernels even when numba is there:
-#: they take about a millisecond per point, less than loading compiled kernels from numba's
-#: cache (about 1 s) and far less than compiling them on a first run (15 to 20 s).
+#: Inputs with fewer points than this run the plain-Python kernels even when numba is there,
+#: unless the compiled ones are already loaded in this process: the Python kernels take about
+#: a millisecond per point, less than loading compiled kernels from numba's cache (about 1 s)
+#: and far less than compiling them on a first run (15 to 20 s).
 NUMBA_MIN_POINTS = 2000
 
 _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
@@ -727,7 +728,7 @@ _JIT_HELPERS: dict = {}
 def compiled_for(n: int):
     """Run the kernels of the enclosed block compiled when numba is there and ``n`` (the number
     of points) is at least :data:`NUMBA_MIN_POINTS`, as plain Python otherwise (same results)."""
-    use = HAVE_NUMBA and n >= NUMBA_MIN_POINTS
+    use = HAVE_NUMBA and (n >= NUMBA_MIN_POINTS or _compiled_already())
     token = _COMPILED.set(use)
     helpers = _JIT_HELPERS if use else _PY_HELPERS
     saved = {k: globals()[k] for k in helpers}
@@ -737,6 +738,12 @@ def compiled_for(n: int):
     finally:
         globals().update(saved)
         _COMPILED.reset(token)
+
+
+def _compiled_already() -> bool:
+    """True once a compiled kernel ran in this process: numba's cache is then warm, and small
+    inputs gain from the compiled kernels too."""
+    return any(getattr(f, "signatures", None) for f in _JIT.values())
 
 
 def _kernel(name):
