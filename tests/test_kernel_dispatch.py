@@ -13,7 +13,8 @@ def _sig(net):
     return [(x.start, x.end, x.indices.tolist(), np.round(x.points, 9).tolist()) for x in c.curves], np.round(c.nodes, 9).tolist()
 
 
-def test_size_picks_the_kernels():
+def test_size_picks_the_kernels(monkeypatch):
+    monkeypatch.setattr(K, "_compiled_already", lambda: False)  # as in a fresh process
     with K.compiled_for(10) as use:
         assert use is False
         assert K._kernel("tangents") is K._PY["tangents"]
