@@ -838,16 +838,21 @@ def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
         if best is None:
             continue
         t = best[1]
-        regions[t] = np.r_[regions[t], pts]
-        regions[r] = np.zeros(0, dtype=np.int64)
         lab[lab == r] = t
-        for i, s in ends_at[r]:
-            if alive[i] and chains[i].ends[s] == r:
-                chains[i].ends[s] = t
-                ends_at[t].append((i, s))
-        ends_at[r] = []
-        v[t] += v[r]
-        v[r] = 0
+        _absorb_region(r, t, chains, regions, alive, ends_at, v)
+
+
+def _absorb_region(r, t, chains, regions, alive, ends_at, v):
+    """Merge region ``r`` into region ``t``: its points, the chain ends at it and its valence."""
+    regions[t] = np.r_[regions[t], regions[r]]
+    regions[r] = np.zeros(0, dtype=np.int64)
+    for i, s in ends_at[r]:
+        if alive[i] and chains[i].ends[s] == r:
+            chains[i].ends[s] = t
+            ends_at[t].append((i, s))
+    ends_at[r] = []
+    v[t] += v[r]
+    v[r] = 0
 
 
 def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
@@ -876,15 +881,7 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
         t = int(lab[k])
         if chains[i].ends[1 - s] == t:
             continue  # a short spur of that very junction: left to the pruning
-        regions[t] = np.r_[regions[t], regions[r]]
-        regions[r] = np.zeros(0, dtype=np.int64)
-        for i, s in ends_at[r]:
-            if alive[i] and chains[i].ends[s] == r:
-                chains[i].ends[s] = t
-                ends_at[t].append((i, s))
-        ends_at[r] = []
-        v[t] += v[r]
-        v[r] = 0
+        _absorb_region(r, t, chains, regions, alive, ends_at, v)
 
 
 def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
