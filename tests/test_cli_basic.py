@@ -70,3 +70,13 @@ def test_unknown_param_is_usage_error(tmp_path):
 def test_broken_pipe_is_quiet():
     p = subprocess.run(f"{sys.executable} -m curvenet.cli formats | head -1", shell=True, capture_output=True, text=True)
     assert "Traceback" not in p.stderr and "internal error" not in p.stderr
+
+
+def test_info_network(tmp_path):
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+    out = tmp_path / "mug.json"
+    assert cli("reconstruct", root / "examples" / "mug.xyz", "-q", "-o", out).returncode == 0
+    r = cli("info", out)
+    assert r.returncode == 0, r.stderr
+    assert "nodes 10 (free ends 0, junctions 10)" in r.stdout and "curves 15" in r.stdout
+    assert "b0=1 b1=6" in r.stdout and "method=robust" in r.stdout

@@ -30,7 +30,9 @@ def run(args) -> int:
         print(f"  curves {net.n_curves} (closed loops without node {sum(c.start is None for c in net.curves)})")
         print(f"  total length {net.lengths.sum():.6g}; Betti numbers b0={net.betti[0]} b1={net.betti[1]}")
         if net.parameters:
-            print("  parameters " + ", ".join(f"{k}={v}" for k, v in net.parameters.items()))
+            from .progress import _fmt
+
+            print("  parameters " + ", ".join(f"{k}={_fmt(v)}" for k, v in net.parameters.items()))
         return 0
     pts = read_points(args.file, columns=args.columns)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
