@@ -265,7 +265,8 @@ _eig_sym = _eig_sym_py
 
 
 def _pca01(Q, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
-    """PCA of the rows ``Q[:cnt]`` with weights ``w[:cnt]`` of 0 or 1 (as robust._pca_dir):
+    """PCA of the rows ``Q[:cnt]`` with weights ``w[:cnt]`` of 0 or 1 (the numpy reference is in
+    tests/test_robust_kernels.py):
     principal direction into ``t``, ascending eigenvalues into ``ev``."""
     d = Q.shape[1]
     sw = 0.0
@@ -752,28 +753,23 @@ def _kernel(name):
     return _PY[name]
 
 
-def extend_into_region(*args):
-    return _kernel("extend_into_region")(*args)
+def _dispatch(name: str):
+    """A function that runs the kernel ``name`` compiled or in plain Python (see compiled_for)."""
+
+    def run(*args):
+        return _kernel(name)(*args)
+
+    run.__name__ = run.__qualname__ = name
+    run.__doc__ = f"Run the kernel :func:`_{name}`, compiled or in plain Python."
+    return run
 
 
-def chain_ends(*args):
-    return _kernel("chain_ends")(*args)
-
-
-def linked_edges(*args):
-    return _kernel("linked_edges")(*args)
-
-
-def short_links(*args):
-    return _kernel("short_links")(*args)
-
-
-def csr_union(*args):
-    return _kernel("csr_union")(*args)
-
-
-def end_count(*args):
-    return _kernel("end_count")(*args)
+extend_into_region = _dispatch("extend_into_region")
+chain_ends = _dispatch("chain_ends")
+linked_edges = _dispatch("linked_edges")
+short_links = _dispatch("short_links")
+csr_union = _dispatch("csr_union")
+end_count = _dispatch("end_count")
 
 
 def tangents(P, idx, h, m):

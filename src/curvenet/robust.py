@@ -135,18 +135,6 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return np.maximum(h, floor)
 
 
-def _pca_dir(Q, w=None):
-    """Principal direction and eigenvalues of point sets Q (n, m, d) with weights w (n, m)."""
-    if w is None:
-        w = np.ones(Q.shape[:2])
-    sw = np.maximum(w.sum(axis=1, keepdims=True), 1e-300)
-    mu = (Q * w[..., None]).sum(axis=1, keepdims=True) / sw[..., None]
-    Z = (Q - mu) * np.sqrt(w)[..., None]
-    C = np.einsum("nki,nkj->nij", Z, Z)
-    ev, v = np.linalg.eigh(C)
-    return v[:, :, -1], ev
-
-
 def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     """Local tangent and linearity of each point.
 
@@ -156,7 +144,8 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     """
     m = min(m, idx.shape[1])
     # compiled, one point at a time: the 4-neighbour PCA, then twice the PCA of the point and
-    # its m nearest within h of the current line (weights 0/1), as _pca_dir on stacked arrays;
+    # its m nearest within h of the current line (weights 0/1: a weighted PCA, whose numpy
+    # formula on stacked arrays is the reference of tests/test_robust_kernels.py);
     # and the noise: distance of each point from the chord between its nearest strip neighbours
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
