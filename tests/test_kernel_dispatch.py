@@ -28,7 +28,9 @@ def test_python_and_compiled_paths_agree(monkeypatch):
     truth = synth.model("crossing")
     pts, _ = synth.sample(truth, noise=0.3, density_ratio=3, rng=4)
     monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 10**9)
-    a = curvenet.reconstruct(pts)
+    with monkeypatch.context() as m:
+        m.setattr(K, "_compiled_already", lambda: False)  # the Python run, even after compiled ones
+        a = curvenet.reconstruct(pts)
     monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 0)
     b = curvenet.reconstruct(pts)
     assert _sig(a) == _sig(b)

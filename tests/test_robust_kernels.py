@@ -158,3 +158,111 @@ def test_linked_edges_match_the_array_formulas(cloud):
     ks = np.repeat(np.arange(n), k)
     m = dist.ravel() <= link * 0.5 * (h[ks] + h[idx.ravel()])
     assert np.array_equal(a, ks[m]) and np.array_equal(b, idx.ravel()[m])
+
+
+def _trim_behind_reference(P, h, ids, x, span2):
+    """The numpy formula of the trimming (what robust did before the compiled kernel)."""
+    if len(ids) < 4:
+        return ids
+    X = P[ids]
+    seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+    k = int(min(np.searchsorted(seg, span2 * float(h[ids[0]])), len(ids) - 1))
+    u = X[k] - x
+    nu = np.linalg.norm(u)
+    if nu == 0:
+        return ids
+    behind = (X[:k] - x) @ (u / nu) <= 0
+    j = 0
+    while j < len(behind) and behind[j]:
+        j += 1
+    return ids[min(j, len(ids) - 2):]
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_trim_ends_match_the_numpy_formula(py):
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 1, 60)
+    P = np.c_[t, 0.05 * np.sin(6 * t), 0.02 * rng.normal(size=60)]
+    h = np.full(60, 1 / 59)
+    chains, x0, x1, d0, d1 = [], [], [], [], []
+    for _ in range(200):
+        a, b = sorted(rng.choice(60, 2, replace=False))
+        ids = np.arange(a, b + 1)
+        chains.append(ids)
+        # nodes near either end, often ahead of the first points (so some are behind them)
+        x0.append(P[min(a + int(rng.integers(0, 6)), b)] + rng.normal(scale=0.01, size=3))
+        x1.append(P[max(b - int(rng.integers(0, 6)), a)] + rng.normal(scale=0.01, size=3))
+        d0.append(rng.uniform() < 0.8)
+        d1.append(rng.uniform() < 0.8)
+    flat = np.concatenate(chains).astype(np.int64)
+    off = np.r_[0, np.cumsum([len(c) for c in chains])].astype(np.int64)
+    f = K._PY["trim_ends"] if py else K.trim_ends
+    lo, hi = f(P, h, flat, off, np.array(d0), np.array(d1), np.array(x0), np.array(x1), 12.0)
+    dropped = 0
+    for i, ids in enumerate(chains):
+        ref = ids
+        if d0[i]:
+            ref = _trim_behind_reference(P, h, ref, x0[i], 12.0)
+        if d1[i]:
+            ref = _trim_behind_reference(P, h, ref[::-1], x1[i], 12.0)[::-1]
+        assert np.array_equal(flat[lo[i]:hi[i]], ref), i
+        dropped += len(ids) - len(ref)
+    assert dropped > 50  # the test does trim
+
+
+def _junction_reference(P, branches, jspan):
+    """Least-squares intersection of the lines fitted (SVD) on each branch's end, numpy."""
+    d = P.shape[1]
+    A = 1e-2 * np.eye(d)
+    anchor = np.mean([P[b[-1]] for b in branches], axis=0)
+    rhs = 1e-2 * anchor
+    for b in branches:
+        X = P[b[::-1]]
+        seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
+        m = max(int(np.searchsorted(seg, jspan * 1.0, side="right")), min(3, len(b)))
+        E = X[:m]
+        c = E.mean(axis=0)
+        u = np.linalg.svd(E - c)[2][0]
+        M = np.eye(d) - np.outer(u, u)
+        A += M
+        rhs += M @ c
+    return np.linalg.solve(A, rhs)
+
+
+@pytest.mark.parametrize("py", [False, True])
+@pytest.mark.parametrize("d", [2, 3])
+def test_junction_nodes_match_the_numpy_least_squares(py, d):
+    rng = np.random.default_rng(d)
+    pts, branches, truth = [], [], []
+    for j in range(30):  # junctions of 3 to 6 noisy straight branches, no region points
+        x = rng.normal(size=d) * 10
+        truth.append(x)
+        for _ in range(int(rng.integers(3, 7))):
+            u = rng.normal(size=d)
+            u /= np.linalg.norm(u)
+            s = np.arange(12, 1, -1) * 1.0 + 0.5  # running towards the junction, stop short
+            B = x + s[:, None] * u + rng.normal(scale=0.05, size=(len(s), d))
+            branches.append((j, np.arange(len(pts), len(pts) + len(s))))
+            pts.extend(B)
+    P = np.asarray(pts)
+    h = np.ones(len(P))
+    nb = np.bincount([j for j, _ in branches], minlength=30)
+    bl = [b for _, b in branches]
+    bflat = np.concatenate(bl).astype(np.int64)
+    boff = np.r_[0, np.cumsum([len(b) for b in bl])].astype(np.int64)
+    jb = np.r_[0, np.cumsum(nb)].astype(np.int64)
+    roff = np.zeros(31, dtype=np.int64)
+    consts = np.array([4.0, 6.0, 1.25, 4.5, 1e9, 0.8 * 5.5, 0.9, 1.5, 0.0])
+    f = K._PY["junction_nodes"] if py else K.junction_nodes
+    X, maybe = f(P, h, np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), bflat, boff, jb,
+                 np.zeros(0, dtype=np.int64), roff, np.ones(30), 1.0, 0.0, consts)
+    assert not maybe.any()
+    err, err_anchor = [], []
+    for j in range(30):
+        ref = _junction_reference(P, [b for jj, b in branches if jj == j], 4.0)
+        assert np.allclose(X[j], ref, atol=1e-9), j
+        anchor = np.mean([P[b[-1]] for jj, b in branches if jj == j], axis=0)
+        err.append(np.linalg.norm(X[j] - truth[j]))
+        err_anchor.append(np.linalg.norm(anchor - truth[j]))
+    # and it is the junction: far nearer to it than the mean of the branch ends (>= 1.5 away)
+    assert max(err) < 0.35 and np.mean(err) < 0.3 * np.mean(err_anchor)

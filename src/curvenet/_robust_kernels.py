@@ -15,7 +15,7 @@ import numpy as np
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "junction_nodes", "trim_ends", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order):  # pragma: no cover - compiled
@@ -692,6 +692,330 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  #
     return buf, cnt
 
 
+def _fit_end(P, h, ids, span, mu, u, C, V, ev):  # pragma: no cover - compiled
+    """Line through the end portion of ``ids`` (running towards the end) over ``span`` h.
+
+    The end portion is that of ``robust._end_portion``: the points from the last id backwards
+    within arc length ``span * h[ids[-1]]``, at least ``min(3, n)``. Its mean goes into ``mu``
+    and its principal direction into ``u``. Returns the number of points in the portion (the
+    direction is meaningful only when it is at least 2).
+    """
+    n = ids.shape[0]
+    d = P.shape[1]
+    if n < 2:
+        m = n
+    else:
+        m = _end_count(P, ids, span * h[ids[n - 1]])
+        if m < 3 and n >= 3:
+            m = 3
+        elif m < n and n < 3:
+            m = n
+    for c in range(d):
+        acc = 0.0
+        for q in range(n - m, n):
+            acc += P[ids[q], c]
+        mu[c] = acc / m if m > 0 else 0.0
+    for i in range(d):
+        for j in range(i, d):
+            acc = 0.0
+            for q in range(n - m, n):
+                acc += (P[ids[q], i] - mu[i]) * (P[ids[q], j] - mu[j])
+            C[i, j] = acc
+            C[j, i] = acc
+    if m >= 2:
+        _eig_sym(C, V, ev)
+        for c in range(d):
+            u[c] = V[c, d - 1]
+    return m
+
+
+def _solve_small(A, b, x):  # pragma: no cover - compiled
+    """``x = A^-1 b`` for a small square ``A`` by Gaussian elimination with partial pivoting
+    (``A`` and ``b`` are overwritten). Returns False when ``A`` is singular."""
+    d = A.shape[0]
+    for k in range(d):
+        p = k
+        for i in range(k + 1, d):
+            if abs(A[i, k]) > abs(A[p, k]):
+                p = i
+        if A[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(d):
+                t = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = t
+            t = b[k]
+            b[k] = b[p]
+            b[p] = t
+        for i in range(k + 1, d):
+            f = A[i, k] / A[k, k]
+            for j in range(k, d):
+                A[i, j] -= f * A[k, j]
+            b[i] -= f * b[k]
+    for k in range(d - 1, -1, -1):
+        acc = b[k]
+        for j in range(k + 1, d):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return True
+
+
+def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hfall, width, noise, consts):  # pragma: no cover - compiled
+    """Node position of many junctions at once (see ``robust._junction_positions``).
+
+    Junction ``j`` has the branches ``jb[j] .. jb[j + 1] - 1``; branch ``b`` is
+    ``bflat[boff[b]:boff[b + 1]]`` (point ids running towards the junction); its region points
+    are ``rflat[roff[j]:roff[j + 1]]``. ``hfall[j]``: the spacing used for a junction without
+    region points. ``consts``: JSPAN, JN, WALK_DEV, NW, the node's largest distance from the
+    anchor in spacings, SWALLOW * shell_outer, SWALLOW_COS, WIDEN, use the graph (1 or 0).
+
+    Each branch is walked into the region (:func:`_extend_into_region`), the walk cut where it
+    leaves a strip of ``WALK_DEV`` link widths around the line fitted on the branch's end; the
+    node is the least-squares intersection of the lines fitted on the walked ends, pulled a
+    little (weight 1e-2) towards the mean of the branch ends (the anchor), and the anchor when
+    it lands over the largest distance away.
+
+    Returns
+    -------
+    X : (n_junctions, d) ndarray
+        Node positions.
+    maybe : (n_junctions,) ndarray of bool
+        Whether a free branch may hide in the region (a superset of what
+        ``robust._swallowed_branches`` finds: False means it finds none).
+    """
+    nj = jb.shape[0] - 1
+    d = P.shape[1]
+    jspan = consts[0]
+    jn = consts[1]
+    walk_dev = consts[2]
+    nw = consts[3]
+    far = consts[4]
+    swallow_r = consts[5]
+    swallow_cos = consts[6]
+    widen = consts[7]
+    use_graph = consts[8] > 0.5
+    X = np.zeros((nj, d))
+    maybe = np.zeros(nj, dtype=np.bool_)
+    mu = np.zeros(d)
+    u = np.zeros(d)
+    C = np.zeros((d, d))
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    A = np.zeros((d, d))
+    bb = np.zeros(d)
+    x = np.zeros(d)
+    anchor = np.zeros(d)
+    for j in range(nj):
+        b0 = jb[j]
+        b1 = jb[j + 1]
+        nbr = b1 - b0
+        rid = rflat[roff[j]:roff[j + 1]]
+        nr = rid.shape[0]
+        base = boff[b0]
+        flat = bflat[base:boff[b1]]
+        off = boff[b0:b1 + 1] - base
+        # walked branches: buf[bi, :L[bi]]
+        if nr > 0 and use_graph:
+            rs = np.unique(rid)
+            wn = nw * noise
+            buf, cnt = _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wn)
+            L = cnt.copy()
+            for bi in range(nbr):
+                n0 = off[bi + 1] - off[bi]
+                if cnt[bi] <= n0 or n0 < 2:
+                    continue
+                orig = flat[off[bi]:off[bi + 1]]
+                hl0 = h[orig[n0 - 1]]
+                m = _fit_end(P, h, orig, jspan + jn * noise / hl0, mu, u, C, V, ev)
+                if m < 2:
+                    continue
+                lim = width * hl0
+                if nw * noise > lim:
+                    lim = nw * noise
+                lim = walk_dev * lim
+                for q in range(n0, cnt[bi]):
+                    p = buf[bi, q]
+                    al = 0.0
+                    r2 = 0.0
+                    for c in range(d):
+                        t = P[p, c] - mu[c]
+                        al += t * u[c]
+                        r2 += t * t
+                    dv = r2 - al * al
+                    dev = np.sqrt(dv if dv > 0.0 else 0.0)
+                    if dev > lim:
+                        L[bi] = q
+                        break
+        else:
+            cap = 1
+            for bi in range(nbr):
+                if off[bi + 1] - off[bi] > cap:
+                    cap = off[bi + 1] - off[bi]
+            buf = np.zeros((nbr, cap), dtype=np.int64)
+            L = np.zeros(nbr, dtype=np.int64)
+            for bi in range(nbr):
+                n0 = off[bi + 1] - off[bi]
+                for q in range(n0):
+                    buf[bi, q] = flat[off[bi] + q]
+                L[bi] = n0
+        for a in range(d):
+            bb[a] = 0.0
+            anchor[a] = 0.0
+            for c in range(d):
+                A[a, c] = 0.0
+        ncs = 0
+        for bi in range(nbr):
+            ids = buf[bi, :L[bi]]
+            n = ids.shape[0]
+            if n == 0:
+                continue
+            m = _fit_end(P, h, ids, jspan + jn * noise / h[ids[n - 1]], mu, u, C, V, ev)
+            for c in range(d):
+                anchor[c] += P[ids[n - 1], c]
+            ncs += 1
+            if m < 2:
+                continue
+            # M = I - u u^T; A += M; b += M mu
+            um = 0.0
+            for c in range(d):
+                um += u[c] * mu[c]
+            for a in range(d):
+                for c in range(d):
+                    A[a, c] += (1.0 if a == c else 0.0) - u[a] * u[c]
+                bb[a] += mu[a] - u[a] * um
+        if ncs > 0:
+            for c in range(d):
+                anchor[c] = anchor[c] / ncs
+        else:
+            for c in range(d):
+                acc = 0.0
+                for q in range(nr):
+                    acc += P[rid[q], c]
+                anchor[c] = acc / nr if nr > 0 else 0.0
+        hl = np.median(h[rid]) if nr > 0 else hfall[j]
+        for a in range(d):
+            A[a, a] += 1e-2
+            bb[a] += 1e-2 * anchor[a]
+        ok = _solve_small(A, bb, x)
+        dist2 = 0.0
+        for c in range(d):
+            if not np.isfinite(x[c]):
+                ok = False
+            dist2 += (x[c] - anchor[c]) ** 2
+        if not ok or not np.sqrt(dist2) <= far * hl:
+            for c in range(d):
+                x[c] = anchor[c]
+        for c in range(d):
+            X[j, c] = x[c]
+        # a free branch hidden in the region: some region point far from the node, in a
+        # direction no branch takes (tested again exactly by robust._swallowed_branches)
+        if nr < 3:
+            continue
+        hs = hl + widen * noise
+        ndir = 0
+        D = np.zeros((nbr, d))
+        for bi in range(nbr):
+            orig = flat[off[bi]:off[bi + 1]]
+            m = _fit_end(P, h, orig, jspan, mu, u, C, V, ev)
+            nu2 = 0.0
+            for c in range(d):
+                D[ndir, c] = mu[c] - x[c]
+                nu2 += D[ndir, c] ** 2
+            if nu2 > 0.0:
+                nu = np.sqrt(nu2)
+                for c in range(d):
+                    D[ndir, c] /= nu
+                ndir += 1
+        if ndir == 0:
+            continue
+        for q in range(nr):
+            p = rid[q]
+            r2 = 0.0
+            for c in range(d):
+                r2 += (P[p, c] - x[c]) ** 2
+            dq = np.sqrt(r2)
+            if not dq > swallow_r * hs * (1.0 - 1e-9):
+                continue
+            best = -np.inf
+            for k in range(ndir):
+                al = 0.0
+                for c in range(d):
+                    al += (P[p, c] - x[c]) * D[k, c]
+                if al > best:
+                    best = al
+            if best / dq < swallow_cos + 1e-9:
+                maybe[j] = True
+                break
+    return X, maybe
+
+
+def _behind_count(P, h, ids, lo, hi, step, x, span2):  # pragma: no cover - compiled
+    """How many leading ids of ``ids[lo:hi]`` (read from ``lo`` up when ``step`` is 1, from
+    ``hi - 1`` down when it is -1) lie behind the node ``x``: see ``robust._trim_behind``."""
+    n = hi - lo
+    if n < 4:
+        return 0
+    d = P.shape[1]
+    first = ids[lo] if step == 1 else ids[hi - 1]
+    lim = span2 * h[first]
+    # k: the first index whose arc length from the start is >= lim (at most n - 1)
+    s = 0.0
+    k = 0
+    if not s >= lim:
+        k = n - 1
+        for i in range(1, n):
+            a = ids[lo + i - 1] if step == 1 else ids[hi - i]
+            b = ids[lo + i] if step == 1 else ids[hi - 1 - i]
+            sq = 0.0
+            for c in range(d):
+                t = P[b, c] - P[a, c]
+                sq += t * t
+            s += np.sqrt(sq)
+            if s >= lim:
+                k = i
+                break
+    pk = ids[lo + k] if step == 1 else ids[hi - 1 - k]
+    nu2 = 0.0
+    for c in range(d):
+        nu2 += (P[pk, c] - x[c]) ** 2
+    nu = np.sqrt(nu2)
+    if nu == 0:
+        return 0
+    j = 0
+    while j < k:
+        p = ids[lo + j] if step == 1 else ids[hi - 1 - j]
+        al = 0.0
+        for c in range(d):
+            al += (P[p, c] - x[c]) * ((P[pk, c] - x[c]) / nu)
+        if not al <= 0:
+            break
+        j += 1
+    return j if j < n - 2 else n - 2
+
+
+def _trim_ends(P, h, flat, off, do0, do1, XA, XB, span2):  # pragma: no cover - compiled
+    """Chain points lying behind their nodes, for many chains (see ``robust._trim_behind``).
+
+    Chain ``c`` is ``flat[off[c]:off[c + 1]]``, from its node ``XA[c]`` to its node ``XB[c]``;
+    its start is trimmed when ``do0[c]``, then (what is left) its end when ``do1[c]``.
+
+    Returns
+    -------
+    lo, hi : (n_chains,) ndarray of int64
+        The kept points are ``flat[lo[c]:hi[c]]``.
+    """
+    nc = off.shape[0] - 1
+    lo = off[:-1].copy()
+    hi = off[1:].copy()
+    for c in range(nc):
+        if do0[c]:
+            lo[c] += _behind_count(P, h, flat, lo[c], hi[c], 1, XA[c], span2)
+        if do1[c]:
+            hi[c] -= _behind_count(P, h, flat, lo[c], hi[c], -1, XB[c], span2)
+    return lo, hi
+
+
 def _order(P):
     """A cache-friendly visiting order of the points (results never depend on it)."""
     if P.shape[0] <= 100_000:
@@ -719,8 +1043,12 @@ _PY = {
     "csr_union": _csr_union,
     "end_count": _end_count,
     "tangents": _tangents,
+    "junction_nodes": _junction_nodes,
+    "trim_ends": _trim_ends,
 }
-_PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range}
+_PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range,
+               "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
+               "_extend_into_region": _extend_into_region, "_behind_count": _behind_count}
 _JIT: dict = {}
 _JIT_HELPERS: dict = {}
 
@@ -770,6 +1098,8 @@ linked_edges = _dispatch("linked_edges")
 short_links = _dispatch("short_links")
 csr_union = _dispatch("csr_union")
 end_count = _dispatch("end_count")
+junction_nodes = _dispatch("junction_nodes")
+trim_ends = _dispatch("trim_ends")
 
 
 def tangents(P, idx, h, m):
@@ -793,6 +1123,11 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_eig_sym": _jit(_eig_sym_py),
             "_pca01": _jit(_pca01),
             "_tangents_block": _jit(_tangents_block),
+            "_end_count": _jit(_end_count),
+            "_fit_end": _jit(_fit_end),
+            "_solve_small": _jit(_solve_small),
+            "_extend_into_region": _jit(_extend_into_region),
+            "_behind_count": _jit(_behind_count),
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)

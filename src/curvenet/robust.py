@@ -665,8 +665,8 @@ def _assemble(P, h, chains, regions, prm):
         if i != j and len(regions[r]) >= 3:
             # a short free branch hidden in the region (a fork passed through by one curve in
             # a sparse place): the region stays a junction
-            x = _junction(P, h, chains, inc, regions[r], prm)
-            if _swallowed_branches(P, h, chains, inc, regions[r], x, prm):
+            X, maybe = _junction_positions(P, h, [(chains, inc, regions[r])], prm)
+            if maybe[0] and _swallowed_branches(P, h, chains, inc, regions[r], X[0], prm):
                 continue
         ci = chains[i]
         a_ids = ci.ids if si == 1 else ci.ids[::-1]
@@ -702,6 +702,10 @@ def _assemble(P, h, chains, regions, prm):
         if not c.closed:
             for s in (0, 1):
                 inc_at.setdefault(c.ends[s], []).append((ci, s))
+    # all junction nodes in one compiled call
+    jr = [r for r in range(len(regions)) if v[r] >= 2]
+    JX, JMAYBE = _junction_positions(P, h, [(live, inc_at[r], regions[r]) for r in jr], prm)
+    jpos = {r: i for i, r in enumerate(jr)}
     for r in range(len(regions)):
         if v[r] == 0:
             continue
@@ -724,9 +728,10 @@ def _assemble(P, h, chains, regions, prm):
             end_ext[(ci, s)] = ext
             node_pos.append(pos)
         else:
-            node_pos.append(_junction(P, h, live, inc, regions[r], prm))
-            for br in _swallowed_branches(P, h, live, inc, regions[r], node_pos[-1], prm):
-                extra.append((len(node_pos) - 1, br))
+            node_pos.append(JX[jpos[r]])
+            if JMAYBE[jpos[r]]:
+                for br in _swallowed_branches(P, h, live, inc, regions[r], node_pos[-1], prm):
+                    extra.append((len(node_pos) - 1, br))
         node_of[r] = len(node_pos) - 1
     # a short free branch lying wholly inside its junction's region (sparse sampling: its
     # length is under the shell radius) gets its own curve to a free end at its tip
@@ -741,22 +746,29 @@ def _assemble(P, h, chains, regions, prm):
         new_id = np.empty(len(norder), dtype=np.int64)
         new_id[norder] = np.arange(len(norder))
         nodes = nodes[norder]
+    # at a junction, chain points lying behind the node (the chain overshot it into another
+    # branch) are dropped (all open chains in one compiled call)
+    opn = [ci for ci, c in enumerate(live) if not c.closed]
+    trim = {}
+    if opn:
+        ends = np.array([[new_id[node_of[live[ci].ends[0]]], new_id[node_of[live[ci].ends[1]]]]
+                         for ci in opn], dtype=np.int64)
+        do0 = np.array([(ci, 0) not in end_ext and v[live[ci].ends[0]] >= 2 for ci in opn])
+        do1 = np.array([(ci, 1) not in end_ext and v[live[ci].ends[1]] >= 2 for ci in opn])
+        flat = np.concatenate([live[ci].ids for ci in opn]).astype(np.int64, copy=False)
+        off = np.r_[0, np.cumsum([len(live[ci].ids) for ci in opn])].astype(np.int64)
+        lo, hi = _k.trim_ends(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, do0, do1,
+                              nodes[ends[:, 0]], nodes[ends[:, 1]], 2.0 * SPAN)
+        trim = {ci: flat[lo[i]:hi[i]] for i, ci in enumerate(opn)}
     curves = []
     for ci, c in enumerate(live):
         if c.closed:
             curves.append(Curve(P[c.ids], None, None, True, c.ids.copy()))
             continue
-        ids = c.ids
         ext0 = end_ext.get((ci, 0), np.zeros(0, dtype=np.int64))
         ext1 = end_ext.get((ci, 1), np.zeros(0, dtype=np.int64))
         a, b = int(new_id[node_of[c.ends[0]]]), int(new_id[node_of[c.ends[1]]])
-        # at a junction, chain points lying behind the node (the chain overshot it into
-        # another branch) are dropped
-        if not len(ext0) and v[c.ends[0]] >= 2:
-            ids = _trim_behind(P, h, ids, nodes[a])
-        if not len(ext1) and v[c.ends[1]] >= 2:
-            ids = _trim_behind(P, h, ids[::-1], nodes[b])[::-1]
-        ids = np.r_[ext0[::-1], ids, ext1]
+        ids = np.r_[ext0[::-1], trim[ci], ext1]
         pts = P[ids]
         ind = ids.astype(np.int64)
         # the curve ends exactly at its nodes (a free end's node is its extreme point)
@@ -880,12 +892,27 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     lies within ``link_width * h + NW * noise`` of the line fitted on each of b's other branches.
     """
     noise = prm.get("_noise", 0.0)
+    # lengths of all chains at once (the ids do not change below); a chain longer than
+    # MERGE_LEN times its largest spacing is longer than MERGE_LEN times its median one
+    lens = [len(c.ids) for c in chains]
+    flat = np.concatenate([c.ids for c in chains]).astype(np.int64) if chains else np.zeros(0, np.int64)
+    step = np.linalg.norm(np.diff(P[flat], axis=0), axis=1) if len(flat) > 1 else np.zeros(0)
+    cum = np.r_[0.0, np.cumsum(step)]
+    off = np.r_[0, np.cumsum(lens)].astype(np.int64)
+    hmax = np.zeros(len(chains))
+    nz = np.flatnonzero(np.asarray(lens) > 0)
+    if len(nz):
+        hmax[nz] = np.maximum.reduceat(h[flat], off[nz])
     for ci in range(len(chains)):
         c = chains[ci]
         if not alive[ci] or c.closed:
             continue
         a, b = c.ends
         if a == b or v[a] < 3 or v[b] < 3:
+            continue
+        # polyline length: the steps inside the chain (not the one joining it to the next)
+        length = cum[off[ci + 1] - 1] - cum[off[ci]] if lens[ci] > 1 else 0.0
+        if length > MERGE_LEN * hmax[ci] * (1 + 1e-9):
             continue
         hl = float(np.median(h[c.ids])) if len(c.ids) else float(np.median(h))
         if _polylen(P[c.ids]) > MERGE_LEN * hl:
@@ -996,23 +1023,24 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
         u = u / nu
         reach = ATT * prm["link"] * hl + GAP * noise
         tip_pts = np.r_[regions[r], e].astype(np.int64)
-        best = None
-        for tp in tip_pts:
-            for k in tree.query_ball_point(P[tp], reach):
-                q = int(pts[k])
-                j = int(owner[q])
-                if j < 0 or j == i or not alive[j]:
-                    continue
-                vq = P[q] - P[e]
-                d = float(np.linalg.norm(P[q] - P[tp]))
-                if vq @ u < np.cos(np.radians(45.0)) * np.linalg.norm(vq):
-                    continue
-                key = (d, q)
-                if best is None or key < best[0]:
-                    best = (key, q, j)
-        if best is None:
+        # chain points of other chains within reach of the tip, ahead of it (within 45 degrees
+        # of its direction): the nearest (then lowest id) is where it attaches
+        near = tree.query_ball_point(P[tip_pts], reach)
+        cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
+        if not cnt.sum():
             continue
-        _, q, j = best
+        q = pts[np.concatenate([np.asarray(x, dtype=np.int64) for x in near])]
+        tp = np.repeat(tip_pts, cnt)
+        j = owner[q]
+        vq = P[q] - P[e]
+        ok = (j >= 0) & (j != i) & ((vq @ u) >= np.cos(np.radians(45.0)) * np.sqrt((vq * vq).sum(axis=1)))
+        ok[ok] = [alive[x] for x in j[ok].tolist()]
+        if not ok.any():
+            continue
+        q, j, tp = q[ok], j[ok], tp[ok]
+        d = np.sqrt(((P[q] - P[tp]) ** 2).sum(axis=1))
+        b = np.lexsort((q, d))[0]
+        q, j = int(q[b]), int(j[b])
         cj = chains[j]
         k = int(np.flatnonzero(cj.ids == q)[0])
         m = len(cj.ids)
@@ -1056,29 +1084,6 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
             ends_at[nr] += [(j, 1), (jn, 0)]
             ends_at[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ends_at[b]]
             v[nr] += 2
-
-
-def _trim_behind(P, h, ids, x):
-    """Drop the leading ids lying behind the node ``x`` (ids run away from it).
-
-    The direction of the chain is that from ``x`` to the chain point about ``SPAN`` spacings
-    along; leading points whose offset from ``x`` has a negative component along it go. At
-    least 2 points are kept.
-    """
-    if len(ids) < 4:
-        return ids
-    X = P[ids]
-    seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]
-    k = int(min(np.searchsorted(seg, 2.0 * SPAN * float(h[ids[0]])), len(ids) - 1))
-    u = X[k] - x
-    nu = np.linalg.norm(u)
-    if nu == 0:
-        return ids
-    behind = (X[:k] - x) @ (u / nu) <= 0
-    j = 0
-    while j < len(behind) and behind[j]:
-        j += 1
-    return ids[min(j, len(ids) - 2):]
 
 
 def _extent(P, ids):
@@ -1162,62 +1167,55 @@ def _extend_into_region(P, h, branches, rid, prm):
 
 
 def _junction(P, h, live, inc, rid, prm):
-    """Least-squares intersection of the tangent lines of the incident branches.
+    """Node position of one junction: see :func:`_junction_positions`."""
+    return _junction_positions(P, h, [(live, inc, rid)], prm)[0][0]
 
-    The branches are first extended into the junction region (:func:`_extend_into_region`),
-    so the lines are fitted close to the junction and extrapolated only a little.
+
+def _junction_positions(P, h, items, prm):
+    """Least-squares intersection of the tangent lines of the incident branches, per junction.
+
+    ``items``: ``(chains, inc, rid)`` per junction, ``inc`` the (chain, side) ends at it and
+    ``rid`` its region points. The branches are first walked into the junction region
+    (:func:`_extend_into_region`), a walk that strays from the branch's own line (onto another
+    branch, led by noise) cut where it leaves a strip of ``WALK_DEV`` link widths around that
+    line; the lines are then fitted close to the junction (over ``JSPAN`` spacings, longer under
+    noise: the fitted direction's error shrinks with the span) and extrapolated only a little.
+    All junctions run in one compiled call (:func:`_robust_kernels._junction_nodes`).
+
+    Returns
+    -------
+    X : (n_items, d) ndarray
+        Node positions.
+    maybe : (n_items,) ndarray of bool
+        False where :func:`_swallowed_branches` surely finds nothing.
     """
     dim = P.shape[1]
-    cR = P[rid].mean(axis=0) if len(rid) else None
-    branches = []
-    for ci, s in inc:
-        c = live[ci]
-        branches.append(c.ids if s == 1 else c.ids[::-1])
-    if len(rid) and "_graph" in prm:
-        walked = _extend_into_region(P, h, branches, rid, prm)
-        # a walk that strays from the branch's own line (onto another branch, led by noise)
-        # is cut where it leaves a strip of WALK_DEV link widths around that line
-        noise = prm.get("_noise", 0.0)
-        for bi, (b0, b) in enumerate(zip(branches, walked)):
-            n0 = len(b0)
-            if len(b) <= n0 or n0 < 2:
-                branches[bi] = b
-                continue
-            E = _end_portion(P, h, np.asarray(b0), span=JSPAN + JN * noise / float(h[b0[-1]]))
-            cc, u = _fit_line(E)
-            if u is None:
-                branches[bi] = b
-                continue
-            X = P[np.asarray(b[n0:])] - cc
-            dev = np.sqrt(np.maximum((X * X).sum(axis=1) - (X @ u) ** 2, 0.0))
-            lim = WALK_DEV * max(prm["_width"] * float(h[b0[-1]]), NW * noise)
-            bad = np.flatnonzero(dev > lim)
-            branches[bi] = b[:n0 + (bad[0] if len(bad) else len(dev))]
-    A = np.zeros((dim, dim))
-    b = np.zeros(dim)
-    cs = []
-    for ids in branches:
-        # longer under noise: the fitted direction's error shrinks with the span
-        E = _end_portion(P, h, np.asarray(ids), span=JSPAN + JN * prm.get("_noise", 0.0) / float(h[ids[-1]]))
-        cc, u = _fit_line(E)
-        cs.append(E[0])
-        if u is None:
-            continue
-        M = np.eye(dim) - np.outer(u, u)
-        A += M
-        b += M @ cc
-    anchor = np.mean(cs, axis=0) if cs else cR
-    hl = float(np.median(h[rid])) if len(rid) else float(np.median([h[live[ci].ids[0]] for ci, _ in inc]))
-    w = 1e-2
-    A += w * np.eye(dim)
-    b += w * anchor
-    try:
-        x = np.linalg.solve(A, b)
-    except np.linalg.LinAlgError:
-        x = anchor
-    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > 3.0 * _DEFAULTS["shell_outer"] * hl:
-        x = anchor
-    return x
+    if not items:
+        return np.zeros((0, dim)), np.zeros(0, dtype=bool)
+    branches, nb, rids, hfall = [], [], [], []
+    for chains, inc, rid in items:
+        for ci, s in inc:
+            c = chains[ci]
+            branches.append(c.ids if s == 1 else c.ids[::-1])
+        nb.append(len(inc))
+        rids.append(np.asarray(rid, dtype=np.int64))
+        hfall.append(0.0 if len(rid) else float(np.median([h[chains[ci].ids[0]] for ci, _ in inc])))
+    bflat = np.concatenate(branches).astype(np.int64, copy=False)
+    boff = np.r_[0, np.cumsum([len(b) for b in branches])].astype(np.int64)
+    jb = np.r_[0, np.cumsum(nb)].astype(np.int64)
+    rflat = np.concatenate(rids).astype(np.int64, copy=False)
+    roff = np.r_[0, np.cumsum([len(r) for r in rids])].astype(np.int64)
+    graph = prm.get("_graph")
+    if graph is None:
+        graph = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+    noise = float(prm.get("_noise", 0.0))
+    consts = np.array([JSPAN, JN, WALK_DEV, NW, 3.0 * _DEFAULTS["shell_outer"],
+                       SWALLOW * prm["shell_outer"], SWALLOW_COS, WIDEN,
+                       1.0 if "_graph" in prm else 0.0])
+    X, maybe = _k.junction_nodes(P, np.ascontiguousarray(h, dtype=np.float64), graph[0], graph[1],
+                                 bflat, boff, jb, rflat, roff, np.asarray(hfall, dtype=np.float64),
+                                 float(prm.get("_width", max(prm["link_width"], 0.0))), noise, consts)
+    return X, maybe
 
 
 def _region_paths(P, rid, entry, prm):
@@ -1266,6 +1264,10 @@ def _hidden_fork(P, h, ids, rid, prm):
     hl = float(np.median(h[rid]))
     noise = prm.get("_noise", 0.0)
     hs = hl + WIDEN * noise
+    # the second tip lies over FORK shell radii from the first path, which starts at the entry
+    # point: a region within that distance of the entry holds no fork (no paths needed)
+    if np.sqrt(((P[rid] - P[int(ids[-1])]) ** 2).sum(axis=1).max()) <= FORK * prm["shell_outer"] * hs * (1 - 1e-9):
+        return None
     S, g, pred = _region_paths(P, rid, int(ids[-1]), prm)
     fin = np.isfinite(g)
     if fin.sum() < 6:
@@ -1343,7 +1345,7 @@ def _swallowed_branches(P, h, live, inc, rid, x, prm):
     proj = X @ u
     perp = np.sqrt(np.maximum(d * d - proj * proj, 0.0))
     lim = max(prm["_width"] * hl, NW * noise) * WALK_DEV
-    on = np.flatnonzero((proj > 0) & (proj <= d[tip]) & (perp <= lim))
+    on = np.flatnonzero((proj > 0) & (proj <= d[tip] * (1 + 1e-9)) & (perp <= lim))
     on = on[np.argsort(proj[on], kind="stable")]
     steps = np.diff(np.r_[0.0, proj[on]])
     if not len(on) or steps.max() > prm["link"] * hl + GAP * noise:
