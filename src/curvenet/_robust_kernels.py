@@ -18,22 +18,38 @@ prange = range  # numba.prange when compiled (parallel loops over independent bl
 __all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "junction_nodes", "trim_ends", "HAVE_NUMBA"]
 
 
-def _shell_groups(P, h, indptr, indices, r_in, r_out, order):  # pragma: no cover - compiled
-    """Groups of the geodesic shell around every point (see robust.shell_group_counts)."""
+def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
+    """Groups of the geodesic shell around every point (see robust.shell_group_counts).
+
+    The points ``order`` (any permutation: the result does not depend on it; a spatial one is
+    cache-friendly) are cut into ``nblocks`` runs done in parallel, each with its own scratch.
+    """
+    n = P.shape[0]
+    groups = np.zeros(n, dtype=np.int32)
+    bs = (n + nblocks - 1) // nblocks if nblocks > 0 else n
+    nb = (n + bs - 1) // bs if bs > 0 else 0
+    for b in prange(nb):
+        p1 = (b + 1) * bs
+        _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, b * bs, p1 if p1 < n else n, groups)
+    return groups
+
+
+def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, groups):  # pragma: no cover - compiled
+    """Points ``order[i0:i1]`` of :func:`_shell_groups` (own scratch: ids as int32)."""
     n = P.shape[0]
     d = P.shape[1]
-    groups = np.zeros(n, dtype=np.int32)
-    mark = np.full(n, -1, dtype=np.int64)  # == p when reached from p
-    done = np.full(n, -1, dtype=np.int64)  # == p when settled
+    mark = np.full(n, -1, dtype=np.int32)  # == p when reached from p
+    done = np.full(n, -1, dtype=np.int32)  # == p when settled
     gd = np.zeros(n, dtype=np.float64)  # tentative geodesic distance from p
-    comp = np.full(n, -1, dtype=np.int64)
-    shell = np.full(n, -1, dtype=np.int64)
-    reached = np.empty(n, dtype=np.int64)
+    comp = np.full(n, -1, dtype=np.int32)
+    shell = np.full(n, -1, dtype=np.int32)
+    reached = np.empty(n, dtype=np.int32)
     heap_k = np.empty(n + 1, dtype=np.float64)
-    heap_v = np.empty(n + 1, dtype=np.int64)
+    heap_v = np.empty(n + 1, dtype=np.int32)
     cap = n + 1
-    stack = np.empty(n, dtype=np.int64)
-    for p in order:  # any order gives the same result; a spatial one is cache-friendly
+    stack = np.empty(n, dtype=np.int32)
+    for ii in range(i0, i1):
+        p = order[ii]
         ro = r_out * h[p]
         ri = r_in * h[p]
         nreach = 0
@@ -1047,6 +1063,7 @@ _PY = {
     "trim_ends": _trim_ends,
 }
 _PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range,
+               "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
                "_extend_into_region": _extend_into_region, "_behind_count": _behind_count}
 _JIT: dict = {}
@@ -1109,7 +1126,12 @@ def tangents(P, idx, h, m):
 
 def shell_groups(P, h, indptr, indices, r_in, r_out):
     """Shell group count of every point: see :func:`_shell_groups`."""
-    return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, _order(P))
+    if P.shape[0] >= 2**31 - 1:
+        raise ValueError("too many points for the shell test (int32 ids)")
+    compiled = HAVE_NUMBA and _COMPILED.get()
+    # blocks: a few per thread (balance); one scratch set (about 44 bytes a point) per thread
+    nblocks = 4 * numba.get_num_threads() if compiled and P.shape[0] >= 50_000 else 1
+    return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, _order(P), nblocks)
 
 
 HAVE_NUMBA = False
@@ -1123,6 +1145,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_eig_sym": _jit(_eig_sym_py),
             "_pca01": _jit(_pca01),
             "_tangents_block": _jit(_tangents_block),
+            "_shell_groups_block": _jit(_shell_groups_block),
             "_end_count": _jit(_end_count),
             "_fit_end": _jit(_fit_end),
             "_solve_small": _jit(_solve_small),
@@ -1131,8 +1154,9 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
-        _JIT = {name: _jit(f) for name, f in _PY.items() if name != "tangents"}
-        _JIT["tangents"] = numba.njit(cache=True, nogil=True, parallel=True)(_tangents)
+        _PAR = ("tangents", "shell_groups")  # prange over independent blocks of points
+        _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
+        _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True
     except ImportError:  # pragma: no cover
         pass
