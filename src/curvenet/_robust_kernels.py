@@ -15,7 +15,7 @@ import numpy as np
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "junction_nodes", "trim_ends", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "junction_nodes", "trim_ends", "vote_agreement", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
@@ -1032,6 +1032,27 @@ def _trim_ends(P, h, flat, off, do0, do1, XA, XB, span2):  # pragma: no cover - 
     return lo, hi
 
 
+def _vote_agreement(t, idx, m):  # pragma: no cover - compiled
+    """``sum_k (t[q_k] . t[p])^2`` over the point ``p`` itself and its ``m`` nearest neighbours
+    ``q_k = idx[p, k]``, for every point (see robust._vote_tangents); in parallel."""
+    n = t.shape[0]
+    d = t.shape[1]
+    out = np.zeros(n)
+    for p in prange(n):
+        x = 0.0
+        for c in range(d):
+            x += t[p, c] * t[p, c]
+        acc = x * x
+        for k in range(m):
+            q = idx[p, k]
+            x = 0.0
+            for c in range(d):
+                x += t[q, c] * t[p, c]
+            acc += x * x
+        out[p] = acc
+    return out
+
+
 def _order(P):
     """A cache-friendly visiting order of the points (results never depend on it)."""
     if P.shape[0] <= 100_000:
@@ -1061,6 +1082,7 @@ _PY = {
     "tangents": _tangents,
     "junction_nodes": _junction_nodes,
     "trim_ends": _trim_ends,
+    "vote_agreement": _vote_agreement,
 }
 _PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
@@ -1117,6 +1139,7 @@ csr_union = _dispatch("csr_union")
 end_count = _dispatch("end_count")
 junction_nodes = _dispatch("junction_nodes")
 trim_ends = _dispatch("trim_ends")
+vote_agreement = _dispatch("vote_agreement")
 
 
 def tangents(P, idx, h, m):
@@ -1154,7 +1177,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
-        _PAR = ("tangents", "shell_groups")  # prange over independent blocks of points
+        _PAR = ("tangents", "shell_groups", "vote_agreement")  # prange over independent blocks of points
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True

@@ -129,7 +129,11 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     m = min(4, dist.shape[1])
     raw = dist[:, :m].mean(axis=1) / (1.5 if m >= 4 else 1.0)
     j = min(8, idx.shape[1])
-    h = np.median(np.concatenate([raw[:, None], raw[idx[:, :j]]], axis=1), axis=1)
+    R = np.concatenate([raw[:, None], raw[idx[:, :j]]], axis=1)
+    if R.shape[1] % 2:  # an odd count: the median is the middle value (partition is faster)
+        h = np.partition(R, R.shape[1] // 2, axis=1)[:, R.shape[1] // 2]
+    else:
+        h = np.median(R, axis=1)
     pos = h[h > 0]
     floor = (pos.min() if len(pos) else 1.0) * 1e-3
     return np.maximum(h, floor)
@@ -169,18 +173,17 @@ def _vote_tangents(t, lin, idx, m=8):
     ``1 - l2 / l1`` (low at junctions, where neighbours vote for different branches).
     """
     m = min(m, idx.shape[1])
-    n = len(t)
-    T = t[np.concatenate([np.arange(n)[:, None], idx[:, :m]], axis=1)]  # (n, m+1, d)
     # only a tangent clearly at odds with a coherent vote is replaced. With C = sum T_k T_k^T,
     # eigenvalues l1 >= l2 and l1 <= m + 1: a swap needs |u.t| < c (u the top eigenvector) and
     # l2 <= (1 - VOTE_COH) l1, hence t^T C t <= (m + 1) (c^2 + (1 - VOTE_COH) (1 - c^2)); the
-    # eigen-decomposition is computed only for the points below that bound (few on clean data)
-    agree = (np.einsum("nkd,nd->nk", T, t) ** 2).sum(axis=1)
+    # eigen-decomposition is computed only for the points below that bound (few on clean data);
+    # t^T C t = sum_k (T_k . t)^2 is computed in a compiled loop (no (N, m + 1, d) array)
+    agree = _k.vote_agreement(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m)
     bound = (m + 1) * (VOTE_COS**2 + (1.0 - VOTE_COH) * (1.0 - VOTE_COS**2))
     cand = np.flatnonzero(agree <= bound * (1 + 1e-9))
     if len(cand) == 0:
         return t, lin
-    Tc = T[cand]
+    Tc = t[np.concatenate([cand[:, None], idx[cand, :m]], axis=1)]  # (n_cand, m + 1, d)
     ev, V = np.linalg.eigh(np.einsum("nki,nkj->nij", Tc, Tc))
     u = V[:, :, -1]
     coh = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
@@ -768,20 +771,23 @@ def _assemble(P, h, chains, regions, prm):
         ext0 = end_ext.get((ci, 0), np.zeros(0, dtype=np.int64))
         ext1 = end_ext.get((ci, 1), np.zeros(0, dtype=np.int64))
         a, b = int(new_id[node_of[c.ends[0]]]), int(new_id[node_of[c.ends[1]]])
-        ids = np.r_[ext0[::-1], trim[ci], ext1]
-        pts = P[ids]
-        ind = ids.astype(np.int64)
+        ids = np.concatenate((ext0[::-1], trim[ci], ext1)) if len(ext0) or len(ext1) else trim[ci]
         # the curve ends exactly at its nodes (a free end's node is its extreme point)
-        if not (len(ext0) and np.array_equal(P[ext0[-1]], nodes[a])):
-            pts = np.vstack([nodes[a], pts])
-            ind = np.r_[-1, ind]
-        if not (len(ext1) and np.array_equal(P[ext1[-1]], nodes[b])):
-            pts = np.vstack([pts, nodes[b]])
-            ind = np.r_[ind, -1]
-        cv = Curve(pts, a, b, False, ind)
-        if a > b:
-            cv = cv.reversed()
-        curves.append(cv)
+        head = int(not (len(ext0) and np.array_equal(P[ext0[-1]], nodes[a])))
+        tail = int(not (len(ext1) and np.array_equal(P[ext1[-1]], nodes[b])))
+        n = len(ids) + head + tail
+        ind = np.full(n, -1, dtype=np.int64)
+        ind[head:head + len(ids)] = ids
+        pts = np.empty((n, dim))
+        pts[head:head + len(ids)] = P[ids]
+        if head:
+            pts[0] = nodes[a]
+        if tail:
+            pts[-1] = nodes[b]
+        if a > b:  # stored from the lower node id to the higher
+            curves.append(Curve(pts[::-1].copy(), b, a, False, ind[::-1].copy()))
+        else:
+            curves.append(Curve(pts, a, b, False, ind))
     for j, t, br in extra_ids:
         a, b = int(new_id[j]), int(new_id[t])
         cv = Curve(np.vstack([nodes[a], P[br]]), a, b, False, np.r_[-1, br].astype(np.int64))
