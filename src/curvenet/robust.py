@@ -709,15 +709,22 @@ def _assemble(P, h, chains, regions, prm):
     jr = [r for r in range(len(regions)) if v[r] >= 2]
     JX, JMAYBE = _junction_positions(P, h, [(live, inc_at[r], regions[r]) for r in jr], prm)
     jpos = {r: i for i, r in enumerate(jr)}
+    # the region paths of all free ends that may hide a fork, in one call
+    fr = [r for r in range(len(regions)) if v[r] == 1]
+    fids = {}
+    for r in fr:
+        ci, s = inc_at[r][0]
+        fids[r] = live[ci].ids if s == 1 else live[ci].ids[::-1]  # ids run towards the region
+    fr = [r for r in fr if _fork_possible(P, h, fids[r], regions[r], prm)]
+    fpaths = dict(zip(fr, _region_paths(P, [(regions[r], int(fids[r][-1])) for r in fr], prm)))
     for r in range(len(regions)):
         if v[r] == 0:
             continue
         inc = inc_at[r]
         if v[r] == 1:
             ci, s = inc[0]
-            c = live[ci]
-            ids = c.ids if s == 1 else c.ids[::-1]  # ids run towards the region
-            fork = _hidden_fork(P, h, ids, regions[r], prm)
+            ids = fids[r]
+            fork = _hidden_fork(P, h, ids, regions[r], prm, fpaths.get(r)) if r in fpaths else None
             if fork is not None:
                 # a whole fork (junction and two short free branches) inside one free end's
                 # region (sparse sampling): a junction node and two free branches
@@ -1224,29 +1231,41 @@ def _junction_positions(P, h, items, prm):
     return X, maybe
 
 
-def _region_paths(P, rid, entry, prm):
-    """Dijkstra on the linked graph restricted to ``entry`` and the region points ``rid``.
+def _region_paths(P, items, prm):
+    """Dijkstra on the linked graph restricted to each region and its entry point.
 
-    Returns the point ids ``S`` (``S[0] = entry``), the geodesic distances from the entry and
-    the predecessor of each (-9999 for none).
+    ``items``: ``(rid, entry)`` pairs. All regions run in one multi-source call on the union
+    of their (disjoint) subgraphs. Returns, per item, the point ids ``S`` (``S[0] = entry``,
+    then the other region points ascending), the geodesic distances from the entry and the
+    predecessor of each (local positions in ``S``; -9999 for none).
     """
     from scipy.sparse import csr_matrix
     indptr, indices = prm["_graph"]
-    S = np.r_[entry, np.setdiff1d(rid, [entry])].astype(np.int64)
-    srt = np.argsort(S, kind="stable")
-    Ss = S[srt]
-    cnt = indptr[S + 1] - indptr[S]
-    rows = np.repeat(np.arange(len(S)), cnt)
-    starts = np.repeat(indptr[S] - np.r_[0, np.cumsum(cnt)[:-1]], cnt)
+    if not items:
+        return []
+    Ss = [np.r_[entry, np.setdiff1d(rid, [entry])].astype(np.int64) for rid, entry in items]
+    sizes = np.array([len(S) for S in Ss], dtype=np.int64)
+    start = np.r_[0, np.cumsum(sizes)[:-1]]
+    U = np.concatenate(Ss)
+    grp = np.repeat(np.arange(len(Ss), dtype=np.int64), sizes)
+    G = len(Ss)
+    # position in U of (point, group): key point * G + group (a point may be in two groups)
+    key = U * G + grp
+    srt = np.argsort(key, kind="stable")
+    ks = key[srt]
+    cnt = indptr[U + 1] - indptr[U]
+    rows = np.repeat(np.arange(len(U)), cnt)
+    starts = np.repeat(indptr[U] - np.r_[0, np.cumsum(cnt)[:-1]], cnt)
     nb = indices[np.arange(len(rows)) + starts]
-    pos = np.searchsorted(Ss, nb)
-    pos = np.minimum(pos, len(Ss) - 1)
-    ok = Ss[pos] == nb
-    a, b = rows[ok], srt[pos[ok]]
-    w = np.linalg.norm(P[S[a]] - P[S[b]], axis=1) + 1e-300
-    G = csr_matrix((w, (a, b)), shape=(len(S), len(S)))
-    g, pred = dijkstra(G, directed=False, indices=0, return_predecessors=True)
-    return S, g, pred
+    want = nb * G + grp[rows]
+    pos = np.minimum(np.searchsorted(ks, want), len(ks) - 1)
+    ok = ks[pos] == want
+    ea, eb = rows[ok], srt[pos[ok]]
+    w = np.sqrt(((P[U[ea]] - P[U[eb]]) ** 2).sum(axis=1)) + 1e-300
+    M = csr_matrix((w, (ea, eb)), shape=(len(U), len(U)))
+    g, pred, _ = dijkstra(M, directed=False, indices=start, min_only=True, return_predecessors=True)
+    pred = np.where(pred >= 0, pred - start[grp], pred)
+    return [(S, g[o:o + n], pred[o:o + n]) for S, o, n in zip(Ss, start, sizes)]
 
 
 def _path_to(pred, j):
@@ -1256,7 +1275,18 @@ def _path_to(pred, j):
     return np.asarray(out[::-1], dtype=np.int64)
 
 
-def _hidden_fork(P, h, ids, rid, prm):
+def _fork_possible(P, h, ids, rid, prm):
+    """False when :func:`_hidden_fork` surely finds no fork (no paths needed): a region of
+    under 6 points, or all within ``FORK`` shell radii of the entry point (the second tip lies
+    that far from the first path, which starts at the entry)."""
+    if len(rid) < 6 or "_graph" not in prm:
+        return False
+    hs = float(np.median(h[rid])) + WIDEN * prm.get("_noise", 0.0)
+    far = np.sqrt(((P[rid] - P[int(ids[-1])]) ** 2).sum(axis=1).max())
+    return bool(far > FORK * prm["shell_outer"] * hs * (1 - 1e-9))
+
+
+def _hidden_fork(P, h, ids, rid, prm, paths=None):
     """A fork (junction and two free branches) hidden in a free end's region, or None.
 
     The region is searched from the chain's last point ``ids[-1]``: the geodesically farthest
@@ -1265,16 +1295,12 @@ def _hidden_fork(P, h, ids, rid, prm):
     the chain's extension (ids, outward, up to the fork), the node (least-squares intersection
     of the three branches' lines) and the two branches (ids ordered from the node out).
     """
-    if len(rid) < 6 or "_graph" not in prm:
+    if not _fork_possible(P, h, ids, rid, prm):
         return None
     hl = float(np.median(h[rid]))
     noise = prm.get("_noise", 0.0)
     hs = hl + WIDEN * noise
-    # the second tip lies over FORK shell radii from the first path, which starts at the entry
-    # point: a region within that distance of the entry holds no fork (no paths needed)
-    if np.sqrt(((P[rid] - P[int(ids[-1])]) ** 2).sum(axis=1).max()) <= FORK * prm["shell_outer"] * hs * (1 - 1e-9):
-        return None
-    S, g, pred = _region_paths(P, rid, int(ids[-1]), prm)
+    S, g, pred = paths if paths is not None else _region_paths(P, [(rid, int(ids[-1]))], prm)[0]
     fin = np.isfinite(g)
     if fin.sum() < 6:
         return None
