@@ -332,6 +332,7 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
         _pca01(Q, 5, w, C, V, ev, mu, t)
         hp2 = h[p] * h[p]
         for it in range(2):
+            same = it > 0
             for k in range(m + 1):
                 al = 0.0
                 r2 = 0.0
@@ -339,7 +340,12 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
                     x = Q[k, c] - Q[0, c]
                     al += x * t[c]
                     r2 += x * x
-                w[k] = 1.0 if r2 - al * al <= hp2 else 0.0
+                wk = 1.0 if r2 - al * al <= hp2 else 0.0
+                if wk != w[k]:
+                    same = False
+                w[k] = wk
+            if same:  # the same weights as the last PCA: the same result
+                break
             _pca01(Q, m + 1, w, C, V, ev, mu, t)
         lam = ev[d - 1]
         if lam < 1e-300:
