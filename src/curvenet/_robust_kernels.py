@@ -584,6 +584,24 @@ def _chain_ends(h, ids_o, par_o, bounds, c_reg, c_par, cb):  # pragma: no cover 
     return ends, touch
 
 
+def _branch_buffer(flat, off, extra):  # pragma: no cover - compiled
+    """Branches ``flat[off[b]:off[b + 1]]`` as the rows of an array with room for ``extra``
+    more ids each: ``buf`` (n_branches, longest + extra) and the lengths ``cnt``."""
+    nbr = off.shape[0] - 1
+    cap = 1
+    for b in range(nbr):
+        if off[b + 1] - off[b] > cap:
+            cap = off[b + 1] - off[b]
+    buf = np.zeros((nbr, cap + extra), dtype=np.int64)
+    cnt = np.zeros(nbr, dtype=np.int64)
+    for b in range(nbr):
+        n = off[b + 1] - off[b]
+        for i in range(n):
+            buf[b, i] = flat[off[b] + i]
+        cnt[b] = n
+    return buf, cnt
+
+
 def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  # pragma: no cover - compiled
     """Walk every branch end into its junction region, in turns (see robust._extend_into_region).
 
@@ -605,20 +623,10 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  #
     nbr = off.shape[0] - 1
     nr = rs.shape[0]
     d = P.shape[1]
-    cap = 1
-    for b in range(nbr):
-        if off[b + 1] - off[b] > cap:
-            cap = off[b + 1] - off[b]
-    cap += nr + 1
-    buf = np.zeros((nbr, cap), dtype=np.int64)
-    cnt = np.zeros(nbr, dtype=np.int64)
+    buf, cnt = _branch_buffer(flat, off, nr + 1)
     active = np.zeros(nbr, dtype=np.bool_)
     for b in range(nbr):
-        n = off[b + 1] - off[b]
-        for i in range(n):
-            buf[b, i] = flat[off[b] + i]
-        cnt[b] = n
-        active[b] = n >= 2
+        active[b] = cnt[b] >= 2
     claimed = np.zeros(nr, dtype=np.bool_)
     pd_ = np.empty(nbr)
     pj = np.empty(nbr, dtype=np.int64)
@@ -870,17 +878,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hfall, 
                         L[bi] = q
                         break
         else:
-            cap = 1
-            for bi in range(nbr):
-                if off[bi + 1] - off[bi] > cap:
-                    cap = off[bi + 1] - off[bi]
-            buf = np.zeros((nbr, cap), dtype=np.int64)
-            L = np.zeros(nbr, dtype=np.int64)
-            for bi in range(nbr):
-                n0 = off[bi + 1] - off[bi]
-                for q in range(n0):
-                    buf[bi, q] = flat[off[bi] + q]
-                L[bi] = n0
+            buf, L = _branch_buffer(flat, off, 0)
         for a in range(d):
             bb[a] = 0.0
             anchor[a] = 0.0
@@ -1093,7 +1091,8 @@ _PY = {
 _PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
-               "_extend_into_region": _extend_into_region, "_behind_count": _behind_count}
+               "_extend_into_region": _extend_into_region, "_behind_count": _behind_count,
+               "_branch_buffer": _branch_buffer}
 _JIT: dict = {}
 _JIT_HELPERS: dict = {}
 
@@ -1180,6 +1179,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_solve_small": _jit(_solve_small),
             "_extend_into_region": _jit(_extend_into_region),
             "_behind_count": _jit(_behind_count),
+            "_branch_buffer": _jit(_branch_buffer),
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
