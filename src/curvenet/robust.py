@@ -5,7 +5,8 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
 
 1. **Spacing.** ``h_i`` is the mean distance to the 4 nearest neighbours divided by 1.5 (on a
    uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h), smoothed by the median over the
-   point and its 8 nearest neighbours. Density may vary along the curves.
+   point and its 8 nearest neighbours; neighbours under ``DUP`` times that spacing (the same
+   place sampled twice, e.g. overlapping strokes) are skipped. Density may vary along the curves.
 2. **Tangents and noise.** A first direction from the 4 nearest neighbours is refined twice by
    the PCA of the 12 nearest lying within one spacing of its line (a strip that leaves out a
    close parallel curve); the linearity ``1 - l2 / l1`` is that of the strip. A tangent at odds
@@ -101,6 +102,8 @@ SWALLOW_COS = float(np.cos(np.radians(25.0)))
 FORK = 0.6
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
+#: A neighbour closer than this fraction of the first spacing estimate is a duplicate sample.
+DUP = 0.1
 _DEFAULTS = {
     "k": 16,
     "shell_inner": 2.5,
@@ -124,10 +127,18 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     -------
     (N,) ndarray of float
         Mean distance to the 4 nearest neighbours divided by 1.5, median-smoothed over the point
-        and its 8 nearest neighbours.
+        and its 8 nearest neighbours. Neighbours closer than ``DUP`` times that first mean are
+        the same place sampled twice (overlapping strokes, a curve given twice): they are
+        skipped and the mean is taken over the next ones, so that coincident samples do not
+        shrink the spacing (and every radius) below the gaps along the curve.
     """
     m = min(4, dist.shape[1])
-    raw = dist[:, :m].mean(axis=1) / (1.5 if m >= 4 else 1.0)
+    div = 1.5 if m >= 4 else 1.0
+    raw0 = dist[:, :m].mean(axis=1) / div
+    keep = dist >= DUP * raw0[:, None]
+    sel = keep & (np.cumsum(keep, axis=1) <= m)
+    cnt = sel.sum(axis=1)
+    raw = np.where(cnt >= m, np.where(sel, dist, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
     j = min(8, idx.shape[1])
     h = np.median(np.concatenate([raw[:, None], raw[idx[:, :j]]], axis=1), axis=1)
     pos = h[h > 0]
