@@ -102,6 +102,9 @@ SWALLOW_COS = float(np.cos(np.radians(25.0)))
 FORK = 0.6
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
+#: A chain whose points, ordered by distance from one end, form a polyline this many times
+#: longer than that distance is a cycle of the linked graph (ordered, it would zigzag).
+ZIGZAG = 4.0
 #: A neighbour closer than this fraction of the first spacing estimate is a duplicate sample.
 DUP = 0.1
 _DEFAULTS = {
@@ -504,20 +507,31 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
             # no region at either end (a contact in the middle only: a clump beside a loop)
             chains.append(_loop_or_piece(P, h, g, seg, lin))
             continue
+        if len(seg) >= 6 and _polylen(P[seg]) > ZIGZAG * float(par_o[bounds[ci + 1] - 1]):
+            # the points ordered by distance from one end zigzag: the chain is still a cycle
+            # in the linked graph (a loop whose links bypass the few points flagged on it):
+            # it is cut open at its contact with the region it touches most, both ends there
+            regs_c, pts_c = c_reg[cb[ci]:cb[ci + 1]], c_pt[cb[ci]:cb[ci + 1]]
+            ru, rc = np.unique(regs_c, return_counts=True)
+            r = int(ru[np.argmax(rc)])
+            lp = _loop_or_piece(P, h, g, seg, lin, start=int(pts_c[regs_c == r].min()))
+            if lp.closed:
+                chains.append(_Chain(lp.ids, [r, r]))
+                continue
         chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
     return chains
 
 
-def _loop_or_piece(P, h, g, seg, lin):
+def _loop_or_piece(P, h, g, seg, lin, start=None):
     """A chain that touches no region: a closed loop (cut open and ordered), or an open piece.
 
-    The loop is cut at its straightest point (largest linearity; ties: lowest id), never at
-    a sharp corner where the tangent is undefined.
+    The loop is cut at ``start`` when given, else at its straightest point (largest
+    linearity; ties: lowest id), never at a sharp corner where the tangent is undefined.
     """
     if len(seg) < 3:
         return _Chain(seg, [-1, -1])
     seg = np.sort(seg)
-    s0 = int(np.argmax(lin[seg]))
+    s0 = int(np.argmax(lin[seg])) if start is None else int(np.searchsorted(seg, start))
     seg = np.r_[seg[s0:], seg[:s0]]
     sub = g[seg][:, seg].tocoo()
     X = P[seg]
