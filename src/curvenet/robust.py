@@ -105,6 +105,9 @@ LIN = 0.3
 #: A chain whose points, ordered by distance from one end, form a polyline this many times
 #: longer than that distance is a cycle of the linked graph (ordered, it would zigzag).
 ZIGZAG = 4.0
+#: A chain end is the region most in contact with the chain within this many spacings of it
+#: (or half the chain, if shorter; robust._chain_ends).
+SHORT_REACH = 4.0
 #: A neighbour closer than this fraction of the first spacing estimate is a duplicate sample.
 DUP = 0.1
 _DEFAULTS = {
@@ -503,6 +506,9 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
                                 c_reg, c_par, cb)
     for ci in range(n_chn):
         seg = ids_o[bounds[ci]:bounds[ci + 1]]
+        if touch[ci] and ends[ci, 0] >= 0 and ends[ci, 0] == ends[ci, 1]:
+            _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
+                       float(par_o[bounds[ci + 1] - 1]), float(np.median(h[seg])))
         if not touch[ci] or (ends[ci, 0] < 0 and ends[ci, 1] < 0):
             # no region at either end (a contact in the middle only: a clump beside a loop)
             chains.append(_loop_or_piece(P, h, g, seg, lin))
@@ -520,6 +526,26 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
                 continue
         chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
     return chains
+
+
+def _other_end(ci, ends, regs, par, length, hl):
+    """A short chain given the same region at both ends that also touches another region.
+
+    Under ``2 * SHORT_REACH`` spacings long, both halves of a chain may be linked mostly to
+    the larger region at one end (a sparse free branch, whose long links reach the chain's far
+    end): the other region touched (most contacts; ties: lowest id) takes the side its
+    contacts lie on (mean position along the chain against that of the first region's).
+    """
+    if length > 2 * SHORT_REACH * hl:
+        return
+    r = ends[ci, 0]
+    other = regs != r
+    if not other.any():
+        return
+    ru, rc = np.unique(regs[other], return_counts=True)
+    r2 = int(ru[np.argmax(rc)])
+    side = 1 if par[regs == r2].mean() > par[regs == r].mean() else 0
+    ends[ci, side] = r2
 
 
 def _loop_or_piece(P, h, g, seg, lin, start=None):
