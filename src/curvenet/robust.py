@@ -5,7 +5,8 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
 
 1. **Spacing.** ``h_i`` is the mean distance to the 4 nearest neighbours divided by 1.5 (on a
    uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h), smoothed by the median over the
-   point and its 8 nearest neighbours. Density may vary along the curves.
+   point and its 8 nearest neighbours; neighbours under ``DUP`` times that spacing (the same
+   place sampled twice, e.g. overlapping strokes) are skipped. Density may vary along the curves.
 2. **Tangents and noise.** A first direction from the 4 nearest neighbours is refined twice by
    the PCA of the 12 nearest lying within one spacing of its line (a strip that leaves out a
    close parallel curve); the linearity ``1 - l2 / l1`` is that of the strip. A tangent at odds
@@ -101,6 +102,14 @@ SWALLOW_COS = float(np.cos(np.radians(25.0)))
 FORK = 0.6
 #: Below this linearity a point has no reliable tangent and its links are kept.
 LIN = 0.3
+#: A chain whose points, ordered by distance from one end, form a polyline this many times
+#: longer than that distance is a cycle of the linked graph (ordered, it would zigzag).
+ZIGZAG = 4.0
+#: A chain end is the region most in contact with the chain within this many spacings of it
+#: (or half the chain, if shorter; robust._chain_ends).
+SHORT_REACH = 4.0
+#: A neighbour closer than this fraction of the first spacing estimate is a duplicate sample.
+DUP = 0.1
 _DEFAULTS = {
     "k": 16,
     "shell_inner": 2.5,
@@ -124,10 +133,18 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     -------
     (N,) ndarray of float
         Mean distance to the 4 nearest neighbours divided by 1.5, median-smoothed over the point
-        and its 8 nearest neighbours.
+        and its 8 nearest neighbours. Neighbours closer than ``DUP`` times that first mean are
+        the same place sampled twice (overlapping strokes, a curve given twice): they are
+        skipped and the mean is taken over the next ones, so that coincident samples do not
+        shrink the spacing (and every radius) below the gaps along the curve.
     """
     m = min(4, dist.shape[1])
-    raw = dist[:, :m].mean(axis=1) / (1.5 if m >= 4 else 1.0)
+    div = 1.5 if m >= 4 else 1.0
+    raw0 = dist[:, :m].mean(axis=1) / div
+    keep = dist >= DUP * raw0[:, None]
+    sel = keep & (np.cumsum(keep, axis=1) <= m)
+    cnt = sel.sum(axis=1)
+    raw = np.where(cnt >= m, np.where(sel, dist, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
     j = min(8, idx.shape[1])
     R = np.concatenate([raw[:, None], raw[idx[:, :j]]], axis=1)
     if R.shape[1] % 2:  # an odd count: the median is the middle value (partition is faster)
@@ -492,24 +509,58 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
                                 c_reg, c_par, cb)
     for ci in range(n_chn):
         seg = ids_o[bounds[ci]:bounds[ci + 1]]
+        if touch[ci] and ends[ci, 0] >= 0 and ends[ci, 0] == ends[ci, 1]:
+            _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
+                       float(par_o[bounds[ci + 1] - 1]), float(np.median(h[seg])))
         if not touch[ci] or (ends[ci, 0] < 0 and ends[ci, 1] < 0):
             # no region at either end (a contact in the middle only: a clump beside a loop)
             chains.append(_loop_or_piece(P, h, g, seg, lin))
             continue
+        if len(seg) >= 6 and _polylen(P[seg]) > ZIGZAG * float(par_o[bounds[ci + 1] - 1]):
+            # the points ordered by distance from one end zigzag: the chain is still a cycle
+            # in the linked graph (a loop whose links bypass the few points flagged on it):
+            # it is cut open at its contact with the region it touches most, both ends there
+            regs_c, pts_c = c_reg[cb[ci]:cb[ci + 1]], c_pt[cb[ci]:cb[ci + 1]]
+            ru, rc = np.unique(regs_c, return_counts=True)
+            r = int(ru[np.argmax(rc)])
+            lp = _loop_or_piece(P, h, g, seg, lin, start=int(pts_c[regs_c == r].min()))
+            if lp.closed:
+                chains.append(_Chain(lp.ids, [r, r]))
+                continue
         chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
     return chains
 
 
-def _loop_or_piece(P, h, g, seg, lin):
+def _other_end(ci, ends, regs, par, length, hl):
+    """A short chain given the same region at both ends that also touches another region.
+
+    Under ``2 * SHORT_REACH`` spacings long, both halves of a chain may be linked mostly to
+    the larger region at one end (a sparse free branch, whose long links reach the chain's far
+    end): the other region touched (most contacts; ties: lowest id) takes the side its
+    contacts lie on (mean position along the chain against that of the first region's).
+    """
+    if length > 2 * SHORT_REACH * hl:
+        return
+    r = ends[ci, 0]
+    other = regs != r
+    if not other.any():
+        return
+    ru, rc = np.unique(regs[other], return_counts=True)
+    r2 = int(ru[np.argmax(rc)])
+    side = 1 if par[regs == r2].mean() > par[regs == r].mean() else 0
+    ends[ci, side] = r2
+
+
+def _loop_or_piece(P, h, g, seg, lin, start=None):
     """A chain that touches no region: a closed loop (cut open and ordered), or an open piece.
 
-    The loop is cut at its straightest point (largest linearity; ties: lowest id), never at
-    a sharp corner where the tangent is undefined.
+    The loop is cut at ``start`` when given, else at its straightest point (largest
+    linearity; ties: lowest id), never at a sharp corner where the tangent is undefined.
     """
     if len(seg) < 3:
         return _Chain(seg, [-1, -1])
     seg = np.sort(seg)
-    s0 = int(np.argmax(lin[seg]))
+    s0 = int(np.argmax(lin[seg])) if start is None else int(np.searchsorted(seg, start))
     seg = np.r_[seg[s0:], seg[:s0]]
     sub = g[seg][:, seg].tocoo()
     X = P[seg]
