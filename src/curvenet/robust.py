@@ -140,17 +140,23 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """
     m = min(4, dist.shape[1])
     div = 1.5 if m >= 4 else 1.0
-    raw0 = dist[:, :m].mean(axis=1) / div
-    keep = dist >= DUP * raw0[:, None]
-    sel = keep & (np.cumsum(keep, axis=1) <= m)
-    cnt = sel.sum(axis=1)
-    raw = np.where(cnt >= m, np.where(sel, dist, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
+    raw = np.empty(len(dist))
+    step = 1 << 16  # rows at a time: the (rows, k) temporaries stay small at any N
+    for a in range(0, len(dist), step):
+        D = dist[a:a + step]
+        raw0 = D[:, :m].mean(axis=1) / div
+        keep = D >= DUP * raw0[:, None]
+        sel = keep & (np.cumsum(keep, axis=1) <= m)
+        cnt = sel.sum(axis=1)
+        raw[a:a + step] = np.where(cnt >= m, np.where(sel, D, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
     j = min(8, idx.shape[1])
-    R = np.concatenate([raw[:, None], raw[idx[:, :j]]], axis=1)
-    if R.shape[1] % 2:  # an odd count: the median is the middle value (partition is faster)
-        h = np.partition(R, R.shape[1] // 2, axis=1)[:, R.shape[1] // 2]
-    else:
-        h = np.median(R, axis=1)
+    h = np.empty(len(dist))
+    for a in range(0, len(dist), step):
+        R = np.concatenate([raw[a:a + step, None], raw[idx[a:a + step, :j]]], axis=1)
+        if R.shape[1] % 2:  # an odd count: the median is the middle value (partition is faster)
+            h[a:a + step] = np.partition(R, R.shape[1] // 2, axis=1)[:, R.shape[1] // 2]
+        else:
+            h[a:a + step] = np.median(R, axis=1)
     pos = h[h > 0]
     floor = (pos.min() if len(pos) else 1.0) * 1e-3
     return np.maximum(h, floor)
