@@ -513,6 +513,10 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     # shorter than 2 reach is split at L / 2); ties: the lowest region id
     ends, touch = _k.chain_ends(np.ascontiguousarray(h, dtype=np.float64), ids_o, par_o, bounds,
                                 c_reg, c_par, cb)
+    # polyline length of every ordered chain (steps inside a chain; a zigzag test below)
+    step = np.r_[np.sqrt(((P[ids_o[1:]] - P[ids_o[:-1]]) ** 2).sum(axis=1)), 0.0]
+    step[bounds[1:] - 1] = 0.0  # the step from a chain's last point to the next chain's first
+    plen = np.add.reduceat(step, bounds[:-1]) if n_chn else np.zeros(0)
     for ci in range(n_chn):
         seg = ids_o[bounds[ci]:bounds[ci + 1]]
         if touch[ci] and ends[ci, 0] >= 0 and ends[ci, 0] == ends[ci, 1]:
@@ -522,7 +526,8 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
             # no region at either end (a contact in the middle only: a clump beside a loop)
             chains.append(_loop_or_piece(P, h, g, seg, lin))
             continue
-        if len(seg) >= 6 and _polylen(P[seg]) > ZIGZAG * float(par_o[bounds[ci + 1] - 1]):
+        if (len(seg) >= 6 and plen[ci] > ZIGZAG * float(par_o[bounds[ci + 1] - 1]) * (1 - 1e-6)
+                and _polylen(P[seg]) > ZIGZAG * float(par_o[bounds[ci + 1] - 1])):
             # the points ordered by distance from one end zigzag: the chain is still a cycle
             # in the linked graph (a loop whose links bypass the few points flagged on it):
             # it is cut open at its contact with the region it touches most, both ends there
