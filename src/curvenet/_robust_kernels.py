@@ -15,7 +15,7 @@ import numpy as np
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "extend_into_region", "junction_nodes", "trim_ends", "vote_agreement", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
@@ -603,7 +603,7 @@ def _branch_buffer(flat, off, extra):  # pragma: no cover - compiled
 
 
 def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  # pragma: no cover - compiled
-    """Walk every branch end into its junction region, in turns (see robust._extend_into_region).
+    """Walk every branch end into its junction region, in turns (see robust._junction_positions).
 
     Branch ``b`` is ``flat[off[b]:off[b + 1]]`` (running towards the junction); ``rs`` the sorted
     unique region points. Each round, every active branch (at least 2 points) proposes the
@@ -1076,7 +1076,6 @@ _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
 # the plain-Python functions, kept under their own names (the compiled ones replace some globals)
 _PY = {
-    "extend_into_region": _extend_into_region,
     "chain_ends": _chain_ends,
     "linked_edges": _linked_edges,
     "short_links": _short_links,
@@ -1136,7 +1135,6 @@ def _dispatch(name: str):
     return run
 
 
-extend_into_region = _dispatch("extend_into_region")
 chain_ends = _dispatch("chain_ends")
 linked_edges = _dispatch("linked_edges")
 short_links = _dispatch("short_links")

@@ -1218,29 +1218,6 @@ def _free_end(P, h, ids, rid):
     return ext, P[ext[-1]].copy()
 
 
-def _extend_into_region(P, h, branches, rid, prm):
-    """Walk every branch end into its junction region, in turns, along its own direction.
-
-    Each step moves a branch to the nearest unclaimed region point linked to its current end
-    that lies ahead (along the direction of the branch's last ``3 h``) and within the link
-    width of that direction. Branches take turns, so they meet where they truly join. Returns
-    the extended id lists (running towards the junction).
-    """
-    indptr, indices = prm["_graph"]
-    # compiled (_robust_kernels.extend_into_region): each round every active branch proposes
-    # the nearest unclaimed linked region point ahead of its end (along its last 3 h, within
-    # max(width h, NW noise) of that line); the nearest proposals win, so the result does not
-    # depend on the order of the branches, hence of the input points
-    lens = [len(b) for b in branches]
-    off = np.r_[0, np.cumsum(lens)].astype(np.int64)
-    flat = (np.concatenate([np.asarray(b, dtype=np.int64) for b in branches]) if branches
-            else np.zeros(0, dtype=np.int64))
-    buf, cnt = _k.extend_into_region(P, np.ascontiguousarray(h, dtype=np.float64), indptr, indices, flat,
-                                     off, np.unique(np.asarray(rid, dtype=np.int64)),
-                                     float(prm["_width"]), float(NW * prm["_noise"]))
-    return [buf[i, :cnt[i]] for i in range(len(branches))]
-
-
 def _junction(P, h, live, inc, rid, prm):
     """Node position of one junction: see :func:`_junction_positions`."""
     return _junction_positions(P, h, [(live, inc, rid)], prm)[0][0]
@@ -1251,9 +1228,9 @@ def _junction_positions(P, h, items, prm):
 
     ``items``: ``(chains, inc, rid)`` per junction, ``inc`` the (chain, side) ends at it and
     ``rid`` its region points. The branches are first walked into the junction region
-    (:func:`_extend_into_region`), a walk that strays from the branch's own line (onto another
-    branch, led by noise) cut where it leaves a strip of ``WALK_DEV`` link widths around that
-    line; the lines are then fitted close to the junction (over ``JSPAN`` spacings, longer under
+    (:func:`_robust_kernels._extend_into_region`), a walk that strays from the branch's own line
+    (onto another branch, led by noise) cut where it leaves a strip of ``WALK_DEV`` link widths
+    around that line; the lines are then fitted close to the junction (over ``JSPAN`` spacings, longer under
     noise: the fitted direction's error shrinks with the span) and extrapolated only a little.
     All junctions run in one compiled call (:func:`_robust_kernels._junction_nodes`).
 
