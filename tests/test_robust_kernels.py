@@ -266,3 +266,24 @@ def test_junction_nodes_match_the_numpy_least_squares(py, d):
         err_anchor.append(np.linalg.norm(anchor - truth[j]))
     # and it is the junction: far nearer to it than the mean of the branch ends (>= 1.5 away)
     assert max(err) < 0.35 and np.mean(err) < 0.3 * np.mean(err_anchor)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_vote_eig_matches_lapack(d):
+    rng = np.random.default_rng(10 + d)
+    n, m = 400, 8
+    t = rng.normal(size=(n, d))
+    t[: n // 2, 0] += 3.0  # half the points roughly agree
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    idx = np.stack([rng.choice(n, m, replace=False) for _ in range(n)]).astype(np.int64)
+    cand = np.sort(rng.choice(n, 150, replace=False)).astype(np.int64)
+    U, coh = K.vote_eig(t, idx, m, cand)
+    U_py, coh_py = K._PY["vote_eig"](t, idx, m, cand)
+    assert np.array_equal(U, U_py) and np.array_equal(coh, coh_py)  # compiled or not, same bits
+    T = t[np.concatenate([cand[:, None], idx[cand]], axis=1)]
+    ev, V = np.linalg.eigh(np.einsum("nki,nkj->nij", T, T))
+    ref_coh = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
+    assert np.allclose(coh, ref_coh, atol=1e-12)
+    ok = ev[:, -1] - ev[:, -2] > 1e-6
+    assert ok.sum() > 100
+    assert np.allclose(np.abs(np.einsum("nd,nd->n", U[ok], V[ok, :, -1])), 1.0, atol=1e-9)

@@ -15,7 +15,7 @@ import numpy as np
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
@@ -1057,6 +1057,46 @@ def _vote_agreement(t, idx, m):  # pragma: no cover - compiled
     return out
 
 
+def _vote_eig(t, idx, m, cand):  # pragma: no cover - compiled
+    """Top eigenvector and coherence ``1 - l2 / l1`` of ``C = sum_k t_k t_k^T`` over each
+    candidate point and its ``m`` nearest neighbours (see robust._vote_tangents); in parallel.
+
+    Returns
+    -------
+    U : (n_cand, d) ndarray
+    coh : (n_cand,) ndarray
+    """
+    nc = cand.shape[0]
+    d = t.shape[1]
+    U = np.zeros((nc, d))
+    coh = np.zeros(nc)
+    bs = 1024
+    nb = (nc + bs - 1) // bs
+    for b in prange(nb):
+        C = np.zeros((d, d))
+        V = np.zeros((d, d))
+        ev = np.zeros(d)
+        i1 = (b + 1) * bs
+        for i in range(b * bs, i1 if i1 < nc else nc):
+            p = cand[i]
+            for a in range(d):
+                for c in range(a, d):
+                    acc = t[p, a] * t[p, c]
+                    for k in range(m):
+                        q = idx[p, k]
+                        acc += t[q, a] * t[q, c]
+                    C[a, c] = acc
+                    C[c, a] = acc
+            _eig_sym(C, V, ev)
+            top = ev[d - 1]
+            if top < 1e-300:
+                top = 1e-300
+            coh[i] = 1.0 - ev[d - 2] / top
+            for c in range(d):
+                U[i, c] = V[c, d - 1]
+    return U, coh
+
+
 def _order(P):
     """A cache-friendly visiting order of the points (results never depend on it)."""
     if P.shape[0] <= 100_000:
@@ -1086,6 +1126,7 @@ _PY = {
     "junction_nodes": _junction_nodes,
     "trim_ends": _trim_ends,
     "vote_agreement": _vote_agreement,
+    "vote_eig": _vote_eig,
 }
 _PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
@@ -1143,6 +1184,7 @@ end_count = _dispatch("end_count")
 junction_nodes = _dispatch("junction_nodes")
 trim_ends = _dispatch("trim_ends")
 vote_agreement = _dispatch("vote_agreement")
+vote_eig = _dispatch("vote_eig")
 
 
 def tangents(P, idx, h, m):
@@ -1181,7 +1223,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
-        _PAR = ("tangents", "shell_groups", "vote_agreement")  # prange over independent blocks of points
+        _PAR = ("tangents", "shell_groups", "vote_agreement", "vote_eig")  # prange over independent blocks of points
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True

@@ -206,10 +206,9 @@ def _vote_tangents(t, lin, idx, m=8):
     cand = np.flatnonzero(agree <= bound * (1 + 1e-9))
     if len(cand) == 0:
         return t, lin
-    Tc = t[np.concatenate([cand[:, None], idx[cand, :m]], axis=1)]  # (n_cand, m + 1, d)
-    ev, V = np.linalg.eigh(np.einsum("nki,nkj->nij", Tc, Tc))
-    u = V[:, :, -1]
-    coh = 1.0 - ev[:, -2] / np.maximum(ev[:, -1], 1e-300)
+    # the eigen-decomposition of C for the candidates (compiled, Jacobi rotations)
+    u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m,
+                         cand.astype(np.int64))
     swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < VOTE_COS) & (coh >= VOTE_COH)
     sw = cand[swap]
     t = t.copy()
