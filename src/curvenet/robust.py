@@ -68,7 +68,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from . import _robust_kernels as _k
 from .errors import InputError
 from .network import Curve, CurveNetwork
-from .neighbors import knn
+from .neighbors import build_tree, knn
 from .validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
@@ -1067,8 +1067,6 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     holding the free end's region too; near an end of the other chain, the free end joins
     the region there instead. Tips are handled in chain order; each moves at most once.
     """
-    from scipy.spatial import cKDTree
-
     N = len(P)
     owner = np.full(N, -1, dtype=np.int64)
     for i, c in enumerate(chains):
@@ -1077,7 +1075,7 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     pts = np.flatnonzero(owner >= 0)
     if len(pts) == 0:
         return
-    tree = cKDTree(P[pts])
+    tree = build_tree(P[pts])  # unbalanced, not compacted: faster to build, same answers
     noise = prm.get("_noise", 0.0)
     tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
             for s in (0, 1) if v[c.ends[s]] == 1]
