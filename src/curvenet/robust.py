@@ -28,8 +28,11 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
 5. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
    ``link * h``) into regions; the remaining points fall apart into chains, one per curve
    segment. Each chain is ordered by geodesic distance from one end (Dijkstra on the linked
-   graph) and attached to the regions its two ends touch; a chain with no region at either end
-   is a closed loop (cut open at its straightest point) or an open piece.
+   graph) and attached to the regions its two ends touch (a short chain given the same region
+   at both ends takes the other region it touches at that side); a chain with no region at
+   either end is a closed loop (cut open at its straightest point) or an open piece, and a chain
+   still cyclic in the linked graph (its order would zigzag) is a loop cut open at the region it
+   touches.
 6. **Repairs** (what noise and sparse sampling break): a region passed through by one curve
    right next to a junction region joins it (a crossing split in two); a short chain leaving a
    region and coming back is absorbed; a flagged clump touching no chain joins the free end beside
@@ -37,8 +40,9 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
    two facing free ends are one curve; a free end stopping within a link reach ahead of another
    chain splits it into a junction (a T whose stem lost its link); two junctions joined by a
    chain under ``MERGE_LEN`` spacings merge when the other branches of one aim at the other's node
-   (two branches of one junction that ran together for a while). Short spurs (a chain from a
-   junction to a free end shorter than ``min_spur * h``) and small isolated clumps are dropped.
+   (two branches of one junction that ran together for a while; short loops this leaves are
+   absorbed as above). Short spurs (a chain from a junction to a free end shorter than
+   ``min_spur * h``) and small isolated clumps are dropped.
 7. **Network.** A region touched by one chain end is a free end: its points extend the chain and
    the node is the extreme point. A region touched by 2 ends is no node (the chains are joined
    through it; a chain joined to itself is a closed loop). A region touched by 3 or more is a
@@ -647,13 +651,7 @@ def _assemble(P, h, chains, regions, prm):
     # piece of that junction cut off by noise (a crossing split in two): merge it
     _merge_near_pass_through(P, h, chains, regions, alive, ends_at, valence(), prm)
     # a short chain leaving a region and coming back to it lies inside the junction: absorb it
-    for i, c in enumerate(chains):
-        if not c.closed and c.ends[0] == c.ends[1] and len(regions[c.ends[0]]):
-            hl = float(np.median(h[c.ids]))
-            cen = P[regions[c.ends[0]]].mean(axis=0)
-            if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm["shell_outer"] * hl:
-                alive[i] = False
-                regions[c.ends[0]] = np.r_[regions[c.ends[0]], c.ids]
+    _absorb_short_loops(P, h, chains, regions, alive, prm)
     # a flagged clump touching no chain, just beyond a free end, is the rest of that end (the
     # link between them was lost to noise): it joins the free end's region
     _absorb_orphans(P, h, chains, regions, alive, ends_at, valence(), prm)
@@ -754,6 +752,8 @@ def _assemble(P, h, chains, regions, prm):
     # two junctions joined by a short chain, the other branches of one pointing at the other,
     # are one junction (two of its branches ran together for a while): merge them
     _merge_close_junctions(P, h, chains, regions, alive, ends_at, valence(), prm)
+    # a short chain between two merged junctions is now a short loop at the merged one
+    _absorb_short_loops(P, h, chains, regions, alive, prm)
     v = valence()
     live = [c for i, c in enumerate(chains) if alive[i]]
     # node positions
@@ -865,6 +865,18 @@ def _assemble(P, h, chains, regions, prm):
     curves.sort(key=lambda c: (-1 if c.start is None else c.start, -1 if c.end is None else c.end,
                                tuple(np.round(c.points[min(1, len(c.points) - 1)], 9))))
     return nodes, curves
+
+
+def _absorb_short_loops(P, h, chains, regions, alive, prm):
+    """Absorb into its region every chain that leaves a region and comes back to it while
+    staying within ``shell_outer`` spacings of the region's centre (it lies inside the junction)."""
+    for i, c in enumerate(chains):
+        if alive[i] and not c.closed and c.ends[0] == c.ends[1] and len(regions[c.ends[0]]):
+            hl = float(np.median(h[c.ids]))
+            cen = P[regions[c.ends[0]]].mean(axis=0)
+            if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm["shell_outer"] * hl:
+                alive[i] = False
+                regions[c.ends[0]] = np.r_[regions[c.ends[0]], c.ids]
 
 
 def _close_tip_pairs(P, tips, r):
