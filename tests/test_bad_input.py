@@ -185,3 +185,36 @@ def test_ctrl_c_leaves_no_file(tmp_path):
     assert p.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     assert sorted(x.name for x in tmp_path.iterdir()) == ["many.npy"]
+
+
+def test_ctrl_c_is_deferred_to_a_safe_point():
+    """Under the command line's handler, Ctrl-C raises at the next checkpoint, not where the
+    main thread happens to be; a second Ctrl-C raises at once; held() delays it to the end."""
+    import os
+    import signal
+
+    from curvenet import _sigint
+
+    with pytest.raises(KeyboardInterrupt):
+        with _sigint.deferred():
+            os.kill(os.getpid(), signal.SIGINT)
+            x = sum(range(1000))  # not interrupted here
+            assert x == 499500
+            _sigint.checkpoint()  # but here
+    with pytest.raises(KeyboardInterrupt):
+        with _sigint.deferred():
+            os.kill(os.getpid(), signal.SIGINT)
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                for _ in range(1000):  # the second one interrupts at once
+                    pass
+            except KeyboardInterrupt:
+                raise
+            pytest.fail("the second Ctrl-C did not interrupt")
+    reached = []
+    with pytest.raises(KeyboardInterrupt):
+        with _sigint.held():
+            os.kill(os.getpid(), signal.SIGINT)  # blocked: pending until the block ends
+            reached.append(True)
+    assert reached == [True]
+    _sigint.checkpoint()  # nothing pending any more

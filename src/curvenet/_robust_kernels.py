@@ -13,6 +13,8 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ._sigint import held
+
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
 __all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
@@ -1169,7 +1171,8 @@ def _dispatch(name: str):
     """A function that runs the kernel ``name`` compiled or in plain Python (see compiled_for)."""
 
     def run(*args):
-        return _kernel(name)(*args)
+        with held():  # Ctrl-C waits for the kernel (see curvenet._sigint)
+            return _kernel(name)(*args)
 
     run.__name__ = run.__qualname__ = name
     run.__doc__ = f"Run the kernel :func:`_{name}`, compiled or in plain Python."
@@ -1189,7 +1192,8 @@ vote_eig = _dispatch("vote_eig")
 
 def tangents(P, idx, h, m):
     """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`."""
-    return _kernel("tangents")(P, idx, h, m, _order(P))
+    with held():
+        return _kernel("tangents")(P, idx, h, m, _order(P))
 
 
 def shell_groups(P, h, indptr, indices, r_in, r_out):
@@ -1199,7 +1203,9 @@ def shell_groups(P, h, indptr, indices, r_in, r_out):
     compiled = HAVE_NUMBA and _COMPILED.get()
     # blocks: a few per thread (balance); one scratch set (about 44 bytes a point) per thread
     nblocks = 4 * numba.get_num_threads() if compiled and P.shape[0] >= 50_000 else 1
-    return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, _order(P), nblocks)
+    order = _order(P)
+    with held():
+        return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, order, nblocks)
 
 
 HAVE_NUMBA = False

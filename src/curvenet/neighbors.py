@@ -5,12 +5,21 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["knn", "build_tree", "locality_order"]
+from ._sigint import held
+
+__all__ = ["knn", "build_tree", "locality_order", "query"]
 
 
 def build_tree(points: np.ndarray) -> cKDTree:
     """A k-d tree over ``points`` ((N, d) float array)."""
     return cKDTree(points, balanced_tree=False, compact_nodes=False)
+
+
+def query(tree: cKDTree, x: np.ndarray, **kwargs):
+    """``tree.query(x, **kwargs)`` that Ctrl-C cannot cut short (see :mod:`curvenet._sigint`:
+    scipy's worker threads write into the result arrays while the main thread waits)."""
+    with held():
+        return tree.query(x, **kwargs)
 
 
 def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1):
@@ -50,7 +59,7 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     for s in range(0, n, step):
         e = min(n, s + step)
         rows = np.arange(s, e) if order is None else order[s:e]
-        d, i = tree.query(points[rows] if order is not None else points[s:e], k=k + 1, workers=workers)
+        d, i = query(tree, points[rows] if order is not None else points[s:e], k=k + 1, workers=workers)
         d = np.atleast_2d(d)
         i = np.atleast_2d(i)
         if np.array_equal(i[:, 0], rows):  # the usual case: each point first in its own list

@@ -107,7 +107,8 @@ import numpy as np
 
 from .errors import InputError
 from .network import Curve, CurveNetwork
-from .neighbors import build_tree, knn
+from ._sigint import held
+from .neighbors import build_tree, knn, query
 from .validate import as_points
 
 __all__ = [
@@ -342,7 +343,7 @@ class _Lists:
         self.tree = build_tree(p)
         self.ub = float(np.nextafter(tau_s, np.inf))
         kq = int(min(K + 1, n))
-        dist, idx = self.tree.query(p, k=kq, distance_upper_bound=self.ub, workers=-1)
+        dist, idx = query(self.tree, p, k=kq, distance_upper_bound=self.ub, workers=-1)
         dist = dist.reshape(n, kq)
         idx = idx.reshape(n, kq).astype(np.int64)
         # a row is complete when the query returned fewer than kq points within the bound
@@ -561,7 +562,12 @@ def _trace(lists: _Lists, is_node: np.ndarray, nodes: np.ndarray, theta: float, 
     in node order (then in order of their starting point) and the list of free-end nodes.
     """
     n = len(lists.p)
-    kern = _kernel(use_numba, n)
+    raw_kern = _kernel(use_numba, n)
+
+    def kern(*args):
+        with held():  # Ctrl-C waits for the kernel (see curvenet._sigint)
+            return raw_kern(*args)
+
     cos_t = float(np.cos(np.radians(theta)))
     stamp = np.full(n, -1, dtype=np.int64)
     need = np.zeros(n, dtype=np.bool_)

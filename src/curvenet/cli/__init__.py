@@ -55,8 +55,11 @@ def main(argv=None) -> int:
         parser.print_help()
         return 2
     verbose = getattr(args, "verbose", False)
+    from .._sigint import deferred
+
     try:
-        return int(args.func(args) or 0)
+        with deferred():  # Ctrl-C acted on at safe points (see curvenet._sigint)
+            return int(args.func(args) or 0)
     except CurvenetError as exc:
         if verbose:
             import traceback

@@ -22,6 +22,8 @@ import threading
 import time
 from contextlib import contextmanager
 
+from .._sigint import checkpoint
+
 __all__ = ["Stages", "print_summary", "summary_rows", "PROGRESS_DELAY"]
 
 #: A stage's progress bar appears once it has run this many seconds.
@@ -113,6 +115,7 @@ class Stages:
         handle
             With ``advance(n=1)`` for stages with a ``total``.
         """
+        checkpoint()  # Ctrl-C pressed since the last stage: stop before starting this one
         handle = _Handle(total)
         lock = threading.Lock()
         state = {"progress": None, "stopped": False}

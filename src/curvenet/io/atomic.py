@@ -6,6 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 
+from .._sigint import checkpoint
 from ..errors import OutputError
 
 __all__ = ["atomic_write", "check_output_path"]
@@ -86,6 +87,7 @@ def atomic_write(path, data, *, inputs=()) -> Path:
             umask = os.umask(0)
             os.umask(umask)
             os.chmod(tmp, 0o666 & ~umask)
+        checkpoint()  # Ctrl-C pressed while writing: no file (see curvenet._sigint)
         os.replace(tmp, p)
     except BaseException as exc:
         try:
