@@ -793,13 +793,14 @@ def _solve_small(A, b, x):  # pragma: no cover - compiled
     return True
 
 
-def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hfall, width, noise, consts):  # pragma: no cover - compiled
+def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise, consts):  # pragma: no cover - compiled
     """Node position of many junctions at once (see ``robust._junction_positions``).
 
     Junction ``j`` has the branches ``jb[j] .. jb[j + 1] - 1``; branch ``b`` is
     ``bflat[boff[b]:boff[b + 1]]`` (point ids running towards the junction); its region points
-    are ``rflat[roff[j]:roff[j + 1]]``. ``hfall[j]``: the spacing used for a junction without
-    region points. ``consts``: JSPAN, JN, WALK_DEV, NW, the node's largest distance from the
+    are ``rflat[roff[j]:roff[j + 1]]`` (sorted, unique). ``hj[j]``: the junction's spacing (the
+    median over its region points; without region points, over its branches' first points).
+    ``consts``: JSPAN, JN, WALK_DEV, NW, the node's largest distance from the
     anchor in spacings, SWALLOW * shell_outer, SWALLOW_COS, WIDEN, use the graph (1 or 0).
 
     Each branch is walked into the region (:func:`_extend_into_region`), the walk cut where it
@@ -849,7 +850,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hfall, 
         off = boff[b0:b1 + 1] - base
         # walked branches: buf[bi, :L[bi]]
         if nr > 0 and use_graph:
-            rs = np.unique(rid)
+            rs = rid
             wn = nw * noise
             buf, cnt = _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wn)
             L = cnt.copy()
@@ -915,7 +916,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hfall, 
                 for q in range(nr):
                     acc += P[rid[q], c]
                 anchor[c] = acc / nr if nr > 0 else 0.0
-        hl = np.median(h[rid]) if nr > 0 else hfall[j]
+        hl = hj[j]
         for a in range(d):
             A[a, a] += 1e-2
             bb[a] += 1e-2 * anchor[a]
@@ -1040,7 +1041,7 @@ def _trim_ends(P, h, flat, off, do0, do1, XA, XB, span2):  # pragma: no cover - 
 
 def _vote_agreement(t, idx, m):  # pragma: no cover - compiled
     """``sum_k (t[q_k] . t[p])^2`` over the point ``p`` itself and its ``m`` nearest neighbours
-    ``q_k = idx[p, k]``, for every point (see robust._vote_tangents); in parallel."""
+    ``q_k = idx[p, k]``, for every point (see robust._vote_tangents)."""
     n = t.shape[0]
     d = t.shape[1]
     out = np.zeros(n)
@@ -1061,7 +1062,7 @@ def _vote_agreement(t, idx, m):  # pragma: no cover - compiled
 
 def _vote_eig(t, idx, m, cand):  # pragma: no cover - compiled
     """Top eigenvector and coherence ``1 - l2 / l1`` of ``C = sum_k t_k t_k^T`` over each
-    candidate point and its ``m`` nearest neighbours (see robust._vote_tangents); in parallel.
+    candidate point and its ``m`` nearest neighbours (see robust._vote_tangents).
 
     Returns
     -------
@@ -1229,7 +1230,9 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
-        _PAR = ("tangents", "shell_groups", "vote_agreement", "vote_eig")  # prange over independent blocks of points
+        # prange over independent blocks of points (the vote kernels are cheap: compiled
+        # serially, their parallel versions cost more compile time than they save)
+        _PAR = ("tangents", "shell_groups")
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True

@@ -1265,7 +1265,26 @@ def _junction_positions(P, h, items, prm):
     boff = np.r_[0, np.cumsum([len(b) for b in branches])].astype(np.int64)
     jb = np.r_[0, np.cumsum(nb)].astype(np.int64)
     rflat = np.concatenate(rids).astype(np.int64, copy=False)
-    roff = np.r_[0, np.cumsum([len(r) for r in rids])].astype(np.int64)
+    rlen = np.array([len(r) for r in rids], dtype=np.int64)
+    grp = np.repeat(np.arange(len(rids)), rlen)
+    # each junction's spacing: the median of h over its region points (as np.median: the
+    # middle value, or the mean of the two middle ones), all junctions at once
+    hv = h[rflat]
+    o = np.lexsort((hv, grp))
+    hv = hv[o]
+    start = np.r_[0, np.cumsum(rlen)[:-1]]
+    lo = start + np.maximum(rlen - 1, 0) // 2
+    hi = start + rlen // 2
+    hj = np.asarray(hfall, dtype=np.float64)
+    has = rlen > 0
+    hj[has] = (hv[lo[has]] + hv[np.minimum(hi, len(hv) - 1)[has]]) / 2
+    # region points sorted and unique per junction
+    o = np.lexsort((rflat, grp))
+    rs, gs = rflat[o], grp[o]
+    first = np.ones(len(rs), dtype=bool)
+    first[1:] = (rs[1:] != rs[:-1]) | (gs[1:] != gs[:-1])
+    rflat = rs[first]
+    roff = np.r_[0, np.cumsum(np.bincount(gs[first], minlength=len(rids)))].astype(np.int64)
     graph = prm.get("_graph")
     if graph is None:
         graph = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
@@ -1274,7 +1293,7 @@ def _junction_positions(P, h, items, prm):
                        SWALLOW * prm["shell_outer"], SWALLOW_COS, WIDEN,
                        1.0 if "_graph" in prm else 0.0])
     X, maybe = _k.junction_nodes(P, np.ascontiguousarray(h, dtype=np.float64), graph[0], graph[1],
-                                 bflat, boff, jb, rflat, roff, np.asarray(hfall, dtype=np.float64),
+                                 bflat, boff, jb, rflat, roff, hj,
                                  float(prm.get("_width", max(prm["link_width"], 0.0))), noise, consts)
     return X, maybe
 
