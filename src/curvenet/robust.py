@@ -785,7 +785,7 @@ def _assemble(P, h, chains, regions, prm):
         if v[r] == 1:
             ci, s = inc[0]
             ids = fids[r]
-            fork = _hidden_fork(P, h, ids, regions[r], prm, fpaths.get(r)) if r in fpaths else None
+            fork = _hidden_fork(P, h, ids, regions[r], prm, fpaths[r]) if r in fpaths else None
             if fork is not None:
                 # a whole fork (junction and two short free branches) inside one free end's
                 # region (sparse sampling): a junction node and two free branches
@@ -1353,7 +1353,7 @@ def _fork_possible(P, h, ids, rid, prm):
     return bool(far > FORK * prm["shell_outer"] * hs * (1 - 1e-9))
 
 
-def _hidden_fork(P, h, ids, rid, prm, paths=None):
+def _hidden_fork(P, h, ids, rid, prm, paths):
     """A fork (junction and two free branches) hidden in a free end's region, or None.
 
     The region is searched from the chain's last point ``ids[-1]``: the geodesically farthest
@@ -1361,13 +1361,13 @@ def _hidden_fork(P, h, ids, rid, prm, paths=None):
     branches from the point where the paths part are over ``min_spur`` spacings long. Returns
     the chain's extension (ids, outward, up to the fork), the node (least-squares intersection
     of the three branches' lines) and the two branches (ids ordered from the node out).
+    ``paths``: the region's :func:`_region_paths` from ``ids[-1]``; the caller runs it only for
+    the regions that pass :func:`_fork_possible`.
     """
-    if not _fork_possible(P, h, ids, rid, prm):
-        return None
     hl = float(np.median(h[rid]))
     noise = prm.get("_noise", 0.0)
     hs = hl + WIDEN * noise
-    S, g, pred = paths if paths is not None else _region_paths(P, [(rid, int(ids[-1]))], prm)[0]
+    S, g, pred = paths
     fin = np.isfinite(g)
     if fin.sum() < 6:
         return None
