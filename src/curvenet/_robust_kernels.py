@@ -724,13 +724,13 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise):  #
     return buf, cnt
 
 
-def _fit_end(P, h, ids, span, mu, u, C, V, ev):  # pragma: no cover - compiled
+def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir):  # pragma: no cover - compiled
     """Line through the end portion of ``ids`` (running towards the end) over ``span`` h.
 
     The end portion is that of ``robust._end_portion``: the points from the last id backwards
     within arc length ``span * h[ids[-1]]``, at least ``min(3, n)``. Its mean goes into ``mu``
-    and its principal direction into ``u``. Returns the number of points in the portion (the
-    direction is meaningful only when it is at least 2).
+    and, when ``with_dir``, its principal direction into ``u``. Returns the number of points in
+    the portion (the direction is meaningful only when it is at least 2).
     """
     n = ids.shape[0]
     d = P.shape[1]
@@ -747,6 +747,8 @@ def _fit_end(P, h, ids, span, mu, u, C, V, ev):  # pragma: no cover - compiled
         for q in range(n - m, n):
             acc += P[ids[q], c]
         mu[c] = acc / m if m > 0 else 0.0
+    if not with_dir:
+        return m
     for i in range(d):
         for j in range(i, d):
             acc = 0.0
@@ -850,9 +852,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         off = boff[b0:b1 + 1] - base
         # walked branches: buf[bi, :L[bi]]
         if nr > 0 and use_graph:
-            rs = rid
-            wn = nw * noise
-            buf, cnt = _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wn)
+            buf, cnt = _extend_into_region(P, h, indptr, indices, flat, off, rid, width, nw * noise)
             L = cnt.copy()
             for bi in range(nbr):
                 n0 = off[bi + 1] - off[bi]
@@ -860,7 +860,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                     continue
                 orig = flat[off[bi]:off[bi + 1]]
                 hl0 = h[orig[n0 - 1]]
-                m = _fit_end(P, h, orig, jspan + jn * noise / hl0, mu, u, C, V, ev)
+                m = _fit_end(P, h, orig, jspan + jn * noise / hl0, mu, u, C, V, ev, True)
                 if m < 2:
                     continue
                 lim = width * hl0
@@ -893,7 +893,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             n = ids.shape[0]
             if n == 0:
                 continue
-            m = _fit_end(P, h, ids, jspan + jn * noise / h[ids[n - 1]], mu, u, C, V, ev)
+            m = _fit_end(P, h, ids, jspan + jn * noise / h[ids[n - 1]], mu, u, C, V, ev, True)
             for c in range(d):
                 anchor[c] += P[ids[n - 1], c]
             ncs += 1
@@ -940,7 +940,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         D = np.zeros((nbr, d))
         for bi in range(nbr):
             orig = flat[off[bi]:off[bi + 1]]
-            m = _fit_end(P, h, orig, jspan, mu, u, C, V, ev)
+            _fit_end(P, h, orig, jspan, mu, u, C, V, ev, False)  # the mean of the end only
             nu2 = 0.0
             for c in range(d):
                 D[ndir, c] = mu[c] - x[c]
@@ -975,7 +975,12 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
 
 def _behind_count(P, h, ids, lo, hi, step, x, span2):  # pragma: no cover - compiled
     """How many leading ids of ``ids[lo:hi]`` (read from ``lo`` up when ``step`` is 1, from
-    ``hi - 1`` down when it is -1) lie behind the node ``x``: see ``robust._trim_behind``."""
+    ``hi - 1`` down when it is -1) lie behind the node ``x``.
+
+    The chain's direction is that from ``x`` to its point ``k``, the first at arc length
+    ``span2 * h`` from the start (at most the last); leading points whose offset from ``x`` has
+    no positive component along it are behind. At least 2 points are kept. (The numpy formula
+    is the reference of tests/test_robust_kernels.py.)"""
     n = hi - lo
     if n < 4:
         return 0
@@ -1018,7 +1023,7 @@ def _behind_count(P, h, ids, lo, hi, step, x, span2):  # pragma: no cover - comp
 
 
 def _trim_ends(P, h, flat, off, do0, do1, XA, XB, span2):  # pragma: no cover - compiled
-    """Chain points lying behind their nodes, for many chains (see ``robust._trim_behind``).
+    """Chain points lying behind their nodes, for many chains (see :func:`_behind_count`).
 
     Chain ``c`` is ``flat[off[c]:off[c + 1]]``, from its node ``XA[c]`` to its node ``XB[c]``;
     its start is trimmed when ``do0[c]``, then (what is left) its end when ``do1[c]``.
