@@ -360,6 +360,14 @@ def test_sampled_density_ratio_3(name):
     assert m["curve_f1"] == 1.0
 
 
+def test_sampled_eye_density_ratio_3():
+    # where the spacing reaches 1.5h the three curves (2.5h apart) are closer than two
+    # spacings: tangents thrown across them linked the curves into a false junction
+    m = _score("eye", seed=3, ratio=3.0)
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+
+
 @pytest.mark.parametrize("name", ["cube", "star8", "knot", "mug", "speaker"])
 def test_sampled_noise_0_3h_and_density_ratio_3(name):
     # speaker: a loop whose links bypass a point flagged by noise stays a closed loop

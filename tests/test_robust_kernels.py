@@ -64,8 +64,18 @@ def test_end_count_matches_numpy_prefix_sums():
         assert K._end_count(P, ids, lim) == ref
 
 
-def test_tangents_match_the_numpy_pca(cloud):
-    P, dist, idx, h = cloud
+@pytest.fixture(scope="module")
+def eye_cloud():
+    # three curves 2.5h apart, sparse places about 1.5h: some tangents need the neighbour test
+    P, _ = synth.sample(synth.model("eye"), density_ratio=3.0, rng=3)
+    P = P[np.lexsort(P.T[::-1])]
+    dist, idx = knn(P, 16)
+    return P, dist, idx, R.local_spacing(dist, idx)
+
+
+@pytest.mark.parametrize("which", ["cloud", "eye_cloud"])
+def test_tangents_match_the_numpy_pca(which, request):
+    P, dist, idx, h = request.getfixturevalue(which)
     t, lin, chord = K.tangents(P, idx, h, 12)
     # numpy reference: the stacked-array PCA
     n = len(P)
@@ -73,7 +83,20 @@ def test_tangents_match_the_numpy_pca(cloud):
     t4, _ = _pca_dir(P[np.concatenate([self_, idx[:, :4]], axis=1)])
     Qm = P[np.concatenate([self_, idx[:, :12]], axis=1)]
     rel = Qm - P[:, None, :]
-    tr = t4
+
+    def strip_score(u):  # (n, d) unit directions -> (n,)
+        al = np.einsum("nkd,nd->nk", rel[:, 1:], u)
+        q = np.maximum(np.einsum("nkd,nkd->nk", rel[:, 1:], rel[:, 1:]) - al**2, 0.0)
+        near = np.abs(al) <= K.STRIP_A * h[:, None]
+        return (np.exp(-q / (K.STRIP_W * h[:, None]) ** 2) * near).sum(axis=1)
+
+    # the direction towards one of the 4 nearest neighbours wins by a margin (first of the best)
+    cand = rel[:, 1:5] / np.linalg.norm(rel[:, 1:5], axis=2, keepdims=True)
+    sc = np.stack([strip_score(cand[:, j]) for j in range(4)], axis=1)
+    j = np.argmax(sc, axis=1)
+    win = sc[np.arange(n), j] > strip_score(t4) + K.CAND_MARGIN
+    assert win.any() or which == "cloud"  # the noisy cube may have none
+    tr = np.where(win[:, None], cand[np.arange(n), j], t4)
     for _ in range(2):
         along = np.einsum("nkd,nd->nk", rel, tr)
         w = (np.einsum("nkd,nkd->nk", rel, rel) - along**2 <= h[:, None] ** 2).astype(float)
@@ -82,6 +105,21 @@ def test_tangents_match_the_numpy_pca(cloud):
     assert np.allclose(np.abs((t * tr).sum(axis=1)), 1.0, atol=1e-9)
     assert np.allclose(lin, lin_ref, atol=1e-9)
     assert np.isfinite(chord).mean() > 0.8 and np.nanmin(chord) >= 0
+
+
+def test_tangent_is_not_thrown_across_close_parallel_curves():
+    # three parallel lines 2.5 apart, each sampled every 1.5 (local spacing about 1.5): the four
+    # nearest neighbours of a middle point are two along its line and two across, whose PCA
+    # points across; the tangent must still follow the lines
+    x = np.arange(0.0, 60.0, 1.5)
+    P = np.concatenate([np.column_stack([x + 0.5 * (j % 2), np.full_like(x, 2.5 * j), 0 * x]) for j in (-1, 0, 1)])
+    P = P[np.lexsort(P.T[::-1])]
+    dist, idx = knn(P, 16)
+    h = R.local_spacing(dist, idx)
+    t, lin, _ = K.tangents(P, idx, h, 12)
+    inner = (P[:, 0] > 8) & (P[:, 0] < 50)
+    assert np.all(np.abs(t[inner, 0]) > 0.99)
+    assert np.all(lin[inner] > 0.9)
 
 
 _PY_RUN = """

@@ -311,6 +311,37 @@ def _pca01(Q, cnt, w, C, V, ev, mu, t):  # pragma: no cover - compiled
         t[c] = V[c, d - 1]
 
 
+#: width (in local spacings) and reach along the line of the strip that scores a direction
+STRIP_W = 0.5
+STRIP_A = 3.0
+#: score a neighbour's direction needs above the 4-neighbour direction's to replace it
+CAND_MARGIN = 2.0
+
+
+def _strip_score(Q, m, u, hp):  # pragma: no cover - compiled
+    """Score of the line through ``Q[0]`` along the unit vector ``u``: the sum over ``Q[1:m+1]``
+    within ``STRIP_A * hp`` along it of ``exp(-(r / (STRIP_W * hp))^2)``, ``r`` the distance from
+    the line."""
+    d = Q.shape[1]
+    s = 0.0
+    a_max = STRIP_A * hp
+    w2 = (STRIP_W * hp) ** 2
+    for k in range(1, m + 1):
+        al = 0.0
+        r2 = 0.0
+        for c in range(d):
+            x = Q[k, c] - Q[0, c]
+            al += x * u[c]
+            r2 += x * x
+        if al > a_max or al < -a_max:
+            continue
+        q = r2 - al * al
+        if q < 0.0:
+            q = 0.0
+        s += np.exp(-q / w2)
+    return s
+
+
 def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no cover - compiled
     """Points ``order[p0:p1]`` of :func:`_tangents` (own scratch arrays)."""
     d = P.shape[1]
@@ -321,6 +352,7 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
     ev = np.zeros(d)
     mu = np.zeros(d)
     t = np.zeros(d)
+    u = np.zeros(d)
     for ii in range(p0, p1):
         p = order[ii]
         for c in range(d):
@@ -333,6 +365,33 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
             w[k] = 1.0
         _pca01(Q, 5, w, C, V, ev, mu, t)
         hp2 = h[p] * h[p]
+        # a close parallel curve can pull the 4-neighbour direction across: the direction
+        # towards one of the 4 nearest neighbours replaces it when its narrow strip holds
+        # clearly more points nearby (see _strip_score)
+        best = _strip_score(Q, m, t, h[p]) + CAND_MARGIN
+        kb = -1
+        for k in range(1, 5):
+            r2 = 0.0
+            for c in range(d):
+                x = Q[k, c] - Q[0, c]
+                r2 += x * x
+            if r2 < 1e-300:
+                continue
+            r = np.sqrt(r2)
+            for c in range(d):
+                u[c] = (Q[k, c] - Q[0, c]) / r
+            sc = _strip_score(Q, m, u, h[p])
+            if sc > best:
+                best = sc
+                kb = k
+        if kb > 0:
+            r2 = 0.0
+            for c in range(d):
+                x = Q[kb, c] - Q[0, c]
+                r2 += x * x
+            r = np.sqrt(r2)
+            for c in range(d):
+                t[c] = (Q[kb, c] - Q[0, c]) / r
         for it in range(2):
             same = it > 0
             for k in range(m + 1):
@@ -397,7 +456,9 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
 def _tangents(P, idx, h, m, order):  # pragma: no cover - compiled
     """Tangent, linearity and strip chord distance of every point (see robust._tangents).
 
-    A first direction from the point and its 4 nearest neighbours; twice, the point and its
+    A first direction from the point and its 4 nearest neighbours, replaced by the direction
+    towards one of those neighbours when that scores ``CAND_MARGIN`` more (:func:`_strip_score`:
+    a close parallel curve, within two spacings, can pull the PCA across); twice, the point and its
     ``m`` nearest neighbours within ``h`` of the current line are weighted 1 (others 0) and the
     weighted PCA gives the next direction. The linearity is ``1 - l2 / l1`` of the last PCA.
     The chord distance is that of the point from the segment joining its nearest neighbours
@@ -1136,7 +1197,8 @@ _PY = {
     "vote_agreement": _vote_agreement,
     "vote_eig": _vote_eig,
 }
-_PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_tangents_block": _tangents_block, "prange": range,
+_PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_strip_score": _strip_score,
+               "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
                "_extend_into_region": _extend_into_region, "_behind_count": _behind_count,
@@ -1224,6 +1286,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         _JIT_HELPERS = {
             "_eig_sym": _jit(_eig_sym_py),
             "_pca01": _jit(_pca01),
+            "_strip_score": _jit(_strip_score),
             "_tangents_block": _jit(_tangents_block),
             "_shell_groups_block": _jit(_shell_groups_block),
             "_end_count": _jit(_end_count),

@@ -169,9 +169,10 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
 def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     """Local tangent and linearity of each point.
 
-    A first direction from the 4 nearest neighbours is refined by a PCA of the ``m`` nearest
-    that lie within one spacing of its line (a strip that leaves out a close parallel curve).
-    The linearity ``1 - l2 / l1`` is that of the plain 8-neighbour PCA.
+    A first direction from the 4 nearest neighbours (or towards one of them, when its narrow
+    strip holds clearly more points: a close parallel curve can pull the PCA across) is refined
+    by a PCA of the ``m`` nearest that lie within one spacing of its line (a strip that leaves
+    out a close parallel curve). The linearity ``1 - l2 / l1`` is that of the last strip PCA.
     """
     m = min(m, idx.shape[1])
     # compiled, one point at a time: the 4-neighbour PCA, then twice the PCA of the point and
