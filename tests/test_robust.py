@@ -360,6 +360,38 @@ def test_sampled_density_ratio_3(name):
     assert m["curve_f1"] == 1.0
 
 
+@pytest.mark.parametrize("side", [1, -1])
+def test_two_junctions_6h_apart_are_two_nodes(side):
+    # branches leave a line at 0 and at 6h: one flagged region (the shell reaches 5.5h),
+    # split by the smaller shell into two junctions and the segment between them
+    def seg(a, b):
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        t = np.linspace(0, 1, int(np.ceil(np.linalg.norm(b - a))) + 1)[:, None]
+        return a + t * (b - a)
+
+    c, s = np.cos(np.radians(60)), np.sin(np.radians(60))
+    P = np.concatenate([seg([-40, 0], [40, 0]), seg([0, 0], [30 * c, 30 * s])[1:],
+                        seg([6, 0], [6 + 30 * c, side * 30 * s])[1:]])
+    net = reconstruct_robust(P)
+    assert net.n_nodes == 6 and len(net.curves) == 5
+    X = net.nodes[np.lexsort(net.nodes.T[::-1])]
+    assert np.abs(X[1:3] - [[0, 0], [6, 0]]).max() < 0.5
+
+
+def test_sampled_mug_close_junctions_under_noise_and_density():
+    # the handle meets the line 12.5h above the ring: with noise 0.3h and spacing up to 1.3h
+    # the widened shell (about 10h) flags both junctions as one region
+    from curvenet import synth
+    from curvenet.bench import _seed
+    from curvenet.metrics import compare
+
+    truth = synth.model("mug")
+    pts, _ = synth.sample(truth, rng=_seed("mug", "noise 0.3h + density x3"), noise=0.3, density_ratio=3.0)
+    m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+
+
 def test_sampled_eye_density_ratio_3():
     # where the spacing reaches 1.5h the three curves (2.5h apart) are closer than two
     # spacings: tangents thrown across them linked the curves into a false junction

@@ -325,3 +325,16 @@ def test_vote_eig_matches_lapack(d):
     ok = ev[:, -1] - ev[:, -2] > 1e-6
     assert ok.sum() > 100
     assert np.allclose(np.abs(np.einsum("nd,nd->n", U[ok], V[ok, :, -1])), 1.0, atol=1e-9)
+
+
+def test_shell_groups_of_a_subset_equal_those_of_all(cloud):
+    P, dist, idx, h = cloud
+    t, lin, _ = K.tangents(P, idx, h, 12)
+    src, dst, _ = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+    indptr, indices = K.csr_union(len(P), src, dst)
+    full = K.shell_groups(P, h, indptr, indices, 1.5, 3.3)
+    sub = np.random.default_rng(1).choice(len(P), size=len(P) // 7, replace=False)
+    part = K.shell_groups(P, h, indptr, indices, 1.5, 3.3, subset=sub)
+    assert np.array_equal(part[sub], full[sub])
+    rest = np.setdiff1d(np.arange(len(P)), sub)
+    assert np.all(part[rest] == 0) and np.any(full[sub] != 2)

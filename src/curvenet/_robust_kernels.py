@@ -24,15 +24,17 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma
     """Groups of the geodesic shell around every point (see robust.shell_group_counts).
 
     The points ``order`` (any permutation: the result does not depend on it; a spatial one is
-    cache-friendly) are cut into ``nblocks`` runs done in parallel, each with its own scratch.
+    cache-friendly; or a subset: the others get 0) are cut into ``nblocks`` runs done in
+    parallel, each with its own scratch.
     """
     n = P.shape[0]
+    no = order.shape[0]
     groups = np.zeros(n, dtype=np.int32)
-    bs = (n + nblocks - 1) // nblocks if nblocks > 0 else n
-    nb = (n + bs - 1) // bs if bs > 0 else 0
+    bs = (no + nblocks - 1) // nblocks if nblocks > 0 else no
+    nb = (no + bs - 1) // bs if bs > 0 else 0
     for b in prange(nb):
         p1 = (b + 1) * bs
-        _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, b * bs, p1 if p1 < n else n, groups)
+        _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, b * bs, p1 if p1 < no else no, groups)
     return groups
 
 
@@ -1264,14 +1266,15 @@ def tangents(P, idx, h, m):
         return _kernel("tangents")(P, idx, h, m, _order(P))
 
 
-def shell_groups(P, h, indptr, indices, r_in, r_out):
-    """Shell group count of every point: see :func:`_shell_groups`."""
+def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None):
+    """Shell group count of every point (or of the points ``subset``, the others 0): see
+    :func:`_shell_groups`."""
     if P.shape[0] >= 2**31 - 1:
         raise ValueError("too many points for the shell test (int32 ids)")
     compiled = HAVE_NUMBA and _COMPILED.get()
+    order = _order(P) if subset is None else np.sort(np.asarray(subset, dtype=np.int64))
     # blocks: a few per thread (balance); one scratch set (about 44 bytes a point) per thread
-    nblocks = 4 * numba.get_num_threads() if compiled and P.shape[0] >= 50_000 else 1
-    order = _order(P)
+    nblocks = 4 * numba.get_num_threads() if compiled and len(order) >= 50_000 else 1
     with held():
         return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, order, nblocks)
 
