@@ -318,6 +318,8 @@ STRIP_W = 0.5
 STRIP_A = 3.0
 #: score a neighbour's direction needs above the 4-neighbour direction's to replace it
 CAND_MARGIN = 2.0
+#: the neighbours' directions are tried only where the 4-neighbour PCA's linearity is below this
+CAND_LIN = 0.8
 
 
 def _strip_score(Q, m, u, hp):  # pragma: no cover - compiled
@@ -370,9 +372,14 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
         # a close parallel curve can pull the 4-neighbour direction across: the direction
         # towards one of the 4 nearest neighbours replaces it when its narrow strip holds
         # clearly more points nearby (see _strip_score)
-        best = _strip_score(Q, m, t, h[p]) + CAND_MARGIN
         kb = -1
-        for k in range(1, 5):
+        lam = ev[d - 1]
+        if lam < 1e-300:
+            lam = 1e-300
+        best = np.inf
+        if 1.0 - ev[d - 2] / lam < CAND_LIN:  # (4 nearly collinear neighbours: t is theirs)
+            best = _strip_score(Q, m, t, h[p]) + CAND_MARGIN
+        for k in range(1, 5 if best < np.inf else 1):
             r2 = 0.0
             for c in range(d):
                 x = Q[k, c] - Q[0, c]

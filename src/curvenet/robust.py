@@ -437,8 +437,7 @@ def _reconstruct_robust(
     # regions: flagged points joined by plain short links (any direction)
     ka, kb = _k.short_links(h, dist, idx, float(prm["link"]))  # kNN pairs within link * h
     # two junctions closer than about two shell radii flag one region: re-test large ones
-    flagged = _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm)
-    reg, n_reg = _components(N, ka, kb, flagged)
+    flagged, reg, n_reg = _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm)
     del ka, kb, dist, idx  # memory: the kNN lists are not needed below
     chn, n_chn = _components(N, src, dst, ~flagged)
 
@@ -512,13 +511,16 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
 
     Returns
     -------
-    (N,) bool ndarray
+    flagged : (N,) bool ndarray
         The flags with the split regions' freed points cleared.
+    reg : (N,) int ndarray
+        Region of each flagged point (-1 elsewhere), see :func:`_components`.
+    n_reg : int
     """
     N, dim = P.shape
     reg, n_reg = _components(N, ka, kb, flagged)
     if n_reg == 0:
-        return flagged
+        return flagged, reg, n_reg
     ids = np.flatnonzero(flagged)
     r = reg[ids]
     cnt = np.bincount(r, minlength=n_reg).astype(float)
@@ -528,7 +530,7 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
     hmean = np.bincount(r, weights=hs[ids], minlength=n_reg) / cnt
     big = rad > SPLIT_R * prm["shell_outer"] * hmean
     if not big.any():
-        return flagged
+        return flagged, reg, n_reg
     sub = ids[big[r]]
     fine = _k.shell_groups(P, hs, indptr, indices, SPLIT_F * prm["shell_inner"], SPLIT_F * prm["shell_outer"],
                            subset=sub)
@@ -544,25 +546,38 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
     eb = indices[np.repeat(indptr[fs] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
     lab, _ = _components(N, ea, eb, freed)
     t = freed[ka] & nf[kb]
-    touch = np.unique(np.stack([lab[ka[t]], reg2[kb[t]]], axis=1), axis=0)
+    touch = np.unique(np.stack([lab[ka[t]], reg2[kb[t]]], axis=1), axis=0)  # sorted by chain
+    tcut = np.searchsorted(touch[:, 0], np.arange(lab.max() + 2))
+    is_j = np.zeros(N, dtype=bool)  # points of the fine test in 3 or more groups
+    is_j[sub] = fine[sub] >= 3
+    # the points of each big region, grouped (one sort, not one pass per region)
+    bsel = big[r]
+    bi, br = ids[bsel], r[bsel]
+    o = np.argsort(br, kind="stable")
+    bi, br = bi[o], br[o]
+    bcut = np.flatnonzero(np.r_[True, br[1:] != br[:-1], True])
     out = flagged.copy()
-    for b in np.flatnonzero(big):
-        pts = ids[r == b]
+    for g0, g1 in zip(bcut[:-1], bcut[1:]):
+        b = br[g0]
+        pts = bi[g0:g1]
         kept = pts[nf[pts]]
         labs, c2 = np.unique(reg2[kept], return_counts=True)
         # sub-regions of 2 or more points with a junction point (3 or more groups)
-        jl = np.unique(reg2[kept[fine[kept] >= 3]])
-        good = labs[(c2 >= SPLIT_MIN) & np.isin(labs, jl)]
+        good = labs[(c2 >= SPLIT_MIN) & np.isin(labs, reg2[kept[is_j[kept]]])]
         ok = len(good) >= 2
         if ok:
-            chains = np.unique(lab[pts[freed[pts]]])
-            tb = touch[np.isin(touch[:, 0], chains) & np.isin(touch[:, 1], good)]
-            cl, nt = np.unique(tb[:, 0], return_counts=True)
-            links = [tuple(tb[tb[:, 0] == c, 1]) for c in cl[nt == 2]]
+            links = []
+            for c in np.unique(lab[pts[freed[pts]]]):
+                tb = touch[tcut[c]:tcut[c + 1], 1]
+                tb = tb[np.isin(tb, good)]
+                if len(tb) > 2:
+                    ok = False
+                elif len(tb) == 2:
+                    links.append(tuple(tb))
             # one chain between two sub-regions and no chain among three: two junctions and
             # the segment between them (two chains between the same two: a crossing split)
-            ok = bool(links) and len(set(links)) == len(links) and not (nt > 2).any()
-            if ok:  # and the two junctions clearly apart: over a fine shell radius
+            ok = ok and bool(links) and len(set(links)) == len(links)
+            if ok:  # and the two junctions clearly apart
                 far = SPLIT_SEP * SPLIT_F * prm["shell_outer"] * hmean[b]
                 for a_, b_ in links:
                     ca = P[kept[reg2[kept] == a_]].mean(axis=0)
@@ -571,7 +586,9 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
         if ok:
             out[pts] = False
             out[kept[np.isin(reg2[kept], good)]] = True
-    return out
+    if np.array_equal(out, flagged):
+        return flagged, reg, n_reg
+    return (out, *_components(N, ka, kb, out))
 
 
 def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
