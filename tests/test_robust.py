@@ -431,6 +431,21 @@ def test_curve_sampled_three_times_keeps_its_spacing():
     assert np.linalg.norm(net.nodes[net.valence == 3][0] - [20, 0, 0]) < 0.5 * H
 
 
+def test_curves_ending_at_one_sample_keep_the_spacing_there():
+    # six curves sampled from a common end point: six coincident samples at the node (as in
+    # sketch data, every stroke ends on the node) must not shrink the spacing there
+    from curvenet.neighbors import knn
+    from curvenet.robust import local_spacing
+
+    ang = np.radians([0, 60, 120, 180, 240, 300])
+    P = np.vstack([_seg([0, 0, 0], [25 * np.cos(a), 25 * np.sin(a), 0]) for a in ang])
+    dist, idx = knn(P, 16)
+    h = local_spacing(dist, idx)
+    at_node = np.linalg.norm(P, axis=1) < 1e-9
+    assert at_node.sum() == 6
+    assert np.all(h[at_node] > 0.4 * H)
+
+
 def test_t_junction_whose_stem_stops_short_of_the_bar():
     # the stem's last sample is 3h from the bar: no link crosses the gap, yet it is a T
     bar = _seg([-20, 0, 0], [20, 0, 0])

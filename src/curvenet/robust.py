@@ -112,8 +112,10 @@ ZIGZAG = 4.0
 #: A chain end is the region most in contact with the chain within this many spacings of it
 #: (or half the chain, if shorter; robust._chain_ends).
 SHORT_REACH = 4.0
-#: A neighbour closer than this fraction of the first spacing estimate is a duplicate sample.
+#: A neighbour closer than DUP times the first spacing estimate, or DUP_K times the k-th
+#: neighbour distance over k / 2, is a duplicate sample.
 DUP = 0.1
+DUP_K = 0.3
 _DEFAULTS = {
     "k": 16,
     "shell_inner": 2.5,
@@ -140,7 +142,9 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
         and its 8 nearest neighbours. Neighbours closer than ``DUP`` times that first mean are
         the same place sampled twice (overlapping strokes, a curve given twice): they are
         skipped and the mean is taken over the next ones, so that coincident samples do not
-        shrink the spacing (and every radius) below the gaps along the curve.
+        shrink the spacing (and every radius) below the gaps along the curve. So are those
+        closer than ``DUP_K`` times the k-th neighbour's distance over k / 2 (about one
+        spacing on a curve): several curves ending on one sample make the first mean tiny.
     """
     m = min(4, dist.shape[1])
     div = 1.5 if m >= 4 else 1.0
@@ -149,7 +153,10 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     for a in range(0, len(dist), step):
         D = dist[a:a + step]
         raw0 = D[:, :m].mean(axis=1) / div
-        keep = D >= DUP * raw0[:, None]
+        # several samples at one place (curves ending at one node) make raw0 tiny: the k-th
+        # neighbour, about k / 2 spacings away on a curve, sets a floor to the duplicate test
+        thr = np.maximum(DUP * raw0, DUP_K * D[:, -1] / (0.5 * D.shape[1]))
+        keep = D >= thr[:, None]
         sel = keep & (np.cumsum(keep, axis=1) <= m)
         cnt = sel.sum(axis=1)
         raw[a:a + step] = np.where(cnt >= m, np.where(sel, D, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
