@@ -446,6 +446,25 @@ def test_curves_ending_at_one_sample_keep_the_spacing_there():
     assert np.all(h[at_node] > 0.4 * H)
 
 
+def test_two_arcs_leaving_a_hub_7_degrees_apart_meet_at_the_hub():
+    # as in a sketched fan of strokes: two arcs (radius 30h) leave the hub 7 degrees apart and
+    # run within 1h for 8h; the fork where they part is merged into the hub, whose lines the
+    # arcs' end tangents miss by 1-2h (within 10 degrees as seen from the fork)
+    def arc(a0, R, L):
+        s = np.arange(0, L + 1e-9, 1.0)
+        th = np.radians(a0) + s / R
+        cx, cy = -R * np.sin(np.radians(a0)), R * np.cos(np.radians(a0))
+        return np.column_stack([cx + R * np.sin(th), cy - R * np.cos(th), 0 * s])
+
+    P = np.vstack([arc(0, 30, 35), arc(7, 30, 35)[1:],
+                   _seg([0, 0, 0], [40 * np.cos(2.1), 40 * np.sin(2.1), 0])[1:],
+                   _seg([0, 0, 0], [40 * np.cos(4.2), 40 * np.sin(4.2), 0])[1:]])
+    net = reconstruct_robust(P)
+    assert net.n_nodes == 5 and len(net.curves) == 4
+    assert _contracted_valences(net) == [1, 1, 1, 1, 4]
+    assert np.linalg.norm(net.nodes[net.valence == 4][0]) < 0.5 * H
+
+
 def test_t_junction_whose_stem_stops_short_of_the_bar():
     # the stem's last sample is 3h from the bar: no link crosses the gap, yet it is a T
     bar = _seg([-20, 0, 0], [20, 0, 0])

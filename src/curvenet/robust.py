@@ -95,6 +95,7 @@ WIDEN = 1.5
 GAP = 3.0
 #: Junctions joined by a chain at most this many spacings long may be one junction.
 MERGE_LEN = 8.0
+MERGE_TAN = float(np.tan(np.radians(10.0)))
 #: Directional links (nearest along the tangent) reach this many times the link length.
 EXTRA = 2.0
 #: A region point beyond this fraction of the shell radius from its junction node, in a
@@ -1101,7 +1102,9 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     """Merge junction b into junction a when a chain a-b is short and b's other branches aim at a.
 
     "Short": at most ``MERGE_LEN`` spacings. "Aim at a": a's node (least-squares intersection)
-    lies within ``link_width * h + NW * noise`` of the line fitted on each of b's other branches.
+    lies within ``max(link_width * h, NW * noise)`` of the line fitted on each of b's other
+    branches, or within ``MERGE_TAN`` times its distance from the branch end (10 degrees: a fan
+    of curved strokes converging on one node parts a few degrees apart).
     """
     noise = prm.get("_noise", 0.0)
     # lengths of all chains at once (the ids do not change below); a chain longer than
@@ -1145,7 +1148,10 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
                     break
                 r = xpos - cc
                 d = np.sqrt(max(float(r @ r) - float(r @ u) ** 2, 0.0))
-                if d > max(prm["_width"] * float(h[ids[-1]]), NW * noise) or float((E[0] - cc) @ u) * float((xpos - cc) @ u) < 0:
+                # within the strip, or within MERGE_ANG as seen from the branch end (a fan of
+                # curves converging on one node parts a few degrees apart)
+                lim = max(prm["_width"] * float(h[ids[-1]]), NW * noise, MERGE_TAN * float(np.linalg.norm(xpos - E[0])))
+                if d > lim or float((E[0] - cc) @ u) * float((xpos - cc) @ u) < 0:
                     ok = False
                     break
             if not ok:
