@@ -192,6 +192,7 @@ def test_ctrl_c_is_deferred_to_a_safe_point():
     main thread happens to be; a second Ctrl-C raises at once; held() delays it to the end."""
     import os
     import signal
+    import threading
 
     from curvenet import _sigint
 
@@ -214,7 +215,9 @@ def test_ctrl_c_is_deferred_to_a_safe_point():
     reached = []
     with pytest.raises(KeyboardInterrupt):
         with _sigint.held():
-            os.kill(os.getpid(), signal.SIGINT)  # blocked: pending until the block ends
+            # to the main thread itself: a signal sent to the process goes to any thread that
+            # does not block it (the test process may have some, started before the block)
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)  # pending until the end
             reached.append(True)
     assert reached == [True]
     _sigint.checkpoint()  # nothing pending any more
