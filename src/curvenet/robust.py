@@ -6,8 +6,13 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
 1. **Spacing.** ``h_i`` is the mean distance to the 4 nearest neighbours divided by 1.5 (on a
    uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h), smoothed by the median over the
    point and its 8 nearest neighbours; neighbours under ``DUP`` times that spacing (the same
-   place sampled twice, e.g. overlapping strokes) are skipped. Density may vary along the curves.
-2. **Tangents and noise.** A first direction from the 4 nearest neighbours is refined twice by
+   place sampled twice, e.g. overlapping strokes), or under ``DUP_K`` times the 16th neighbour's
+   distance over 8 (several curves ending on one sample), are skipped. Density may vary along
+   the curves.
+2. **Tangents and noise.** A first direction from the 4 nearest neighbours (where their PCA is
+   not clearly linear, the direction towards one of them when a narrow strip along it holds
+   clearly more points: a close parallel curve under two spacings away can pull the PCA across)
+   is refined twice by
    the PCA of the 12 nearest lying within one spacing of its line (a strip that leaves out a
    close parallel curve); the linearity ``1 - l2 / l1`` is that of the strip. A tangent at odds
    (over 10 degrees) with a coherent vote of its 8 neighbours' tangents is replaced by the vote
@@ -26,8 +31,10 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
    its connected groups that reach the middle of the shell along the graph are counted: 1 at a
    free end, 2 on a curve (a sharp or acute corner included), 3 or more near a junction.
 5. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
-   ``link * h``) into regions; the remaining points fall apart into chains, one per curve
-   segment. Each chain is ordered by geodesic distance from one end (Dijkstra on the linked
+   ``link * h``) into regions. A region too large for one junction (two junctions closer than
+   about two shell radii) is re-tested on a shell 0.6 times the size and split when that shows
+   two junctions and one chain between them. The remaining points fall apart into chains, one
+   per curve segment. Each chain is ordered by geodesic distance from one end (Dijkstra on the linked
    graph) and attached to the regions its two ends touch (a short chain given the same region
    at both ends takes the other region it touches at that side); a chain with no region at
    either end is a closed loop (cut open at its straightest point) or an open piece, and a chain
@@ -40,7 +47,7 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
    two facing free ends are one curve; a free end stopping within a link reach ahead of another
    chain splits it into a junction (a T whose stem lost its link); two junctions joined by a
    chain under ``MERGE_LEN`` spacings merge when the other branches of one aim at the other's node
-   (two branches of one junction that ran together for a while; short loops this leaves are
+   within a strip or 10 degrees (two branches of one junction that ran together for a while; short loops this leaves are
    absorbed as above). Short spurs (a chain from a junction to a free end shorter than
    ``min_spur * h``) and small isolated clumps are dropped.
 7. **Network.** A region touched by one chain end is a free end: its points extend the chain and
