@@ -284,6 +284,33 @@ def _components(n, a, b, mask):
     return out, len(uniq)
 
 
+def _lex_order(P):
+    """``np.lexsort(P.T[::-1])``: the rows sorted by the first coordinate, then the next, ...,
+    ties by index (the same permutation, faster: one sort on the first coordinate, then the few
+    rows tied there sorted by the others).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray of float
+        Finite coordinates.
+
+    Returns
+    -------
+    (N,) ndarray of int64
+    """
+    o = np.argsort(P[:, 0])  # not stable: the tied rows are put in index order below
+    x = P[o, 0]
+    tie = x[1:] == x[:-1]
+    if not tie.any():
+        return o
+    pos = np.flatnonzero(np.r_[False, tie] | np.r_[tie, False])  # rows in a run of equal x
+    run = np.cumsum(np.r_[True, ~tie])[pos]
+    sub = o[pos]
+    keys = (sub,) + tuple(P[sub, c] for c in range(P.shape[1] - 1, 0, -1)) + (run,)
+    o[pos] = sub[np.lexsort(keys)]
+    return o
+
+
 def _first_per_label(labels, key, ids):
     """For each label, the id with the largest key (ties: smallest id)."""
     o = np.lexsort((ids, -key, labels))
@@ -389,7 +416,7 @@ def _reconstruct_robust(
         raise InputError(f"smoothing must be a non-negative number, got {smoothing!r}")
 
     N, dim = P0.shape
-    order = np.lexsort(P0.T[::-1])
+    order = _lex_order(P0)
     P = P0[order]
     params_out = dict(prm)
     params_out["smooth"] = bool(smooth)
@@ -452,9 +479,13 @@ def _reconstruct_robust(
     nodes, curves = _assemble(P, h, chains, regions, prm_int)
     tm["assemble"] = time.perf_counter() - t1
 
-    # map back to input indices
-    for c in curves:
-        c.indices = np.where(c.indices >= 0, order[np.maximum(c.indices, 0)], -1)
+    # map back to input indices (all curves at once)
+    if curves:
+        ind = np.concatenate([c.indices for c in curves])
+        ind = np.where(ind >= 0, order[np.maximum(ind, 0)], -1)
+        off = np.r_[0, np.cumsum([len(c.indices) for c in curves])].tolist()
+        for i, c in enumerate(curves):
+            c.indices = ind[off[i]:off[i + 1]]
 
     if smooth:
         t1 = time.perf_counter()
@@ -831,40 +862,103 @@ def _assemble(P, h, chains, regions, prm):
         lo, hi = _k.trim_ends(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, do0, do1,
                               nodes[ends[:, 0]], nodes[ends[:, 1]], 2.0 * SPAN)
         trim = {ci: flat[lo[i]:hi[i]] for i, ci in enumerate(opn)}
-    curves = []
+    curves: list = [None] * len(live)
     for ci, c in enumerate(live):
         if c.closed:
-            curves.append(Curve(P[c.ids], None, None, True, c.ids.copy()))
-            continue
-        ext0 = end_ext.get((ci, 0), np.zeros(0, dtype=np.int64))
-        ext1 = end_ext.get((ci, 1), np.zeros(0, dtype=np.int64))
-        a, b = int(new_id[node_of[c.ends[0]]]), int(new_id[node_of[c.ends[1]]])
-        ids = np.concatenate((ext0[::-1], trim[ci], ext1)) if len(ext0) or len(ext1) else trim[ci]
-        # the curve ends exactly at its nodes (a free end's node is its extreme point)
-        head = int(not (len(ext0) and np.array_equal(P[ext0[-1]], nodes[a])))
-        tail = int(not (len(ext1) and np.array_equal(P[ext1[-1]], nodes[b])))
-        n = len(ids) + head + tail
-        ind = np.full(n, -1, dtype=np.int64)
-        ind[head:head + len(ids)] = ids
-        pts = np.empty((n, dim))
-        pts[head:head + len(ids)] = P[ids]
-        if head:
-            pts[0] = nodes[a]
-        if tail:
-            pts[-1] = nodes[b]
-        if a > b:  # stored from the lower node id to the higher
-            curves.append(Curve(pts[::-1].copy(), b, a, False, ind[::-1].copy()))
-        else:
-            curves.append(Curve(pts, a, b, False, ind))
+            curves[ci] = Curve(P[c.ids], None, None, True, c.ids.copy())
+    if opn:
+        # the open curves all at once: each runs from node a through its free-end extension
+        # (reversed), trimmed chain points and the other extension to node b
+        pieces, n0, n1, last0, last1 = [], np.zeros(len(opn), np.int64), np.zeros(len(opn), np.int64), [], []
+        for i, ci in enumerate(opn):
+            ext0, ext1 = end_ext.get((ci, 0)), end_ext.get((ci, 1))
+            if ext0 is not None and len(ext0):
+                pieces.append(ext0[::-1])
+                n0[i] = len(ext0)
+                last0.append((i, ext0[-1]))
+            pieces.append(trim[ci])
+            if ext1 is not None and len(ext1):
+                pieces.append(ext1)
+                n1[i] = len(ext1)
+                last1.append((i, ext1[-1]))
+        curves_open = _open_curves(P, nodes, np.concatenate(pieces).astype(np.int64, copy=False),
+                                   n0 + (hi - lo) + n1, ends[:, 0], ends[:, 1], last0, last1)
+        for ci, cv in zip(opn, curves_open):
+            curves[ci] = cv
     for j, t, br in extra_ids:
         a, b = int(new_id[j]), int(new_id[t])
         cv = Curve(np.vstack([nodes[a], P[br]]), a, b, False, np.r_[-1, br].astype(np.int64))
         if a > b:
             cv = cv.reversed()
         curves.append(cv)
-    curves.sort(key=lambda c: (-1 if c.start is None else c.start, -1 if c.end is None else c.end,
-                               tuple(np.round(c.points[min(1, len(c.points) - 1)], 9))))
+    curves = _sort_curves(curves)
     return nodes, curves
+
+
+def _open_curves(P, nodes, ids, nids, a, b, last0, last1):
+    """Open curves from their point ids, each ending exactly at its two nodes.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        Points.
+    nodes : (n_nodes, d) ndarray
+        Node positions.
+    ids : (M,) ndarray of int64
+        The point ids of all curves, concatenated, each curve's running from node ``a`` to ``b``.
+    nids : (n_curves,) ndarray of int64
+        The number of ids of each curve.
+    a, b : (n_curves,) ndarray of int64
+        The nodes at the start and the end of each curve's ids.
+    last0, last1 : list of (int, int)
+        ``(curve, point id)``: a curve whose first (resp. last) id is the extreme point of a free
+        end; where that point lies exactly at the node, the node is not added again.
+
+    Returns
+    -------
+    list of Curve
+        Node position, points, node position (``indices`` -1 at the nodes), stored from the
+        lower node id to the higher (reversed where ``a > b``). The curves' arrays are views of
+        two shared arrays.
+    """
+    nc = len(nids)
+    head = np.ones(nc, dtype=np.int64)
+    tail = np.ones(nc, dtype=np.int64)
+    for flag, last, node in ((head, last0, a), (tail, last1, b)):
+        if last:
+            c, q = np.asarray(last, dtype=np.int64).T
+            flag[c] = ~(P[q] == nodes[node[c]]).all(axis=1)
+    n = nids + head + tail
+    off = np.r_[0, np.cumsum(n)]
+    cid = np.repeat(np.arange(nc), n)
+    local = np.arange(off[-1]) - off[cid]
+    rev = a > b
+    # the position of each output entry in the curve as built from a to b
+    src = np.where(rev[cid], n[cid] - 1 - local, local)
+    k = src - head[cid]
+    inner = (k >= 0) & (k < nids[cid])
+    ind = np.full(off[-1], -1, dtype=np.int64)
+    ind[inner] = ids[(np.r_[0, np.cumsum(nids)][cid] + k)[inner]]
+    pts = P[np.maximum(ind, 0)]
+    at_a = ~inner & (k < 0)
+    at_b = ~inner & (k >= 0)
+    pts[at_a] = nodes[a[cid[at_a]]]
+    pts[at_b] = nodes[b[cid[at_b]]]
+    lo_, hi_ = np.where(rev, b, a).tolist(), np.where(rev, a, b).tolist()
+    o = off.tolist()
+    return [Curve(pts[o[i]:o[i + 1]], lo_[i], hi_[i], False, ind[o[i]:o[i + 1]]) for i in range(nc)]
+
+
+def _sort_curves(curves):
+    """The curves by start node, end node (-1 for none), then second point rounded to 9
+    decimals (the first for a curve of one point); ties keep their order."""
+    if not curves:
+        return curves
+    se = np.array([[-1 if c.start is None else c.start, -1 if c.end is None else c.end] for c in curves],
+                  dtype=np.int64)
+    X = np.round(np.array([c.points[min(1, len(c.points) - 1)] for c in curves]), 9)
+    o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (se[:, 1], se[:, 0]))
+    return [curves[i] for i in o.tolist()]
 
 
 def _absorb_short_loops(P, h, chains, regions, alive, prm):
