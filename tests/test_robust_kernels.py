@@ -287,3 +287,47 @@ def test_vote_eig_matches_lapack(d):
     ok = ev[:, -1] - ev[:, -2] > 1e-6
     assert ok.sum() > 100
     assert np.allclose(np.abs(np.einsum("nd,nd->n", U[ok], V[ok, :, -1])), 1.0, atol=1e-9)
+
+
+def _chain_order_reference(n, src, dst, dd, chn, n_chn):
+    """scipy's double Dijkstra sweep of every chain, numpy (the former robust._order_chains)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
+    g = coo_matrix((np.maximum(dd[inside], 1e-12), (src[inside], dst[inside])), shape=(n, n)).tocsr()
+    ids = np.flatnonzero(chn >= 0)
+    lab = chn[ids]
+    _, first = np.unique(lab, return_index=True)
+    d0 = dijkstra(g, directed=False, indices=ids[first], min_only=True)
+    o = np.lexsort((ids, -d0[ids], lab))
+    ls = lab[o]
+    f = np.r_[True, ls[1:] != ls[:-1]]
+    e1 = np.empty(n_chn, dtype=np.int64)
+    e1[ls[f]] = ids[o[f]]
+    d1 = dijkstra(g, directed=False, indices=e1, min_only=True)
+    par = d1[ids]
+    o = np.lexsort((ids, par, lab))
+    return ids[o], par[o], np.flatnonzero(np.r_[True, lab[o][1:] != lab[o][:-1], True])
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_chain_order_matches_scipy_dijkstra(py):
+    """Chains of a random linked graph (cycles, branches, single points) ordered as by scipy's
+    dijkstra, bit for bit, compiled and as plain Python; also with many equal distances."""
+    rng = np.random.default_rng(5)
+    P = rng.uniform(size=(3000, 3))
+    dist, idx = knn(P, 6)
+    keep = dist < np.median(dist)  # sparse: many components, paths and cycles
+    n = len(P)
+    src = np.repeat(np.arange(n), 6)[keep.ravel()]
+    dst, dd = idx[keep], dist[keep]
+    mask = rng.uniform(size=n) < 0.9  # "flagged" points cut the graph further
+    chn, n_chn = R._components(n, src, dst, mask)
+    f = K._PY["chain_order"] if py else K.chain_order
+    for w in (dd, np.round(dd / dd.mean(), 1), np.zeros_like(dd)):
+        ids_o, par_o, bounds = f(n, src, dst, np.ascontiguousarray(w), chn, n_chn)
+        ref = _chain_order_reference(n, src, dst, w, chn, n_chn)
+        assert n_chn > 100 and np.diff(bounds).max() > 20 and len(ids_o) == mask.sum()
+        for x, y in zip((ids_o, par_o, bounds), ref):
+            assert np.array_equal(x, y)

@@ -311,15 +311,6 @@ def _lex_order(P):
     return o
 
 
-def _first_per_label(labels, key, ids):
-    """For each label, the id with the largest key (ties: smallest id)."""
-    o = np.lexsort((ids, -key, labels))
-    lab_sorted = labels[o]
-    first = np.ones(len(o), dtype=bool)
-    first[1:] = lab_sorted[1:] != lab_sorted[:-1]
-    return ids[o[first]], lab_sorted[first]
-
-
 # ---------------------------------------------------------------------------------- helpers
 def _fit_line(X):
     c = X.mean(axis=0)
@@ -506,26 +497,12 @@ def _reconstruct_robust(
 def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     """Order every chain by geodesic distance from one end; find the regions its ends touch."""
     N = len(P)
-    chains: list[_Chain] = []
     if n_chn == 0:
-        return chains
-    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
-    a, b, w = src[inside], dst[inside], np.maximum(dd[inside], 1e-12)
-    g = coo_matrix((w, (a, b)), shape=(N, N)).tocsr()
-    ids = np.flatnonzero(chn >= 0)
-    lab = chn[ids]
-    # first point of every chain (lowest id)
-    _, first = np.unique(lab, return_index=True)
-    s0 = ids[first]
-    d0 = dijkstra(g, directed=False, indices=s0, min_only=True)
-    e1, e1lab = _first_per_label(lab, d0[ids], ids)
-    e1_by_chain = np.empty(n_chn, dtype=np.int64)
-    e1_by_chain[e1lab] = e1
-    d1 = dijkstra(g, directed=False, indices=e1_by_chain, min_only=True)
-    par = d1[ids]
-    o = np.lexsort((ids, par, lab))
-    ids_o, lab_o, par_o = ids[o], lab[o], par[o]
-    bounds = np.flatnonzero(np.r_[True, lab_o[1:] != lab_o[:-1], True])
+        return []
+    # compiled: each chain ordered by its distance along the linked graph (edges inside the
+    # chain) from its far end, the point farthest from its lowest id (a double sweep)
+    ids_o, par_o, bounds = _k.chain_order(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64),
+                                          np.ascontiguousarray(dd, dtype=np.float64), chn, int(n_chn))
 
     # contacts: linked edges between a chain point and a region point
     cmask = (chn[src] >= 0) & (reg[dst] >= 0)
@@ -551,17 +528,31 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     step = np.r_[np.sqrt(((P[ids_o[1:]] - P[ids_o[:-1]]) ** 2).sum(axis=1)), 0.0]
     step[bounds[1:] - 1] = 0.0  # the step from a chain's last point to the next chain's first
     plen = np.add.reduceat(step, bounds[:-1]) if n_chn else np.zeros(0)
-    for ci in range(n_chn):
-        seg = ids_o[bounds[ci]:bounds[ci + 1]]
-        if touch[ci] and ends[ci, 0] >= 0 and ends[ci, 0] == ends[ci, 1]:
-            _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
-                       float(par_o[bounds[ci + 1] - 1]), float(np.median(h[seg])))
-        if not touch[ci] or (ends[ci, 0] < 0 and ends[ci, 1] < 0):
-            # no region at either end (a contact in the middle only: a clump beside a loop)
-            chains.append(_loop_or_piece(P, h, g, seg, lin))
+    length = par_o[bounds[1:] - 1]  # the distance of each chain's far end
+    # a short chain given the same region at both ends may take another one at one side
+    for ci in np.flatnonzero(touch & (ends[:, 0] >= 0) & (ends[:, 0] == ends[:, 1])).tolist():
+        _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
+                   float(length[ci]), float(np.median(h[ids_o[bounds[ci]:bounds[ci + 1]]])))
+    # no region at either end (a contact in the middle only: a clump beside a loop)
+    free = ~touch | ((ends[:, 0] < 0) & (ends[:, 1] < 0))
+    # may zigzag (checked below)
+    zig = ~free & (np.diff(bounds) >= 6) & (plen > ZIGZAG * length * (1 - 1e-6))
+    special = np.flatnonzero(free | zig)
+    b = bounds.tolist()
+    e0, e1 = ends[:, 0].tolist(), ends[:, 1].tolist()
+    chains = [_Chain(ids_o[b[ci]:b[ci + 1]], [e0[ci], e1[ci]]) for ci in range(n_chn)]
+    if not len(special):
+        return chains
+    # the linked graph inside the chains below (their loops are cut open on it)
+    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
+    inside[inside] = np.isin(chn[src[inside]], special)
+    g = coo_matrix((np.maximum(dd[inside], 1e-12), (src[inside], dst[inside])), shape=(N, N)).tocsr()
+    for ci in special.tolist():
+        seg = ids_o[b[ci]:b[ci + 1]]
+        if free[ci]:
+            chains[ci] = _loop_or_piece(P, h, g, seg, lin)
             continue
-        if (len(seg) >= 6 and plen[ci] > ZIGZAG * float(par_o[bounds[ci + 1] - 1]) * (1 - 1e-6)
-                and _polylen(P[seg]) > ZIGZAG * float(par_o[bounds[ci + 1] - 1])):
+        if _polylen(P[seg]) > ZIGZAG * float(length[ci]):
             # the points ordered by distance from one end zigzag: the chain is still a cycle
             # in the linked graph (a loop whose links bypass the few points flagged on it):
             # it is cut open at its contact with the region it touches most, both ends there
@@ -570,9 +561,7 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
             r = int(ru[np.argmax(rc)])
             lp = _loop_or_piece(P, h, g, seg, lin, start=int(pts_c[regs_c == r].min()))
             if lp.closed:
-                chains.append(_Chain(lp.ids, [r, r]))
-                continue
-        chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
+                chains[ci] = _Chain(lp.ids, [r, r])
     return chains
 
 
