@@ -17,7 +17,7 @@ from ._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "chain_order", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
@@ -210,6 +210,28 @@ def _end_count(P, ids, lim):  # pragma: no cover - compiled
             break
         m += 1
     return m
+
+
+def _end_counts(P, h, flat, off, span):  # pragma: no cover - compiled
+    """How many points of each id list make its end portion (see robust._end_portion).
+
+    For list ``b``, ``ids = flat[off[b]:off[b + 1]]`` (running towards its end): the count of
+    :func:`_end_count` within ``span * h[ids[-1]]``, at least ``min(3, len(ids))``.
+
+    Returns
+    -------
+    (n_lists,) ndarray of int64
+    """
+    nb = off.shape[0] - 1
+    out = np.zeros(nb, dtype=np.int64)
+    for b in range(nb):
+        n = off[b + 1] - off[b]
+        if n == 0:
+            continue
+        ids = flat[off[b]:off[b + 1]]
+        m = _end_count(P, ids, span * h[ids[n - 1]])
+        out[b] = m if m > min(3, n) else min(3, n)
+    return out
 
 
 def _eig_sym_py(C, V, ev):  # pragma: no cover - compiled
@@ -1305,6 +1327,7 @@ _PY = {
     "shell_groups": _shell_groups,
     "csr_union": _csr_union,
     "end_count": _end_count,
+    "end_counts": _end_counts,
     "tangents": _tangents,
     "junction_nodes": _junction_nodes,
     "trim_ends": _trim_ends,
@@ -1366,6 +1389,7 @@ linked_edges = _dispatch("linked_edges")
 short_links = _dispatch("short_links")
 csr_union = _dispatch("csr_union")
 end_count = _dispatch("end_count")
+end_counts = _dispatch("end_counts")
 junction_nodes = _dispatch("junction_nodes")
 trim_ends = _dispatch("trim_ends")
 vote_agreement = _dispatch("vote_agreement")

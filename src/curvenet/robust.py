@@ -63,6 +63,7 @@ per input); every user-facing radius is a keyword of :func:`reconstruct_robust`.
 from __future__ import annotations
 
 import functools
+import itertools
 import time
 
 import numpy as np
@@ -70,6 +71,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
 from . import _robust_kernels as _k
+from . import _sigint
 from .errors import InputError
 from .network import Curve, CurveNetwork
 from .neighbors import build_tree, knn
@@ -659,12 +661,9 @@ def _assemble(P, h, chains, regions, prm):
                 ends_at[c.ends[s]].append((i, s))
 
     def valence():
-        v = np.zeros(len(regions), dtype=np.int64)
-        for i, c in enumerate(chains):
-            if alive[i] and not c.closed:
-                v[c.ends[0]] += 1
-                v[c.ends[1]] += 1
-        return v
+        e = [c.ends for c, a in zip(chains, alive) if a and not c.closed]
+        e = np.fromiter(itertools.chain.from_iterable(e), dtype=np.int64, count=2 * len(e))
+        return np.bincount(e, minlength=len(regions)).astype(np.int64)
 
     hmed = float(np.median(h))
     # a region passed through by one curve (valence 2) right next to a junction region is a
@@ -709,11 +708,16 @@ def _assemble(P, h, chains, regions, prm):
     # noise or sparse sampling (a T whose stem does not reach the bar): split that curve there
     _attach_dangling(P, h, chains, regions, alive, ends_at, valence(), prm)
     # prune short spurs and small isolated pieces
+    # a chain is short only if its polyline is under min_spur (a loop: twice) times its largest
+    # spacing: the exact tests below run only for those (the sums here are within rounding)
+    length, hmax = _chain_lengths(P, h, chains)
+    short_loop = (length <= 2 * prm["min_spur"] * hmax * (1 + 1e-9)).tolist()
+    short = (length <= prm["min_spur"] * hmax * (1 + 1e-9)).tolist()
     for _ in range(3):
         v = valence()
         changed = False
         for i, c in enumerate(chains):
-            if not alive[i]:
+            if not alive[i] or not short_loop[i]:
                 continue
             if c.closed:
                 hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
@@ -723,7 +727,7 @@ def _assemble(P, h, chains, regions, prm):
                 continue
             a, b = c.ends
             free_a, free_b = v[a] == 1, v[b] == 1
-            if not (free_a or free_b):
+            if not (free_a or free_b) or not short[i]:
                 continue
             hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
             length = _polylen(P[c.ids])
@@ -798,6 +802,7 @@ def _assemble(P, h, chains, regions, prm):
         fids[r] = live[ci].ids if s == 1 else live[ci].ids[::-1]  # ids run towards the region
     fr = [r for r in fr if _fork_possible(P, h, fids[r], regions[r], prm)]
     fpaths = dict(zip(fr, _region_paths(P, [(regions[r], int(fids[r][-1])) for r in fr], prm)))
+    fm = dict(zip(fids, _end_counts(P, h, list(fids.values()), 4.0).tolist()))  # _free_end's
     for r in range(len(regions)):
         if v[r] == 0:
             continue
@@ -815,7 +820,7 @@ def _assemble(P, h, chains, regions, prm):
                 extra.extend((len(node_pos) - 1, lf) for lf in leaves)
                 node_of[r] = len(node_pos) - 1
                 continue
-            ext, pos = _free_end(P, h, ids, regions[r])
+            ext, pos = _free_end(P, h, ids, regions[r], m=fm[r])
             end_ext[(ci, s)] = ext
             node_pos.append(pos)
         else:
@@ -842,10 +847,11 @@ def _assemble(P, h, chains, regions, prm):
     opn = [ci for ci, c in enumerate(live) if not c.closed]
     trim = {}
     if opn:
-        ends = np.array([[new_id[node_of[live[ci].ends[0]]], new_id[node_of[live[ci].ends[1]]]]
-                         for ci in opn], dtype=np.int64)
-        do0 = np.array([(ci, 0) not in end_ext and v[live[ci].ends[0]] >= 2 for ci in opn])
-        do1 = np.array([(ci, 1) not in end_ext and v[live[ci].ends[1]] >= 2 for ci in opn])
+        nid, vl = new_id.tolist(), v.tolist()
+        ends = np.array([[nid[node_of[live[ci].ends[0]]], nid[node_of[live[ci].ends[1]]]]
+                         for ci in opn], dtype=np.int64).reshape(-1, 2)
+        do0 = np.array([(ci, 0) not in end_ext and vl[live[ci].ends[0]] >= 2 for ci in opn])
+        do1 = np.array([(ci, 1) not in end_ext and vl[live[ci].ends[1]] >= 2 for ci in opn])
         flat = np.concatenate([live[ci].ids for ci in opn]).astype(np.int64, copy=False)
         off = np.r_[0, np.cumsum([len(live[ci].ids) for ci in opn])].astype(np.int64)
         lo, hi = _k.trim_ends(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, do0, do1,
@@ -882,6 +888,24 @@ def _assemble(P, h, chains, regions, prm):
         curves.append(cv)
     curves = _sort_curves(curves)
     return nodes, curves
+
+
+def _chain_lengths(P, h, chains):
+    """Polyline length (summed per chain, within rounding of :func:`_polylen`) and largest
+    spacing of every chain; a chain without points gets length 0 and spacing inf."""
+    lens = np.array([len(c.ids) for c in chains], dtype=np.int64)
+    length = np.zeros(len(chains))
+    hmax = np.full(len(chains), np.inf)
+    nz = np.flatnonzero(lens > 0)
+    if len(nz):
+        flat = np.concatenate([chains[i].ids for i in nz.tolist()]).astype(np.int64, copy=False)
+        off = np.r_[0, np.cumsum(lens[nz])]
+        step = np.zeros(len(flat))
+        step[:-1] = np.sqrt(((P[flat[1:]] - P[flat[:-1]]) ** 2).sum(axis=1))
+        step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
+        length[nz] = np.add.reduceat(step, off[:-1])
+        hmax[nz] = np.maximum.reduceat(h[flat], off[:-1])
+    return length, hmax
 
 
 def _open_curves(P, nodes, ids, nids, a, b, last0, last1):
@@ -1037,13 +1061,17 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     ids = np.concatenate([regions[r] for r in big])
     tree = cKDTree(P[ids])
     noise = prm.get("_noise", 0.0)
+    # a tip's chain end and region do not change below before its turn (a merge only moves
+    # the ends at the tip merged): the end portions of all in one call
+    one = []
     for r in tips:
         inc = [(i, s) for i, s in ends_at[r] if alive[i] and chains[i].ends[s] == r]
-        if len(inc) != 1:
-            continue
-        i, s = inc[0]
-        cids = chains[i].ids if s == 1 else chains[i].ids[::-1]  # running towards the tip
-        _, tip = _free_end(P, h, cids, regions[r])  # where the free end's node would be
+        if len(inc) == 1:
+            i, s = inc[0]
+            one.append((r, i, s, chains[i].ids if s == 1 else chains[i].ids[::-1]))  # towards the tip
+    ms = _end_counts(P, h, [x[3] for x in one], 4.0).tolist()
+    for (r, i, s, cids), m in zip(one, ms):
+        _, tip = _free_end(P, h, cids, regions[r], m=m)  # where the free end's node would be
         gap = prm["link"] * 1.2 * float(h[cids[-1]]) + GAP * noise
         d, k = tree.query(tip, distance_upper_bound=gap)
         if not np.isfinite(d):
@@ -1174,30 +1202,55 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     noise = prm.get("_noise", 0.0)
     tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
             for s in (0, 1) if v[c.ends[s]] == 1]
-    for i, s in tips:
+    if not tips:
+        return
+    # what each tip needs, for all at once: a tip still to be handled has the chain end and
+    # region it had here (a move or a split changes only the valence-1 ends it involves), and
+    # its chain's points unless that chain was split meanwhile (then its end is redone below)
+    tchain = [chains[i] for i, _ in tips]
+    tids = [c.ids if s == 1 else c.ids[::-1] for c, (_, s) in zip(tchain, tips)]  # towards the tip
+    tms = _end_counts(P, h, tids, 3.0).tolist()
+    tpts = [np.r_[regions[c.ends[s]], ids[-1]].astype(np.int64) for c, (_, s), ids in zip(tchain, tips, tids)]
+    reach_of = ATT * prm["link"] * h[[int(ids[-1]) for ids in tids]] + GAP * noise
+    # chain points within reach of each tip point (one threaded query)
+    allp = np.concatenate(tpts)
+    with _sigint.held():
+        near = tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
+    cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
+    qall = pts[np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))]
+    qoff = np.r_[0, np.cumsum(cnt)]
+    toff = np.r_[0, np.cumsum([len(x) for x in tpts])].tolist()
+    for t_, (i, s) in enumerate(tips):
         c = chains[i]
         if not alive[i] or c.closed or v[c.ends[s]] != 1:
             continue
         r = c.ends[s]
         ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
         e = int(ids[-1])
-        hl = float(h[e])
-        E = _end_portion(P, h, ids, span=3.0)
+        same = c is tchain[t_]
+        E = _end_portion(P, h, ids, span=3.0, m=tms[t_] if same else None)
         u = E[0] - E[-1]
         nu = np.linalg.norm(u)
         if nu == 0:
             continue
         u = u / nu
-        reach = ATT * prm["link"] * hl + GAP * noise
-        tip_pts = np.r_[regions[r], e].astype(np.int64)
         # chain points of other chains within reach of the tip, ahead of it (within 45 degrees
         # of its direction): the nearest (then lowest id) is where it attaches
-        near = tree.query_ball_point(P[tip_pts], reach)
-        cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
-        if not cnt.sum():
-            continue
-        q = pts[np.concatenate([np.asarray(x, dtype=np.int64) for x in near])]
-        tp = np.repeat(tip_pts, cnt)
+        if same:
+            tip_pts = tpts[t_]
+            a0, a1 = toff[t_], toff[t_ + 1]
+            if qoff[a1] == qoff[a0]:
+                continue
+            q = qall[qoff[a0]:qoff[a1]]
+            tp = np.repeat(tip_pts, cnt[a0:a1])
+        else:  # its chain was split meanwhile: queried again
+            tip_pts = np.r_[regions[r], e].astype(np.int64)
+            near_t = tree.query_ball_point(P[tip_pts], ATT * prm["link"] * float(h[e]) + GAP * noise)
+            cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
+            if not cnt_t.sum():
+                continue
+            q = pts[np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])]
+            tp = np.repeat(tip_pts, cnt_t)
         j = owner[q]
         vq = P[q] - P[e]
         ok = (j >= 0) & (j != i) & ((vq @ u) >= np.cos(np.radians(45.0)) * np.sqrt((vq * vq).sum(axis=1)))
@@ -1272,20 +1325,47 @@ def _order_between(P, ids, pa, pb):
     return ids[np.lexsort((ids, proj))]
 
 
-def _end_portion(P, h, ids, span=3.0):
-    """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h."""
+def _end_portion(P, h, ids, span=3.0, m=None):
+    """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h.
+
+    ``m``: their number when already known (:func:`_end_counts`).
+    """
     n = len(ids)
     if n < 2:
         return P[ids[::-1]]
-    hl = float(h[ids[-1]])
-    # arc length summed backwards from the end, only as far as needed (compiled kernel)
-    m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(3, n))
+    if m is None:
+        hl = float(h[ids[-1]])
+        # arc length summed backwards from the end, only as far as needed (compiled kernel)
+        m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(3, n))
     return P[ids[: -m - 1: -1]]
 
 
-def _free_end(P, h, ids, rid):
-    """Extension ids (ordered outward) and node position of a free end."""
-    E = _end_portion(P, h, ids, span=4.0)
+def _end_counts(P, h, lists, span):
+    """The number of points of :func:`_end_portion` of every id list, in one compiled call.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+    lists : list of (n_i,) ndarray of int
+        Id lists, each running towards its end.
+    span : float
+
+    Returns
+    -------
+    (len(lists),) ndarray of int64
+    """
+    if not lists:
+        return np.zeros(0, dtype=np.int64)
+    flat = np.concatenate(lists).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
+    return _k.end_counts(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, float(span))
+
+
+def _free_end(P, h, ids, rid, m=None):
+    """Extension ids (ordered outward) and node position of a free end (``m``: the count of
+    its end portion, when known)."""
+    E = _end_portion(P, h, ids, span=4.0, m=m)
     tip = E[0]
     if len(E) >= 2:
         u = E[0] - E[-1]
