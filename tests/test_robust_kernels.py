@@ -331,3 +331,18 @@ def test_chain_order_matches_scipy_dijkstra(py):
         assert n_chn > 100 and np.diff(bounds).max() > 20 and len(ids_o) == mask.sum()
         for x, y in zip((ids_o, par_o, bounds), ref):
             assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_end_counts_match_end_portion(py):
+    """The batched end counts are the lengths of robust._end_portion, list by list."""
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(200, 3))
+    h = rng.uniform(0.5, 2.0, size=200)
+    lists = [rng.integers(0, 200, size=int(rng.integers(0, 30))) for _ in range(300)]
+    flat = np.concatenate(lists).astype(np.int64)
+    off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
+    f = K._PY["end_counts"] if py else K.end_counts
+    for span in (0.0, 3.0, 4.0):
+        m = f(P, h, flat, off, span)
+        assert [int(x) for x in m] == [len(R._end_portion(P, h, ids, span=span)) for ids in lists]
