@@ -346,3 +346,33 @@ def test_end_counts_match_end_portion(py):
     for span in (0.0, 3.0, 4.0):
         m = f(P, h, flat, off, span)
         assert [int(x) for x in m] == [len(R._end_portion(P, h, ids, span=span)) for ids in lists]
+
+
+def _components_reference(n, a, b, mask):
+    """scipy's connected components, relabelled by lowest point (the former robust._components)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    sel = mask[a] & mask[b]
+    g = coo_matrix((np.ones(int(sel.sum())), (a[sel], b[sel])), shape=(n, n)).tocsr()
+    _, lab = connected_components(g, directed=False)
+    ids = np.flatnonzero(mask)
+    uniq, first = np.unique(lab[ids], return_index=True)
+    remap = np.full(lab.max() + 1, -1, dtype=np.int64)
+    remap[uniq[np.argsort(ids[first])]] = np.arange(len(uniq))
+    out = np.full(n, -1, dtype=np.int64)
+    out[ids] = remap[lab[ids]]
+    return out, len(uniq)
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_components_match_scipy(py):
+    rng = np.random.default_rng(2)
+    f = K._PY["components"] if py else K.components
+    for n, m, frac in ((1, 0, 1.0), (50, 0, 0.5), (3000, 2500, 0.8), (3000, 6000, 0.9), (500, 3000, 0.3)):
+        a = rng.integers(0, n, size=m)
+        b = rng.integers(0, n, size=m)
+        mask = rng.uniform(size=n) < frac
+        lab, count = f(n, a, b, mask)
+        ref, rcount = _components_reference(n, a, b, mask)
+        assert count == rcount and np.array_equal(lab, ref)

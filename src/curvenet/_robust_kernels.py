@@ -17,7 +17,7 @@ from ._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
@@ -539,6 +539,49 @@ def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
                 b[e] = idx[p, j]
                 e += 1
     return a, b
+
+
+def _components(n, a, b, mask):  # pragma: no cover - compiled
+    """Connected components of the points in ``mask`` joined by the edges ``(a[i], b[i])``
+    with both ends in ``mask`` (union-find), numbered in the order of their lowest point.
+
+    Returns
+    -------
+    lab : (n,) ndarray of int64
+        Component of every point, -1 outside ``mask``.
+    count : int
+    """
+    parent = np.arange(n)
+    for i in range(a.shape[0]):
+        x = a[i]
+        y = b[i]
+        if not (mask[x] and mask[y]):
+            continue
+        while parent[x] != x:  # the roots, halving the paths on the way
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        while parent[y] != y:
+            parent[y] = parent[parent[y]]
+            y = parent[y]
+        if x < y:
+            parent[y] = x
+        elif y < x:
+            parent[x] = y
+    lab = np.full(n, -1, dtype=np.int64)
+    count = 0
+    for p in range(n):
+        if not mask[p]:
+            continue
+        x = p
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        if x == p:  # the lowest point of its component is its root: the first one met
+            lab[p] = count
+            count += 1
+        else:
+            lab[p] = lab[x]
+    return lab, count
 
 
 def _chain_order(n, src, dst, dd, chn, n_chn):  # pragma: no cover - compiled
@@ -1320,6 +1363,7 @@ _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
 # the plain-Python functions, kept under their own names (the compiled ones replace some globals)
 _PY = {
+    "components": _components,
     "chain_order": _chain_order,
     "chain_ends": _chain_ends,
     "linked_edges": _linked_edges,
@@ -1383,6 +1427,7 @@ def _dispatch(name: str):
     return run
 
 
+components = _dispatch("components")
 chain_order = _dispatch("chain_order")
 chain_ends = _dispatch("chain_ends")
 linked_edges = _dispatch("linked_edges")

@@ -68,7 +68,7 @@ import time
 
 import numpy as np
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.sparse.csgraph import dijkstra
 
 from . import _robust_kernels as _k
 from . import _sigint
@@ -268,22 +268,12 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
 def _components(n, a, b, mask):
     """Connected components of the points in ``mask`` joined by edges (a, b) inside ``mask``.
 
-    Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id.
+    Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id,
+    and their number (compiled union-find).
     """
-    sel = mask[a] & mask[b]
-    g = coo_matrix((np.ones(int(sel.sum())), (a[sel], b[sel])), shape=(n, n)).tocsr()
-    _, lab = connected_components(g, directed=False)
-    lab = np.where(mask, lab, -1)
-    ids = np.flatnonzero(mask)
-    # relabel by first occurrence (deterministic, independent of scipy's numbering)
-    _, first = np.unique(lab[ids], return_index=True)
-    order = np.argsort(ids[first])
-    remap = np.full(lab.max() + 2 if len(ids) else 1, -1, dtype=np.int64)
-    uniq = np.unique(lab[ids])
-    remap[uniq[order]] = np.arange(len(uniq))
-    out = np.full(n, -1, dtype=np.int64)
-    out[ids] = remap[lab[ids]]
-    return out, len(uniq)
+    lab, count = _k.components(int(n), np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64),
+                               np.ascontiguousarray(mask, dtype=np.bool_))
+    return lab, int(count)
 
 
 def _lex_order(P):
@@ -967,10 +957,11 @@ def _sort_curves(curves):
     decimals (the first for a curve of one point); ties keep their order."""
     if not curves:
         return curves
-    se = np.array([[-1 if c.start is None else c.start, -1 if c.end is None else c.end] for c in curves],
-                  dtype=np.int64)
-    X = np.round(np.array([c.points[min(1, len(c.points) - 1)] for c in curves]), 9)
-    o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (se[:, 1], se[:, 0]))
+    n = len(curves)
+    st = np.fromiter((-1 if c.start is None else c.start for c in curves), dtype=np.int64, count=n)
+    en = np.fromiter((-1 if c.end is None else c.end for c in curves), dtype=np.int64, count=n)
+    X = np.round(np.stack([c.points[min(1, len(c.points) - 1)] for c in curves]), 9)
+    o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (en, st))
     return [curves[i] for i in o.tolist()]
 
 
