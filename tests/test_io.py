@@ -178,3 +178,31 @@ def test_output_errors(tmp_path, net):
     assert inp.read_text() == "keep"
     with pytest.raises(FormatError, match="unknown output extension"):
         write_network(net, tmp_path / "n.xyz")
+
+
+def test_json_fast_and_plain_writers_agree(monkeypatch, net):
+    """With orjson (curvenet[fast]) and without, the JSON reads back to the same values, bit
+    for bit (the shortest round-trip text of every float), and NaN is refused by both."""
+    import sys
+
+    from curvenet import reconstruct, synth
+    from curvenet.io.network_io import network_to_json
+
+    pytest.importorskip("orjson")
+    pts, _ = synth.sample(synth.model("tree"), noise=0.2, rng=1)
+    big = reconstruct(pts)
+    odd = CurveNetwork(np.array([[1e-5, -0.0, 1e16], [0.1, 0.2, 0.30000000000000004]]),
+                       [Curve(np.array([[1e-5, -0.0, 1e16], [1 / 3, 2e-308, 5e-324],
+                                        [0.1, 0.2, 0.30000000000000004]]), 0, 1),
+                        Curve(np.zeros((0, 3)), None, None, closed=True)],
+                       {"k": np.int64(3), "x": np.float64(0.1), "none": None}, {})
+    for n in (net, big, odd):
+        fast = network_to_json(n)
+        with monkeypatch.context() as m:
+            m.setitem(sys.modules, "orjson", None)  # import orjson fails: the json module writes
+            plain = network_to_json(n)
+        assert fast != plain and json.loads(fast) == json.loads(plain)
+        assert fast.endswith("}\n")
+    odd.curves[0].points[1, 1] = np.nan
+    with pytest.raises(ValueError):
+        network_to_json(odd)

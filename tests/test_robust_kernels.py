@@ -340,3 +340,92 @@ def test_shell_groups_of_a_subset_equal_those_of_all(cloud):
     assert np.array_equal(part[sub], full[sub])
     rest = np.setdiff1d(np.arange(len(P)), sub)
     assert np.all(part[rest] == 0) and np.any(full[sub] != 2)
+
+
+def _chain_order_reference(n, src, dst, dd, chn, n_chn):
+    """scipy's double Dijkstra sweep of every chain, numpy (the former robust._order_chains)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
+    g = coo_matrix((np.maximum(dd[inside], 1e-12), (src[inside], dst[inside])), shape=(n, n)).tocsr()
+    ids = np.flatnonzero(chn >= 0)
+    lab = chn[ids]
+    _, first = np.unique(lab, return_index=True)
+    d0 = dijkstra(g, directed=False, indices=ids[first], min_only=True)
+    o = np.lexsort((ids, -d0[ids], lab))
+    ls = lab[o]
+    f = np.r_[True, ls[1:] != ls[:-1]]
+    e1 = np.empty(n_chn, dtype=np.int64)
+    e1[ls[f]] = ids[o[f]]
+    d1 = dijkstra(g, directed=False, indices=e1, min_only=True)
+    par = d1[ids]
+    o = np.lexsort((ids, par, lab))
+    return ids[o], par[o], np.flatnonzero(np.r_[True, lab[o][1:] != lab[o][:-1], True])
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_chain_order_matches_scipy_dijkstra(py):
+    """Chains of a random linked graph (cycles, branches, single points) ordered as by scipy's
+    dijkstra, bit for bit, compiled and as plain Python; also with many equal distances."""
+    rng = np.random.default_rng(5)
+    P = rng.uniform(size=(3000, 3))
+    dist, idx = knn(P, 6)
+    keep = dist < np.median(dist)  # sparse: many components, paths and cycles
+    n = len(P)
+    src = np.repeat(np.arange(n), 6)[keep.ravel()]
+    dst, dd = idx[keep], dist[keep]
+    mask = rng.uniform(size=n) < 0.9  # "flagged" points cut the graph further
+    chn, n_chn = R._components(n, src, dst, mask)
+    f = K._PY["chain_order"] if py else K.chain_order
+    for w in (dd, np.round(dd / dd.mean(), 1), np.zeros_like(dd)):
+        ids_o, par_o, bounds = f(n, src, dst, np.ascontiguousarray(w), chn, n_chn)
+        ref = _chain_order_reference(n, src, dst, w, chn, n_chn)
+        assert n_chn > 100 and np.diff(bounds).max() > 20 and len(ids_o) == mask.sum()
+        for x, y in zip((ids_o, par_o, bounds), ref):
+            assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_end_counts_match_end_portion(py):
+    """The batched end counts are the lengths of robust._end_portion, list by list."""
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(200, 3))
+    h = rng.uniform(0.5, 2.0, size=200)
+    lists = [rng.integers(0, 200, size=int(rng.integers(0, 30))) for _ in range(300)]
+    flat = np.concatenate(lists).astype(np.int64)
+    off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
+    f = K._PY["end_counts"] if py else K.end_counts
+    for span in (0.0, 3.0, 4.0):
+        m = f(P, h, flat, off, span)
+        assert [int(x) for x in m] == [len(R._end_portion(P, h, ids, span=span)) for ids in lists]
+
+
+def _components_reference(n, a, b, mask):
+    """scipy's connected components, relabelled by lowest point (the former robust._components)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    sel = mask[a] & mask[b]
+    g = coo_matrix((np.ones(int(sel.sum())), (a[sel], b[sel])), shape=(n, n)).tocsr()
+    _, lab = connected_components(g, directed=False)
+    ids = np.flatnonzero(mask)
+    uniq, first = np.unique(lab[ids], return_index=True)
+    remap = np.full(lab.max() + 1, -1, dtype=np.int64)
+    remap[uniq[np.argsort(ids[first])]] = np.arange(len(uniq))
+    out = np.full(n, -1, dtype=np.int64)
+    out[ids] = remap[lab[ids]]
+    return out, len(uniq)
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_components_match_scipy(py):
+    rng = np.random.default_rng(2)
+    f = K._PY["components"] if py else K.components
+    for n, m, frac in ((1, 0, 1.0), (50, 0, 0.5), (3000, 2500, 0.8), (3000, 6000, 0.9), (500, 3000, 0.3)):
+        a = rng.integers(0, n, size=m)
+        b = rng.integers(0, n, size=m)
+        mask = rng.uniform(size=n) < frac
+        lab, count = f(n, a, b, mask)
+        ref, rcount = _components_reference(n, a, b, mask)
+        assert count == rcount and np.array_equal(lab, ref)

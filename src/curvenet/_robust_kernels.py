@@ -17,7 +17,7 @@ from ._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "end_count", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
+__all__ = ["shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
@@ -212,6 +212,28 @@ def _end_count(P, ids, lim):  # pragma: no cover - compiled
             break
         m += 1
     return m
+
+
+def _end_counts(P, h, flat, off, span):  # pragma: no cover - compiled
+    """How many points of each id list make its end portion (see robust._end_portion).
+
+    For list ``b``, ``ids = flat[off[b]:off[b + 1]]`` (running towards its end): the count of
+    :func:`_end_count` within ``span * h[ids[-1]]``, at least ``min(3, len(ids))``.
+
+    Returns
+    -------
+    (n_lists,) ndarray of int64
+    """
+    nb = off.shape[0] - 1
+    out = np.zeros(nb, dtype=np.int64)
+    for b in range(nb):
+        n = off[b + 1] - off[b]
+        if n == 0:
+            continue
+        ids = flat[off[b]:off[b + 1]]
+        m = _end_count(P, ids, span * h[ids[n - 1]])
+        out[b] = m if m > min(3, n) else min(3, n)
+    return out
 
 
 def _eig_sym_py(C, V, ev):  # pragma: no cover - compiled
@@ -587,6 +609,223 @@ def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
                 b[e] = idx[p, j]
                 e += 1
     return a, b
+
+
+def _components(n, a, b, mask):  # pragma: no cover - compiled
+    """Connected components of the points in ``mask`` joined by the edges ``(a[i], b[i])``
+    with both ends in ``mask`` (union-find), numbered in the order of their lowest point.
+
+    Returns
+    -------
+    lab : (n,) ndarray of int64
+        Component of every point, -1 outside ``mask``.
+    count : int
+    """
+    parent = np.arange(n)
+    for i in range(a.shape[0]):
+        x = a[i]
+        y = b[i]
+        if not (mask[x] and mask[y]):
+            continue
+        while parent[x] != x:  # the roots, halving the paths on the way
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        while parent[y] != y:
+            parent[y] = parent[parent[y]]
+            y = parent[y]
+        if x < y:
+            parent[y] = x
+        elif y < x:
+            parent[x] = y
+    lab = np.full(n, -1, dtype=np.int64)
+    count = 0
+    for p in range(n):
+        if not mask[p]:
+            continue
+        x = p
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        if x == p:  # the lowest point of its component is its root: the first one met
+            lab[p] = count
+            count += 1
+        else:
+            lab[p] = lab[x]
+    return lab, count
+
+
+def _chain_order(n, src, dst, dd, chn, n_chn):  # pragma: no cover - compiled
+    """Every chain ordered by geodesic distance from one end (see robust._order_chains).
+
+    Chain ``c`` is the set of points with ``chn == c`` (-1: none), joined by the edges
+    ``(src[i], dst[i])`` with both ends in it, undirected, of length ``max(dd[i], 1e-12)``.
+    Its far end is the point geodesically farthest from its lowest id (ties: the lowest id);
+    its points are ordered by their geodesic distance from the far end (ties: by id). Both
+    are Dijkstra runs inside the chain: a distance is the smallest sum of edge lengths, added
+    up along a path from its source (what scipy's ``dijkstra`` gives, bit for bit).
+
+    Parameters
+    ----------
+    n : int
+        Number of points.
+    src, dst : (E,) ndarray of int64
+        Edges.
+    dd : (E,) ndarray of float
+        Their lengths.
+    chn : (n,) ndarray of int64
+        Chain of every point (-1: none); every chain is connected by its edges.
+    n_chn : int
+        Number of chains.
+
+    Returns
+    -------
+    ids_o : (M,) ndarray of int64
+        The points of all chains (M of them), chain by chain, each chain in order.
+    par_o : (M,) ndarray of float
+        Their distance from their chain's far end.
+    bounds : (n_chn + 1,) ndarray of int64
+        Chain ``c`` is ``ids_o[bounds[c]:bounds[c + 1]]``.
+    """
+    m = src.shape[0]
+    # the undirected adjacency of the chain edges (counting sort)
+    deg = np.zeros(n + 1, dtype=np.int64)
+    for i in range(m):
+        a = src[i]
+        b = dst[i]
+        if chn[a] >= 0 and chn[a] == chn[b]:
+            deg[a + 1] += 1
+            deg[b + 1] += 1
+    for i in range(n):
+        deg[i + 1] += deg[i]
+    nbr = np.empty(deg[n], dtype=np.int64)
+    wt = np.empty(deg[n], dtype=np.float64)
+    fill = deg[:-1].copy()
+    for i in range(m):
+        a = src[i]
+        b = dst[i]
+        if chn[a] >= 0 and chn[a] == chn[b]:
+            w = dd[i] if dd[i] > 1e-12 else 1e-12
+            nbr[fill[a]] = b
+            wt[fill[a]] = w
+            fill[a] += 1
+            nbr[fill[b]] = a
+            wt[fill[b]] = w
+            fill[b] += 1
+    # the members of each chain, ascending
+    bounds = np.zeros(n_chn + 1, dtype=np.int64)
+    for p in range(n):
+        if chn[p] >= 0:
+            bounds[chn[p] + 1] += 1
+    for c in range(n_chn):
+        bounds[c + 1] += bounds[c]
+    mem = np.empty(bounds[n_chn], dtype=np.int64)
+    fc = bounds[:-1].copy()
+    for p in range(n):
+        c = chn[p]
+        if c >= 0:
+            mem[fc[c]] = p
+            fc[c] += 1
+    # heap room: one entry per push, at most 1 + the adjacency size of the chain
+    cap = 1
+    for c in range(n_chn):
+        x = 1
+        for j in range(bounds[c], bounds[c + 1]):
+            x += deg[mem[j] + 1] - deg[mem[j]]
+        if x > cap:
+            cap = x
+    heap_k = np.empty(cap, dtype=np.float64)
+    heap_v = np.empty(cap, dtype=np.int64)
+    gd = np.zeros(n, dtype=np.float64)
+    mark = np.full(n, -1, dtype=np.int64)  # == run when gd is set in that run
+    done = np.full(n, -1, dtype=np.int64)  # == run when settled in that run
+    ids_o = np.empty(bounds[n_chn], dtype=np.int64)
+    par_o = np.empty(bounds[n_chn], dtype=np.float64)
+    for c in range(n_chn):
+        b0 = bounds[c]
+        b1 = bounds[c + 1]
+        s = mem[b0]
+        for rep in range(2):
+            run = 2 * c + rep
+            # Dijkstra from s (lazy deletion binary heap, ties by id); settled order into ids_o
+            hs = 1
+            heap_k[0] = 0.0
+            heap_v[0] = s
+            mark[s] = run
+            gd[s] = 0.0
+            k = b0
+            while hs > 0:
+                key = heap_k[0]
+                a = heap_v[0]
+                hs -= 1
+                if hs > 0:
+                    lk = heap_k[hs]
+                    lv = heap_v[hs]
+                    i = 0
+                    while True:
+                        c1 = 2 * i + 1
+                        if c1 >= hs:
+                            break
+                        c2 = c1 + 1
+                        if c2 < hs and (heap_k[c2] < heap_k[c1] or (heap_k[c2] == heap_k[c1] and heap_v[c2] < heap_v[c1])):
+                            c1 = c2
+                        if heap_k[c1] < lk or (heap_k[c1] == lk and heap_v[c1] < lv):
+                            heap_k[i] = heap_k[c1]
+                            heap_v[i] = heap_v[c1]
+                            i = c1
+                        else:
+                            break
+                    heap_k[i] = lk
+                    heap_v[i] = lv
+                if done[a] == run or key > gd[a]:
+                    continue
+                done[a] = run
+                ids_o[k] = a
+                par_o[k] = key
+                k += 1
+                for e in range(deg[a], deg[a + 1]):
+                    b = nbr[e]
+                    if done[b] == run:
+                        continue
+                    nk = key + wt[e]
+                    if mark[b] == run and gd[b] <= nk:
+                        continue
+                    mark[b] = run
+                    gd[b] = nk
+                    i = hs
+                    hs += 1
+                    while i > 0:
+                        par = (i - 1) // 2
+                        if heap_k[par] > nk or (heap_k[par] == nk and heap_v[par] > b):
+                            heap_k[i] = heap_k[par]
+                            heap_v[i] = heap_v[par]
+                            i = par
+                        else:
+                            break
+                    heap_k[i] = nk
+                    heap_v[i] = b
+            if rep == 0:
+                # the far end: the largest distance, ties the lowest id
+                best = -1.0
+                for j in range(b0, b1):
+                    p = mem[j]
+                    if gd[p] > best:
+                        best = gd[p]
+                        s = p
+        # settled by distance (non-decreasing); equal distances by id
+        i = b0
+        while i < b1:
+            j = i + 1
+            while j < b1 and par_o[j] == par_o[i]:
+                j += 1
+            for x in range(i + 1, j):  # insertion sort (ties are few and short)
+                v = ids_o[x]
+                y = x - 1
+                while y >= i and ids_o[y] > v:
+                    ids_o[y + 1] = ids_o[y]
+                    y -= 1
+                ids_o[y + 1] = v
+            i = j
+    return ids_o, par_o, bounds
 
 
 def _chain_ends(h, ids_o, par_o, bounds, c_reg, c_par, cb):  # pragma: no cover - compiled
@@ -1194,12 +1433,15 @@ _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
 # the plain-Python functions, kept under their own names (the compiled ones replace some globals)
 _PY = {
+    "components": _components,
+    "chain_order": _chain_order,
     "chain_ends": _chain_ends,
     "linked_edges": _linked_edges,
     "short_links": _short_links,
     "shell_groups": _shell_groups,
     "csr_union": _csr_union,
     "end_count": _end_count,
+    "end_counts": _end_counts,
     "tangents": _tangents,
     "junction_nodes": _junction_nodes,
     "trim_ends": _trim_ends,
@@ -1256,11 +1498,14 @@ def _dispatch(name: str):
     return run
 
 
+components = _dispatch("components")
+chain_order = _dispatch("chain_order")
 chain_ends = _dispatch("chain_ends")
 linked_edges = _dispatch("linked_edges")
 short_links = _dispatch("short_links")
 csr_union = _dispatch("csr_union")
 end_count = _dispatch("end_count")
+end_counts = _dispatch("end_counts")
 junction_nodes = _dispatch("junction_nodes")
 trim_ends = _dispatch("trim_ends")
 vote_agreement = _dispatch("vote_agreement")

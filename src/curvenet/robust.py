@@ -70,13 +70,15 @@ per input); every user-facing radius is a keyword of :func:`reconstruct_robust`.
 from __future__ import annotations
 
 import functools
+import itertools
 import time
 
 import numpy as np
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.sparse.csgraph import dijkstra
 
 from . import _robust_kernels as _k
+from . import _sigint
 from .errors import InputError
 from .network import Curve, CurveNetwork
 from .neighbors import build_tree, knn
@@ -282,31 +284,39 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
 def _components(n, a, b, mask):
     """Connected components of the points in ``mask`` joined by edges (a, b) inside ``mask``.
 
-    Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id.
+    Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id,
+    and their number (compiled union-find).
     """
-    sel = mask[a] & mask[b]
-    g = coo_matrix((np.ones(int(sel.sum())), (a[sel], b[sel])), shape=(n, n)).tocsr()
-    _, lab = connected_components(g, directed=False)
-    lab = np.where(mask, lab, -1)
-    ids = np.flatnonzero(mask)
-    # relabel by first occurrence (deterministic, independent of scipy's numbering)
-    _, first = np.unique(lab[ids], return_index=True)
-    order = np.argsort(ids[first])
-    remap = np.full(lab.max() + 2 if len(ids) else 1, -1, dtype=np.int64)
-    uniq = np.unique(lab[ids])
-    remap[uniq[order]] = np.arange(len(uniq))
-    out = np.full(n, -1, dtype=np.int64)
-    out[ids] = remap[lab[ids]]
-    return out, len(uniq)
+    lab, count = _k.components(int(n), np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64),
+                               np.ascontiguousarray(mask, dtype=np.bool_))
+    return lab, int(count)
 
 
-def _first_per_label(labels, key, ids):
-    """For each label, the id with the largest key (ties: smallest id)."""
-    o = np.lexsort((ids, -key, labels))
-    lab_sorted = labels[o]
-    first = np.ones(len(o), dtype=bool)
-    first[1:] = lab_sorted[1:] != lab_sorted[:-1]
-    return ids[o[first]], lab_sorted[first]
+def _lex_order(P):
+    """``np.lexsort(P.T[::-1])``: the rows sorted by the first coordinate, then the next, ...,
+    ties by index (the same permutation, faster: one sort on the first coordinate, then the few
+    rows tied there sorted by the others).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray of float
+        Finite coordinates.
+
+    Returns
+    -------
+    (N,) ndarray of int64
+    """
+    o = np.argsort(P[:, 0])  # not stable: the tied rows are put in index order below
+    x = P[o, 0]
+    tie = x[1:] == x[:-1]
+    if not tie.any():
+        return o
+    pos = np.flatnonzero(np.r_[False, tie] | np.r_[tie, False])  # rows in a run of equal x
+    run = np.cumsum(np.r_[True, ~tie])[pos]
+    sub = o[pos]
+    keys = (sub,) + tuple(P[sub, c] for c in range(P.shape[1] - 1, 0, -1)) + (run,)
+    o[pos] = sub[np.lexsort(keys)]
+    return o
 
 
 # ---------------------------------------------------------------------------------- helpers
@@ -405,7 +415,7 @@ def _reconstruct_robust(
         raise InputError(f"smoothing must be a non-negative number, got {smoothing!r}")
 
     N, dim = P0.shape
-    order = np.lexsort(P0.T[::-1])
+    order = _lex_order(P0)
     P = P0[order]
     params_out = dict(prm)
     params_out["smooth"] = bool(smooth)
@@ -469,9 +479,13 @@ def _reconstruct_robust(
     nodes, curves = _assemble(P, h, chains, regions, prm_int)
     tm["assemble"] = time.perf_counter() - t1
 
-    # map back to input indices
-    for c in curves:
-        c.indices = np.where(c.indices >= 0, order[np.maximum(c.indices, 0)], -1)
+    # map back to input indices (all curves at once)
+    if curves:
+        ind = np.concatenate([c.indices for c in curves])
+        ind = np.where(ind >= 0, order[np.maximum(ind, 0)], -1)
+        off = np.r_[0, np.cumsum([len(c.indices) for c in curves])].tolist()
+        for i, c in enumerate(curves):
+            c.indices = ind[off[i]:off[i + 1]]
 
     if smooth:
         t1 = time.perf_counter()
@@ -609,26 +623,12 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
 def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     """Order every chain by geodesic distance from one end; find the regions its ends touch."""
     N = len(P)
-    chains: list[_Chain] = []
     if n_chn == 0:
-        return chains
-    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
-    a, b, w = src[inside], dst[inside], np.maximum(dd[inside], 1e-12)
-    g = coo_matrix((w, (a, b)), shape=(N, N)).tocsr()
-    ids = np.flatnonzero(chn >= 0)
-    lab = chn[ids]
-    # first point of every chain (lowest id)
-    _, first = np.unique(lab, return_index=True)
-    s0 = ids[first]
-    d0 = dijkstra(g, directed=False, indices=s0, min_only=True)
-    e1, e1lab = _first_per_label(lab, d0[ids], ids)
-    e1_by_chain = np.empty(n_chn, dtype=np.int64)
-    e1_by_chain[e1lab] = e1
-    d1 = dijkstra(g, directed=False, indices=e1_by_chain, min_only=True)
-    par = d1[ids]
-    o = np.lexsort((ids, par, lab))
-    ids_o, lab_o, par_o = ids[o], lab[o], par[o]
-    bounds = np.flatnonzero(np.r_[True, lab_o[1:] != lab_o[:-1], True])
+        return []
+    # compiled: each chain ordered by its distance along the linked graph (edges inside the
+    # chain) from its far end, the point farthest from its lowest id (a double sweep)
+    ids_o, par_o, bounds = _k.chain_order(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64),
+                                          np.ascontiguousarray(dd, dtype=np.float64), chn, int(n_chn))
 
     # contacts: linked edges between a chain point and a region point
     cmask = (chn[src] >= 0) & (reg[dst] >= 0)
@@ -654,17 +654,31 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     step = np.r_[np.sqrt(((P[ids_o[1:]] - P[ids_o[:-1]]) ** 2).sum(axis=1)), 0.0]
     step[bounds[1:] - 1] = 0.0  # the step from a chain's last point to the next chain's first
     plen = np.add.reduceat(step, bounds[:-1]) if n_chn else np.zeros(0)
-    for ci in range(n_chn):
-        seg = ids_o[bounds[ci]:bounds[ci + 1]]
-        if touch[ci] and ends[ci, 0] >= 0 and ends[ci, 0] == ends[ci, 1]:
-            _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
-                       float(par_o[bounds[ci + 1] - 1]), float(np.median(h[seg])))
-        if not touch[ci] or (ends[ci, 0] < 0 and ends[ci, 1] < 0):
-            # no region at either end (a contact in the middle only: a clump beside a loop)
-            chains.append(_loop_or_piece(P, h, g, seg, lin))
+    length = par_o[bounds[1:] - 1]  # the distance of each chain's far end
+    # a short chain given the same region at both ends may take another one at one side
+    for ci in np.flatnonzero(touch & (ends[:, 0] >= 0) & (ends[:, 0] == ends[:, 1])).tolist():
+        _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
+                   float(length[ci]), float(np.median(h[ids_o[bounds[ci]:bounds[ci + 1]]])))
+    # no region at either end (a contact in the middle only: a clump beside a loop)
+    free = ~touch | ((ends[:, 0] < 0) & (ends[:, 1] < 0))
+    # may zigzag (checked below)
+    zig = ~free & (np.diff(bounds) >= 6) & (plen > ZIGZAG * length * (1 - 1e-6))
+    special = np.flatnonzero(free | zig)
+    b = bounds.tolist()
+    e0, e1 = ends[:, 0].tolist(), ends[:, 1].tolist()
+    chains = [_Chain(ids_o[b[ci]:b[ci + 1]], [e0[ci], e1[ci]]) for ci in range(n_chn)]
+    if not len(special):
+        return chains
+    # the linked graph inside the chains below (their loops are cut open on it)
+    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
+    inside[inside] = np.isin(chn[src[inside]], special)
+    g = coo_matrix((np.maximum(dd[inside], 1e-12), (src[inside], dst[inside])), shape=(N, N)).tocsr()
+    for ci in special.tolist():
+        seg = ids_o[b[ci]:b[ci + 1]]
+        if free[ci]:
+            chains[ci] = _loop_or_piece(P, h, g, seg, lin)
             continue
-        if (len(seg) >= 6 and plen[ci] > ZIGZAG * float(par_o[bounds[ci + 1] - 1]) * (1 - 1e-6)
-                and _polylen(P[seg]) > ZIGZAG * float(par_o[bounds[ci + 1] - 1])):
+        if _polylen(P[seg]) > ZIGZAG * float(length[ci]):
             # the points ordered by distance from one end zigzag: the chain is still a cycle
             # in the linked graph (a loop whose links bypass the few points flagged on it):
             # it is cut open at its contact with the region it touches most, both ends there
@@ -673,9 +687,7 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
             r = int(ru[np.argmax(rc)])
             lp = _loop_or_piece(P, h, g, seg, lin, start=int(pts_c[regs_c == r].min()))
             if lp.closed:
-                chains.append(_Chain(lp.ids, [r, r]))
-                continue
-        chains.append(_Chain(seg, [int(ends[ci, 0]), int(ends[ci, 1])]))
+                chains[ci] = _Chain(lp.ids, [r, r])
     return chains
 
 
@@ -773,12 +785,9 @@ def _assemble(P, h, chains, regions, prm):
                 ends_at[c.ends[s]].append((i, s))
 
     def valence():
-        v = np.zeros(len(regions), dtype=np.int64)
-        for i, c in enumerate(chains):
-            if alive[i] and not c.closed:
-                v[c.ends[0]] += 1
-                v[c.ends[1]] += 1
-        return v
+        e = [c.ends for c, a in zip(chains, alive) if a and not c.closed]
+        e = np.fromiter(itertools.chain.from_iterable(e), dtype=np.int64, count=2 * len(e))
+        return np.bincount(e, minlength=len(regions)).astype(np.int64)
 
     hmed = float(np.median(h))
     # a region passed through by one curve (valence 2) right next to a junction region is a
@@ -823,11 +832,16 @@ def _assemble(P, h, chains, regions, prm):
     # noise or sparse sampling (a T whose stem does not reach the bar): split that curve there
     _attach_dangling(P, h, chains, regions, alive, ends_at, valence(), prm)
     # prune short spurs and small isolated pieces
+    # a chain is short only if its polyline is under min_spur (a loop: twice) times its largest
+    # spacing: the exact tests below run only for those (the sums here are within rounding)
+    length, hmax = _chain_lengths(P, h, chains)
+    short_loop = (length <= 2 * prm["min_spur"] * hmax * (1 + 1e-9)).tolist()
+    short = (length <= prm["min_spur"] * hmax * (1 + 1e-9)).tolist()
     for _ in range(3):
         v = valence()
         changed = False
         for i, c in enumerate(chains):
-            if not alive[i]:
+            if not alive[i] or not short_loop[i]:
                 continue
             if c.closed:
                 hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
@@ -837,7 +851,7 @@ def _assemble(P, h, chains, regions, prm):
                 continue
             a, b = c.ends
             free_a, free_b = v[a] == 1, v[b] == 1
-            if not (free_a or free_b):
+            if not (free_a or free_b) or not short[i]:
                 continue
             hl = float(np.median(h[c.ids])) if len(c.ids) else hmed
             length = _polylen(P[c.ids])
@@ -912,6 +926,7 @@ def _assemble(P, h, chains, regions, prm):
         fids[r] = live[ci].ids if s == 1 else live[ci].ids[::-1]  # ids run towards the region
     fr = [r for r in fr if _fork_possible(P, h, fids[r], regions[r], prm)]
     fpaths = dict(zip(fr, _region_paths(P, [(regions[r], int(fids[r][-1])) for r in fr], prm)))
+    fm = dict(zip(fids, _end_counts(P, h, list(fids.values()), 4.0).tolist()))  # _free_end's
     for r in range(len(regions)):
         if v[r] == 0:
             continue
@@ -929,7 +944,7 @@ def _assemble(P, h, chains, regions, prm):
                 extra.extend((len(node_pos) - 1, lf) for lf in leaves)
                 node_of[r] = len(node_pos) - 1
                 continue
-            ext, pos = _free_end(P, h, ids, regions[r])
+            ext, pos = _free_end(P, h, ids, regions[r], m=fm[r])
             end_ext[(ci, s)] = ext
             node_pos.append(pos)
         else:
@@ -956,49 +971,132 @@ def _assemble(P, h, chains, regions, prm):
     opn = [ci for ci, c in enumerate(live) if not c.closed]
     trim = {}
     if opn:
-        ends = np.array([[new_id[node_of[live[ci].ends[0]]], new_id[node_of[live[ci].ends[1]]]]
-                         for ci in opn], dtype=np.int64)
-        do0 = np.array([(ci, 0) not in end_ext and v[live[ci].ends[0]] >= 2 for ci in opn])
-        do1 = np.array([(ci, 1) not in end_ext and v[live[ci].ends[1]] >= 2 for ci in opn])
+        nid, vl = new_id.tolist(), v.tolist()
+        ends = np.array([[nid[node_of[live[ci].ends[0]]], nid[node_of[live[ci].ends[1]]]]
+                         for ci in opn], dtype=np.int64).reshape(-1, 2)
+        do0 = np.array([(ci, 0) not in end_ext and vl[live[ci].ends[0]] >= 2 for ci in opn])
+        do1 = np.array([(ci, 1) not in end_ext and vl[live[ci].ends[1]] >= 2 for ci in opn])
         flat = np.concatenate([live[ci].ids for ci in opn]).astype(np.int64, copy=False)
         off = np.r_[0, np.cumsum([len(live[ci].ids) for ci in opn])].astype(np.int64)
         lo, hi = _k.trim_ends(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, do0, do1,
                               nodes[ends[:, 0]], nodes[ends[:, 1]], 2.0 * SPAN)
         trim = {ci: flat[lo[i]:hi[i]] for i, ci in enumerate(opn)}
-    curves = []
+    curves: list = [None] * len(live)
     for ci, c in enumerate(live):
         if c.closed:
-            curves.append(Curve(P[c.ids], None, None, True, c.ids.copy()))
-            continue
-        ext0 = end_ext.get((ci, 0), np.zeros(0, dtype=np.int64))
-        ext1 = end_ext.get((ci, 1), np.zeros(0, dtype=np.int64))
-        a, b = int(new_id[node_of[c.ends[0]]]), int(new_id[node_of[c.ends[1]]])
-        ids = np.concatenate((ext0[::-1], trim[ci], ext1)) if len(ext0) or len(ext1) else trim[ci]
-        # the curve ends exactly at its nodes (a free end's node is its extreme point)
-        head = int(not (len(ext0) and np.array_equal(P[ext0[-1]], nodes[a])))
-        tail = int(not (len(ext1) and np.array_equal(P[ext1[-1]], nodes[b])))
-        n = len(ids) + head + tail
-        ind = np.full(n, -1, dtype=np.int64)
-        ind[head:head + len(ids)] = ids
-        pts = np.empty((n, dim))
-        pts[head:head + len(ids)] = P[ids]
-        if head:
-            pts[0] = nodes[a]
-        if tail:
-            pts[-1] = nodes[b]
-        if a > b:  # stored from the lower node id to the higher
-            curves.append(Curve(pts[::-1].copy(), b, a, False, ind[::-1].copy()))
-        else:
-            curves.append(Curve(pts, a, b, False, ind))
+            curves[ci] = Curve(P[c.ids], None, None, True, c.ids.copy())
+    if opn:
+        # the open curves all at once: each runs from node a through its free-end extension
+        # (reversed), trimmed chain points and the other extension to node b
+        pieces, n0, n1, last0, last1 = [], np.zeros(len(opn), np.int64), np.zeros(len(opn), np.int64), [], []
+        for i, ci in enumerate(opn):
+            ext0, ext1 = end_ext.get((ci, 0)), end_ext.get((ci, 1))
+            if ext0 is not None and len(ext0):
+                pieces.append(ext0[::-1])
+                n0[i] = len(ext0)
+                last0.append((i, ext0[-1]))
+            pieces.append(trim[ci])
+            if ext1 is not None and len(ext1):
+                pieces.append(ext1)
+                n1[i] = len(ext1)
+                last1.append((i, ext1[-1]))
+        curves_open = _open_curves(P, nodes, np.concatenate(pieces).astype(np.int64, copy=False),
+                                   n0 + (hi - lo) + n1, ends[:, 0], ends[:, 1], last0, last1)
+        for ci, cv in zip(opn, curves_open):
+            curves[ci] = cv
     for j, t, br in extra_ids:
         a, b = int(new_id[j]), int(new_id[t])
         cv = Curve(np.vstack([nodes[a], P[br]]), a, b, False, np.r_[-1, br].astype(np.int64))
         if a > b:
             cv = cv.reversed()
         curves.append(cv)
-    curves.sort(key=lambda c: (-1 if c.start is None else c.start, -1 if c.end is None else c.end,
-                               tuple(np.round(c.points[min(1, len(c.points) - 1)], 9))))
+    curves = _sort_curves(curves)
     return nodes, curves
+
+
+def _chain_lengths(P, h, chains):
+    """Polyline length (summed per chain, within rounding of :func:`_polylen`) and largest
+    spacing of every chain; a chain without points gets length 0 and spacing inf."""
+    lens = np.array([len(c.ids) for c in chains], dtype=np.int64)
+    length = np.zeros(len(chains))
+    hmax = np.full(len(chains), np.inf)
+    nz = np.flatnonzero(lens > 0)
+    if len(nz):
+        flat = np.concatenate([chains[i].ids for i in nz.tolist()]).astype(np.int64, copy=False)
+        off = np.r_[0, np.cumsum(lens[nz])]
+        step = np.zeros(len(flat))
+        step[:-1] = np.sqrt(((P[flat[1:]] - P[flat[:-1]]) ** 2).sum(axis=1))
+        step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
+        length[nz] = np.add.reduceat(step, off[:-1])
+        hmax[nz] = np.maximum.reduceat(h[flat], off[:-1])
+    return length, hmax
+
+
+def _open_curves(P, nodes, ids, nids, a, b, last0, last1):
+    """Open curves from their point ids, each ending exactly at its two nodes.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        Points.
+    nodes : (n_nodes, d) ndarray
+        Node positions.
+    ids : (M,) ndarray of int64
+        The point ids of all curves, concatenated, each curve's running from node ``a`` to ``b``.
+    nids : (n_curves,) ndarray of int64
+        The number of ids of each curve.
+    a, b : (n_curves,) ndarray of int64
+        The nodes at the start and the end of each curve's ids.
+    last0, last1 : list of (int, int)
+        ``(curve, point id)``: a curve whose first (resp. last) id is the extreme point of a free
+        end; where that point lies exactly at the node, the node is not added again.
+
+    Returns
+    -------
+    list of Curve
+        Node position, points, node position (``indices`` -1 at the nodes), stored from the
+        lower node id to the higher (reversed where ``a > b``). The curves' arrays are views of
+        two shared arrays.
+    """
+    nc = len(nids)
+    head = np.ones(nc, dtype=np.int64)
+    tail = np.ones(nc, dtype=np.int64)
+    for flag, last, node in ((head, last0, a), (tail, last1, b)):
+        if last:
+            c, q = np.asarray(last, dtype=np.int64).T
+            flag[c] = ~(P[q] == nodes[node[c]]).all(axis=1)
+    n = nids + head + tail
+    off = np.r_[0, np.cumsum(n)]
+    cid = np.repeat(np.arange(nc), n)
+    local = np.arange(off[-1]) - off[cid]
+    rev = a > b
+    # the position of each output entry in the curve as built from a to b
+    src = np.where(rev[cid], n[cid] - 1 - local, local)
+    k = src - head[cid]
+    inner = (k >= 0) & (k < nids[cid])
+    ind = np.full(off[-1], -1, dtype=np.int64)
+    ind[inner] = ids[(np.r_[0, np.cumsum(nids)][cid] + k)[inner]]
+    pts = P[np.maximum(ind, 0)]
+    at_a = ~inner & (k < 0)
+    at_b = ~inner & (k >= 0)
+    pts[at_a] = nodes[a[cid[at_a]]]
+    pts[at_b] = nodes[b[cid[at_b]]]
+    lo_, hi_ = np.where(rev, b, a).tolist(), np.where(rev, a, b).tolist()
+    o = off.tolist()
+    return [Curve(pts[o[i]:o[i + 1]], lo_[i], hi_[i], False, ind[o[i]:o[i + 1]]) for i in range(nc)]
+
+
+def _sort_curves(curves):
+    """The curves by start node, end node (-1 for none), then second point rounded to 9
+    decimals (the first for a curve of one point); ties keep their order."""
+    if not curves:
+        return curves
+    n = len(curves)
+    st = np.fromiter((-1 if c.start is None else c.start for c in curves), dtype=np.int64, count=n)
+    en = np.fromiter((-1 if c.end is None else c.end for c in curves), dtype=np.int64, count=n)
+    X = np.round(np.stack([c.points[min(1, len(c.points) - 1)] for c in curves]), 9)
+    o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (en, st))
+    return [curves[i] for i in o.tolist()]
 
 
 def _absorb_short_loops(P, h, chains, regions, alive, prm):
@@ -1088,13 +1186,17 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     ids = np.concatenate([regions[r] for r in big])
     tree = cKDTree(P[ids])
     noise = prm.get("_noise", 0.0)
+    # a tip's chain end and region do not change below before its turn (a merge only moves
+    # the ends at the tip merged): the end portions of all in one call
+    one = []
     for r in tips:
         inc = [(i, s) for i, s in ends_at[r] if alive[i] and chains[i].ends[s] == r]
-        if len(inc) != 1:
-            continue
-        i, s = inc[0]
-        cids = chains[i].ids if s == 1 else chains[i].ids[::-1]  # running towards the tip
-        _, tip = _free_end(P, h, cids, regions[r])  # where the free end's node would be
+        if len(inc) == 1:
+            i, s = inc[0]
+            one.append((r, i, s, chains[i].ids if s == 1 else chains[i].ids[::-1]))  # towards the tip
+    ms = _end_counts(P, h, [x[3] for x in one], 4.0).tolist()
+    for (r, i, s, cids), m in zip(one, ms):
+        _, tip = _free_end(P, h, cids, regions[r], m=m)  # where the free end's node would be
         gap = prm["link"] * 1.2 * float(h[cids[-1]]) + GAP * noise
         d, k = tree.query(tip, distance_upper_bound=gap)
         if not np.isfinite(d):
@@ -1230,30 +1332,55 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     noise = prm.get("_noise", 0.0)
     tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
             for s in (0, 1) if v[c.ends[s]] == 1]
-    for i, s in tips:
+    if not tips:
+        return
+    # what each tip needs, for all at once: a tip still to be handled has the chain end and
+    # region it had here (a move or a split changes only the valence-1 ends it involves), and
+    # its chain's points unless that chain was split meanwhile (then its end is redone below)
+    tchain = [chains[i] for i, _ in tips]
+    tids = [c.ids if s == 1 else c.ids[::-1] for c, (_, s) in zip(tchain, tips)]  # towards the tip
+    tms = _end_counts(P, h, tids, 3.0).tolist()
+    tpts = [np.r_[regions[c.ends[s]], ids[-1]].astype(np.int64) for c, (_, s), ids in zip(tchain, tips, tids)]
+    reach_of = ATT * prm["link"] * h[[int(ids[-1]) for ids in tids]] + GAP * noise
+    # chain points within reach of each tip point (one threaded query)
+    allp = np.concatenate(tpts)
+    with _sigint.held():
+        near = tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
+    cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
+    qall = pts[np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))]
+    qoff = np.r_[0, np.cumsum(cnt)]
+    toff = np.r_[0, np.cumsum([len(x) for x in tpts])].tolist()
+    for t_, (i, s) in enumerate(tips):
         c = chains[i]
         if not alive[i] or c.closed or v[c.ends[s]] != 1:
             continue
         r = c.ends[s]
         ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
         e = int(ids[-1])
-        hl = float(h[e])
-        E = _end_portion(P, h, ids, span=3.0)
+        same = c is tchain[t_]
+        E = _end_portion(P, h, ids, span=3.0, m=tms[t_] if same else None)
         u = E[0] - E[-1]
         nu = np.linalg.norm(u)
         if nu == 0:
             continue
         u = u / nu
-        reach = ATT * prm["link"] * hl + GAP * noise
-        tip_pts = np.r_[regions[r], e].astype(np.int64)
         # chain points of other chains within reach of the tip, ahead of it (within 45 degrees
         # of its direction): the nearest (then lowest id) is where it attaches
-        near = tree.query_ball_point(P[tip_pts], reach)
-        cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
-        if not cnt.sum():
-            continue
-        q = pts[np.concatenate([np.asarray(x, dtype=np.int64) for x in near])]
-        tp = np.repeat(tip_pts, cnt)
+        if same:
+            tip_pts = tpts[t_]
+            a0, a1 = toff[t_], toff[t_ + 1]
+            if qoff[a1] == qoff[a0]:
+                continue
+            q = qall[qoff[a0]:qoff[a1]]
+            tp = np.repeat(tip_pts, cnt[a0:a1])
+        else:  # its chain was split meanwhile: queried again
+            tip_pts = np.r_[regions[r], e].astype(np.int64)
+            near_t = tree.query_ball_point(P[tip_pts], ATT * prm["link"] * float(h[e]) + GAP * noise)
+            cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
+            if not cnt_t.sum():
+                continue
+            q = pts[np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])]
+            tp = np.repeat(tip_pts, cnt_t)
         j = owner[q]
         vq = P[q] - P[e]
         ok = (j >= 0) & (j != i) & ((vq @ u) >= np.cos(np.radians(45.0)) * np.sqrt((vq * vq).sum(axis=1)))
@@ -1328,20 +1455,47 @@ def _order_between(P, ids, pa, pb):
     return ids[np.lexsort((ids, proj))]
 
 
-def _end_portion(P, h, ids, span=3.0):
-    """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h."""
+def _end_portion(P, h, ids, span=3.0, m=None):
+    """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h.
+
+    ``m``: their number when already known (:func:`_end_counts`).
+    """
     n = len(ids)
     if n < 2:
         return P[ids[::-1]]
-    hl = float(h[ids[-1]])
-    # arc length summed backwards from the end, only as far as needed (compiled kernel)
-    m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(3, n))
+    if m is None:
+        hl = float(h[ids[-1]])
+        # arc length summed backwards from the end, only as far as needed (compiled kernel)
+        m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(3, n))
     return P[ids[: -m - 1: -1]]
 
 
-def _free_end(P, h, ids, rid):
-    """Extension ids (ordered outward) and node position of a free end."""
-    E = _end_portion(P, h, ids, span=4.0)
+def _end_counts(P, h, lists, span):
+    """The number of points of :func:`_end_portion` of every id list, in one compiled call.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+    lists : list of (n_i,) ndarray of int
+        Id lists, each running towards its end.
+    span : float
+
+    Returns
+    -------
+    (len(lists),) ndarray of int64
+    """
+    if not lists:
+        return np.zeros(0, dtype=np.int64)
+    flat = np.concatenate(lists).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
+    return _k.end_counts(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, float(span))
+
+
+def _free_end(P, h, ids, rid, m=None):
+    """Extension ids (ordered outward) and node position of a free end (``m``: the count of
+    its end portion, when known)."""
+    E = _end_portion(P, h, ids, span=4.0, m=m)
     tip = E[0]
     if len(E) >= 2:
         u = E[0] - E[-1]

@@ -8,15 +8,56 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import FormatError
-from ..network import CurveNetwork
+from ..network import CurveNetwork, _jsonable
 from .points import check_readable
 
 __all__ = ["network_to_json", "network_to_obj", "network_to_ply", "read_network", "polyline_vertices"]
 
 
 def network_to_json(net: CurveNetwork, *, indent: int | None = None) -> str:
-    """The network in the curvenet JSON format (version 1)."""
+    """The network in the curvenet JSON format (version 1).
+
+    Without ``indent``, written by ``orjson`` when it is installed (``curvenet[fast]``; about
+    ten times faster on large networks): the same document, every number reading back to
+    the same value, only without spaces after the separators.
+    """
+    if indent is None:
+        text = _json_orjson(net)
+        if text is not None:
+            return text
     return json.dumps(net.to_dict(), indent=indent, allow_nan=False) + "\n"
+
+
+def _json_orjson(net: CurveNetwork) -> str | None:
+    """:func:`network_to_json` by orjson (the arrays serialised without Python floats), or
+    None when orjson is missing or a coordinate is not finite (``json`` raises then)."""
+    try:
+        import orjson
+    except ImportError:
+        return None
+    arrays = [net.nodes] + [a for c in net.curves for a in (c.points, c.indices)]
+    floats = [a.ravel() for a in arrays if a.dtype.kind == "f"]
+    if floats and not np.isfinite(np.concatenate(floats)).all():
+        return None  # orjson would write null
+    doc = {  # the layout of CurveNetwork.to_dict
+        "format": "curvenet",
+        "version": 1,
+        "dimension": net.dimension,
+        "nodes": np.ascontiguousarray(net.nodes, dtype=np.float64),
+        "curves": [
+            {
+                "points": np.ascontiguousarray(c.points, dtype=np.float64),
+                "start": None if c.start is None else int(c.start),
+                "end": None if c.end is None else int(c.end),
+                "closed": bool(c.closed),
+                "indices": np.ascontiguousarray(c.indices, dtype=np.int64),
+            }
+            for c in net.curves
+        ],
+        "parameters": _jsonable(net.parameters),
+        "stats": _jsonable(net.stats),
+    }
+    return orjson.dumps(doc, option=orjson.OPT_SERIALIZE_NUMPY).decode("utf-8") + "\n"
 
 
 def polyline_vertices(net: CurveNetwork):
