@@ -1227,6 +1227,9 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     nz = np.flatnonzero(np.asarray(lens) > 0)
     if len(nz):
         hmax[nz] = np.maximum.reduceat(h[flat], off[nz])
+    # the short chains between two junctions (a merge only maps one junction onto another and
+    # raises its valence, so no other chain can become one below)
+    cand = []
     for ci in range(len(chains)):
         c = chains[ci]
         if not alive[ci] or c.closed:
@@ -1241,12 +1244,30 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
         hl = float(np.median(h[c.ids])) if len(c.ids) else float(np.median(h))
         if _polylen(P[c.ids]) > MERGE_LEN * hl:
             continue
+        cand.append(ci)
+
+    def incident(r):
+        return [(i, s) for i, s in ends_at[r] if alive[i] and chains[i].ends[s] == r]
+
+    # the nodes of their junctions in one batch; a merge changes only its two junctions
+    need = sorted({r for ci in cand for r in chains[ci].ends})
+    pos = {}
+    if need:
+        X, _ = _junction_positions(P, h, [(chains, incident(r), regions[r]) for r in need], prm)
+        pos = dict(zip(need, X))
+    for ci in cand:
+        c = chains[ci]
+        a, b = c.ends
+        if not alive[ci] or a == b or v[a] < 3 or v[b] < 3:
+            continue
         for x_r, y_r in ((a, b), (b, a)):
-            inc_x = [(i, s) for i, s in ends_at[x_r] if alive[i] and chains[i].ends[s] == x_r]
+            inc_x = incident(x_r)
             inc_y = [(i, s) for i, s in ends_at[y_r] if alive[i] and chains[i].ends[s] == y_r and i != ci]
             if len(inc_y) < 2:
                 continue
-            xpos = _junction(P, h, chains, inc_x, regions[x_r], prm)
+            if x_r not in pos:
+                pos[x_r] = _junction(P, h, chains, inc_x, regions[x_r], prm)
+            xpos = pos[x_r]
             ok = True
             for i, s in inc_y:
                 ids = chains[i].ids if s == 1 else chains[i].ids[::-1]
@@ -1266,6 +1287,8 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
             if not ok:
                 continue
             # merge y into x, the short chain included
+            pos.pop(x_r, None)
+            pos.pop(y_r, None)
             alive[ci] = False
             v[x_r] -= 1
             v[y_r] -= 1
