@@ -190,23 +190,27 @@ def test_ctrl_c_leaves_no_file(tmp_path):
 def test_ctrl_c_is_deferred_to_a_safe_point():
     """Under the command line's handler, Ctrl-C raises at the next checkpoint, not where the
     main thread happens to be; a second Ctrl-C raises at once; held() delays it to the end."""
-    import os
     import signal
     import threading
 
     from curvenet import _sigint
 
+    def ctrl_c():
+        # to the main thread itself: a signal sent to the process goes to any thread that does
+        # not block it, whose handler may run late (two signals then merge into one)
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
     with pytest.raises(KeyboardInterrupt):
         with _sigint.deferred():
-            os.kill(os.getpid(), signal.SIGINT)
+            ctrl_c()
             x = sum(range(1000))  # not interrupted here
             assert x == 499500
             _sigint.checkpoint()  # but here
     with pytest.raises(KeyboardInterrupt):
         with _sigint.deferred():
-            os.kill(os.getpid(), signal.SIGINT)
+            ctrl_c()
             try:
-                os.kill(os.getpid(), signal.SIGINT)
+                ctrl_c()
                 for _ in range(1000):  # the second one interrupts at once
                     pass
             except KeyboardInterrupt:
@@ -215,9 +219,7 @@ def test_ctrl_c_is_deferred_to_a_safe_point():
     reached = []
     with pytest.raises(KeyboardInterrupt):
         with _sigint.held():
-            # to the main thread itself: a signal sent to the process goes to any thread that
-            # does not block it (the test process may have some, started before the block)
-            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)  # pending until the end
+            ctrl_c()  # blocked: pending until the block ends
             reached.append(True)
     assert reached == [True]
     _sigint.checkpoint()  # nothing pending any more
