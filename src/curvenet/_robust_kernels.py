@@ -20,6 +20,53 @@ prange = range  # numba.prange when compiled (parallel loops over independent bl
 __all__ = ["shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
+def _heap_pop(heap_k, heap_v, hs):  # pragma: no cover - compiled
+    """Pop the smallest entry of the binary heap ``heap_k[:hs]`` / ``heap_v[:hs]`` (key, then
+    id: equal keys come out by id, so the order never depends on the insertion order).
+
+    Returns the key, the id and the new size."""
+    key = heap_k[0]
+    a = heap_v[0]
+    hs -= 1
+    if hs > 0:
+        lk = heap_k[hs]
+        lv = heap_v[hs]
+        i = 0
+        while True:
+            c1 = 2 * i + 1
+            if c1 >= hs:
+                break
+            c2 = c1 + 1
+            if c2 < hs and (heap_k[c2] < heap_k[c1] or (heap_k[c2] == heap_k[c1] and heap_v[c2] < heap_v[c1])):
+                c1 = c2
+            if heap_k[c1] < lk or (heap_k[c1] == lk and heap_v[c1] < lv):
+                heap_k[i] = heap_k[c1]
+                heap_v[i] = heap_v[c1]
+                i = c1
+            else:
+                break
+        heap_k[i] = lk
+        heap_v[i] = lv
+    return key, a, hs
+
+
+def _heap_push(heap_k, heap_v, hs, key, v):  # pragma: no cover - compiled
+    """Push ``(key, v)`` on the binary heap of :func:`_heap_pop`; returns the new size."""
+    i = hs
+    hs += 1
+    while i > 0:
+        par = (i - 1) // 2
+        if heap_k[par] > key or (heap_k[par] == key and heap_v[par] > v):
+            heap_k[i] = heap_k[par]
+            heap_v[i] = heap_v[par]
+            i = par
+        else:
+            break
+    heap_k[i] = key
+    heap_v[i] = v
+    return hs
+
+
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
     """Groups of the geodesic shell around every point (see robust.shell_group_counts).
 
@@ -64,28 +111,7 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
         mark[p] = p
         gd[p] = 0.0
         while hs > 0:
-            key = heap_k[0]
-            a = heap_v[0]
-            hs -= 1
-            if hs > 0:
-                lk = heap_k[hs]
-                lv = heap_v[hs]
-                i = 0
-                while True:
-                    c1 = 2 * i + 1
-                    if c1 >= hs:
-                        break
-                    c2 = c1 + 1
-                    if c2 < hs and (heap_k[c2] < heap_k[c1] or (heap_k[c2] == heap_k[c1] and heap_v[c2] < heap_v[c1])):
-                        c1 = c2
-                    if heap_k[c1] < lk or (heap_k[c1] == lk and heap_v[c1] < lv):
-                        heap_k[i] = heap_k[c1]
-                        heap_v[i] = heap_v[c1]
-                        i = c1
-                    else:
-                        break
-                heap_k[i] = lk
-                heap_v[i] = lv
+            key, a, hs = _heap_pop(heap_k, heap_v, hs)
             if done[a] == p or key > gd[a]:
                 continue
             done[a] = p
@@ -108,18 +134,7 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
                 gd[b] = nk
                 if hs >= cap:
                     continue
-                i = hs
-                hs += 1
-                while i > 0:
-                    par = (i - 1) // 2
-                    if heap_k[par] > nk or (heap_k[par] == nk and heap_v[par] > b):
-                        heap_k[i] = heap_k[par]
-                        heap_v[i] = heap_v[par]
-                        i = par
-                    else:
-                        break
-                heap_k[i] = nk
-                heap_v[i] = b
+                hs = _heap_push(heap_k, heap_v, hs, nk, b)
         # the shell: reached points at least ri away, both along the graph and in space
         for q in range(nreach):
             a = reached[q]
@@ -754,28 +769,7 @@ def _chain_order(n, src, dst, dd, chn, n_chn):  # pragma: no cover - compiled
             gd[s] = 0.0
             k = b0
             while hs > 0:
-                key = heap_k[0]
-                a = heap_v[0]
-                hs -= 1
-                if hs > 0:
-                    lk = heap_k[hs]
-                    lv = heap_v[hs]
-                    i = 0
-                    while True:
-                        c1 = 2 * i + 1
-                        if c1 >= hs:
-                            break
-                        c2 = c1 + 1
-                        if c2 < hs and (heap_k[c2] < heap_k[c1] or (heap_k[c2] == heap_k[c1] and heap_v[c2] < heap_v[c1])):
-                            c1 = c2
-                        if heap_k[c1] < lk or (heap_k[c1] == lk and heap_v[c1] < lv):
-                            heap_k[i] = heap_k[c1]
-                            heap_v[i] = heap_v[c1]
-                            i = c1
-                        else:
-                            break
-                    heap_k[i] = lk
-                    heap_v[i] = lv
+                key, a, hs = _heap_pop(heap_k, heap_v, hs)
                 if done[a] == run or key > gd[a]:
                     continue
                 done[a] = run
@@ -791,18 +785,7 @@ def _chain_order(n, src, dst, dd, chn, n_chn):  # pragma: no cover - compiled
                         continue
                     mark[b] = run
                     gd[b] = nk
-                    i = hs
-                    hs += 1
-                    while i > 0:
-                        par = (i - 1) // 2
-                        if heap_k[par] > nk or (heap_k[par] == nk and heap_v[par] > b):
-                            heap_k[i] = heap_k[par]
-                            heap_v[i] = heap_v[par]
-                            i = par
-                        else:
-                            break
-                    heap_k[i] = nk
-                    heap_v[i] = b
+                    hs = _heap_push(heap_k, heap_v, hs, nk, b)
             if rep == 0:
                 # the far end: the largest distance, ties the lowest id
                 best = -1.0
@@ -1448,7 +1431,8 @@ _PY = {
     "vote_agreement": _vote_agreement,
     "vote_eig": _vote_eig,
 }
-_PY_HELPERS = {"_eig_sym": _eig_sym_py, "_pca01": _pca01, "_strip_score": _strip_score,
+_PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
+               "_eig_sym": _eig_sym_py, "_pca01": _pca01, "_strip_score": _strip_score,
                "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
@@ -1539,6 +1523,9 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         _jit = numba.njit(cache=True, nogil=True)
         # helpers first: the kernels resolve them by their global names when compiled
         _JIT_HELPERS = {
+            # inlined into the Dijkstra loops (as calls they cost the shell kernel 25%)
+            "_heap_pop": numba.njit(cache=True, nogil=True, inline="always")(_heap_pop),
+            "_heap_push": numba.njit(cache=True, nogil=True, inline="always")(_heap_push),
             "_eig_sym": _jit(_eig_sym_py),
             "_pca01": _jit(_pca01),
             "_strip_score": _jit(_strip_score),
