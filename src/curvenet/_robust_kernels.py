@@ -394,6 +394,7 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
     mu = np.zeros(d)
     t = np.zeros(d)
     u = np.zeros(d)
+    ub = np.zeros(d)  # the best of the neighbour directions
     for ii in range(p0, p1):
         p = order[ii]
         for c in range(d):
@@ -430,14 +431,11 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
             if sc > best:
                 best = sc
                 kb = k
+                for c in range(d):
+                    ub[c] = u[c]
         if kb > 0:
-            r2 = 0.0
             for c in range(d):
-                x = Q[kb, c] - Q[0, c]
-                r2 += x * x
-            r = np.sqrt(r2)
-            for c in range(d):
-                t[c] = (Q[kb, c] - Q[0, c]) / r
+                t[c] = ub[c]
         for it in range(2):
             same = it > 0
             for k in range(m + 1):
