@@ -378,6 +378,26 @@ def test_two_junctions_6h_apart_are_two_nodes(side):
     assert np.abs(X[1:3] - [[0, 0], [6, 0]]).max() < 0.5
 
 
+@pytest.mark.parametrize("half_angle", [20, 60])
+def test_fork_7h_from_a_t_junction_under_noise(half_angle):
+    # a stem leaves a line and forks 7h away; under noise 0.2h the two junctions are one
+    # flagged region, and the smaller shell's two sub-regions have centroids 5.7h apart
+    # (1.36 fine outer radii): they must still be split
+    from curvenet import synth
+    from curvenet.metrics import compare
+    from curvenet.network import Curve, CurveNetwork
+
+    a = np.radians(half_angle)
+    V = np.array([[-30, 0], [30, 0], [0, 0], [0, 7], [30 * np.sin(a), 7 + 30 * np.cos(a)],
+                  [-30 * np.sin(a), 7 + 30 * np.cos(a)]])
+    edges = [(0, 2), (2, 1), (2, 3), (3, 4), (3, 5)]
+    truth = CurveNetwork(V, [Curve(_seg(V[i], V[j], h=0.1), i, j) for i, j in edges])
+    pts, _ = synth.sample(truth, h=1.0, rng=0, noise=0.2)
+    m = compare(reconstruct_robust(pts), truth, h=1.0)
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+
+
 def test_sampled_mug_close_junctions_under_noise_and_density():
     # the handle meets the line 12.5h above the ring: with noise 0.3h and spacing up to 1.3h
     # the widened shell (about 10h) flags both junctions as one region

@@ -510,7 +510,7 @@ def _reconstruct_robust(
 SPLIT_R = 0.65
 SPLIT_F = 0.6
 SPLIT_MIN = 2
-SPLIT_SEP = 1.5
+SPLIT_SEP = 1.2
 
 
 def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
