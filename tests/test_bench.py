@@ -143,3 +143,19 @@ def test_tune_each_condition_and_extra_conditions():
     assert by["outliers 2%", "paper"]["N_d"] == n_clean + round(0.02 * n_clean)
     with pytest.raises(InputError):
         bench.run_bench(["emst"], ["crossing"], quick=True, tune_on="sometimes")
+
+
+def test_seed_spread_scores_every_sampling():
+    models, conds = ["tree", "eye"], ["clean", "noise 0.3h + density x3"]
+    sp = bench.seed_spread("robust", 2, models, conds)
+    assert [s["condition"] for s in sp] == conds
+    for s in sp:
+        rows = [r for k in range(2) for r in bench.run_bench(["robust"], models, [s["condition"]], seed=k)]
+        f1 = [r["curve_f1"] for r in rows]
+        assert s["mean"] == pytest.approx(np.mean(f1))
+        assert s["seed0"] == pytest.approx(np.mean(f1[:2]))
+        assert s["worst_seed"] == pytest.approx(min(np.mean(f1[:2]), np.mean(f1[2:])))
+        assert len(s["misses"]) == sum(f < 1 for f in f1)
+    md = bench.write_markdown([], None, spread=sp)
+    assert "## Seed spread (2 samplings, `robust`)" in md
+    assert md.count("\n| noise 0.3h + density x3 |") == 1

@@ -27,6 +27,8 @@ def register(sub) -> None:
     p.add_argument("--tune-each", action="store_true",
                    help="tune paper-tuned on every condition (default: on the clean sampling only)")
     p.add_argument("--no-cassie", action="store_true", help="skip the CASSIE real-data table")
+    p.add_argument("--spread-seeds", type=int, default=8, metavar="K",
+                   help="also score robust on K samplings of every model and condition (default 8; 0: skip)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
     p.add_argument("--out", default=".", help="output folder (default: the current folder)")
     add_common(p)
@@ -44,7 +46,12 @@ def run(args) -> int:
     for opt in ("methods", "models", "conditions"):
         if getattr(args, opt):
             cmd.append(f"--{opt} " + " ".join(repr(v) if " " in v else v for v in getattr(args, opt)))
-    cmd += ["--tune-each"] * args.tune_each + ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures + [f"--out {args.out}"]
+    cmd += ["--tune-each"] * args.tune_each + ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures
+    cmd += [f"--spread-seeds {args.spread_seeds}"] * (args.spread_seeds != 8) + [f"--out {args.out}"]
+    if args.spread_seeds < 0:
+        from ..errors import InputError
+
+        raise InputError(f"--spread-seeds must be 0 or more, got {args.spread_seeds}")
     res = run_all(
         args.out,
         quick=args.quick,
@@ -56,6 +63,7 @@ def run(args) -> int:
         tune_on="each" if args.tune_each else "clean",
         progress=progress if getattr(args, "verbose", False) else None,
         command=" ".join(cmd),
+        spread_seeds=args.spread_seeds,
     )
     if not quiet:
         for s in summarize(res["rows"]):
