@@ -1125,7 +1125,9 @@ def _close_tip_pairs(P, tips, r):
     return [(int(x), int(y)) for x, y in ab]
 
 
-ATT = 1.5
+#: A free end attaches to a chain at most ATT link lengths (plus GAP times the noise) ahead of it:
+#: a link lost to noise. A longer gap on clean samples is in the data: the end stays free.
+ATT = 1.0
 
 
 def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
