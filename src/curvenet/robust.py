@@ -32,7 +32,7 @@ Outline (every radius is in units of the *local* sampling spacing ``h_i``; "nois
    free end, 2 on a curve (a sharp or acute corner included), 3 or more near a junction.
 5. **Regions and chains.** Points whose count is not 2 are grouped (links shorter than
    ``link * h``) into regions. A region too large for one junction (two junctions closer than
-   about two shell radii) is re-tested on a shell 0.6 times the size and split when that shows
+   about two shell radii) is re-tested on a shell 0.7 times the size and split when that shows
    two junctions and one chain between them. The remaining points fall apart into chains, one
    per curve segment. Each chain is ordered by geodesic distance from one end (Dijkstra on the linked
    graph) and attached to the regions its two ends touch (a short chain given the same region
@@ -508,7 +508,7 @@ def _reconstruct_robust(
 #: on a shell SPLIT_F times the size, and split when that gives two or more sub-regions of
 #: SPLIT_MIN points or more with a junction point each, over SPLIT_SEP fine outer radii apart
 SPLIT_R = 0.65
-SPLIT_F = 0.6
+SPLIT_F = 0.7
 SPLIT_MIN = 2
 SPLIT_SEP = 1.2
 
