@@ -159,3 +159,16 @@ def test_seed_spread_scores_every_sampling():
     md = bench.write_markdown([], None, spread=sp)
     assert "## Seed spread (2 samplings, `robust`)" in md
     assert md.count("\n| noise 0.3h + density x3 |") == 1
+
+
+def test_study_sketches_are_a_separate_check():
+    from curvenet.synth import cassie
+
+    if not cassie.available():
+        pytest.skip("CASSIE dataset not found")
+    names = cassie.study_sketches()[:2]
+    rows = bench.run_cassie(["robust"], names, tune=False, dataset="cassie-study")
+    assert [r["model"] for r in rows] == names and {r["dataset"] for r in rows} == {"cassie-study"}
+    md = bench.write_markdown(rows, None)
+    assert "## Check (CASSIE user-study sketches, 2, 2 mm spacing)" in md
+    assert "## CASSIE free creations" not in md  # no per-sketch table of the free creations

@@ -172,6 +172,19 @@ def test_cassie_free_creations_present():
 
 
 @cassie_needed
+def test_cassie_study_sketches_are_the_others():
+    names = synth.cassie.study_sketches()
+    assert len(names) == 48 and names == sorted(names)
+    assert not set(names) & set(synth.cassie.FREE_CREATIONS)
+    assert all(len(n) == 6 and n[2] == "-" for n in names)
+
+
+def test_cassie_study_sketches_without_the_dataset(monkeypatch, tmp_path):
+    monkeypatch.setenv("CURVENET_CASSIE", str(tmp_path))
+    assert synth.cassie.study_sketches() == []
+
+
+@cassie_needed
 def test_cassie_hat():
     net = synth.cassie.load("hat")
     assert net.dimension == 3 and 2 not in set(net.valence.tolist())

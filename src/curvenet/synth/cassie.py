@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import FormatError, InputError
 from ..network import Curve, CurveNetwork
 
-__all__ = ["FREE_CREATIONS", "root", "available", "load", "min_separation"]
+__all__ = ["FREE_CREATIONS", "root", "available", "study_sketches", "load", "min_separation"]
 
 #: The 16 sketches made freely with the full CASSIE system (not the user-study files).
 FREE_CREATIONS = (
@@ -62,6 +62,18 @@ def root() -> Path:
 def available() -> bool:
     """True when the sketch_graph folder of the dataset can be found."""
     return (root() / "sketch_graph").is_dir()
+
+
+def study_sketches() -> list[str]:
+    """Names of the user-study sketches (``NN-M-K``: participant, model, system), sorted.
+
+    Their networks were recovered after the study from stroke intersections (the dataset's
+    README: "may have some errors"); the benchmark uses them as a check of changes chosen on
+    :data:`FREE_CREATIONS`. Empty when the dataset is missing.
+    """
+    if not available():
+        return []
+    return sorted(p.stem for p in (root() / "sketch_graph").glob("[0-9][0-9]-*.json"))
 
 
 def _bezier(ctrl: np.ndarray, step: float) -> np.ndarray:
