@@ -1494,21 +1494,27 @@ vote_agreement = _dispatch("vote_agreement")
 vote_eig = _dispatch("vote_eig")
 
 
-def tangents(P, idx, h, m):
-    """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`."""
+def tangents(P, idx, h, m, order=None):
+    """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`
+    (``order``: the visiting order when already computed, see :func:`_order`)."""
     with held():
-        return _kernel("tangents")(P, idx, h, m, _order(P))
+        return _kernel("tangents")(P, idx, h, m, _order(P) if order is None else order)
 
 
-def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None):
+def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
     """Shell group count of every point (or of the points ``subset``, the others 0): see
-    :func:`_shell_groups`."""
+    :func:`_shell_groups` (``order``: the visiting order of all points when already computed,
+    see :func:`_order`)."""
     if P.shape[0] >= 2**31 - 1:
         raise ValueError("too many points for the shell test (int32 ids)")
     compiled = HAVE_NUMBA and _COMPILED.get()
-    order = _order(P) if subset is None else np.sort(np.asarray(subset, dtype=np.int64))
+    if subset is not None:
+        order = np.sort(np.asarray(subset, dtype=np.int64))
+    elif order is None:
+        order = _order(P)
     # blocks: a few per thread (balance); one scratch set (about 44 bytes a point) per thread
-    nblocks = 4 * numba.get_num_threads() if compiled and len(order) >= 50_000 else 1
+    # (parallel from a few thousand points: the thread pool is running by then)
+    nblocks = 4 * numba.get_num_threads() if compiled and len(order) >= 4096 else 1
     with held():
         return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, order, nblocks)
 

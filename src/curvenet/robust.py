@@ -183,7 +183,7 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return np.maximum(h, floor)
 
 
-def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
+def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=None):
     """Local tangent and linearity of each point.
 
     A first direction from the 4 nearest neighbours (or towards one of them, when its narrow
@@ -199,7 +199,7 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
     t, lin, cr = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                             np.ascontiguousarray(h, dtype=np.float64), m)
+                             np.ascontiguousarray(h, dtype=np.float64), m, order)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
     rms = 1.28 * cr / np.sqrt(1.5 * max(dim - 1, 1))
@@ -257,7 +257,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
                            float(width), float(wmin), float(gap), float(EXTRA), float(LIN))
 
 
-def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
+def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None):
     """Number of connected groups of linked points in the shell around each point.
 
     Parameters
@@ -270,6 +270,8 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
         CSR adjacency of the linked graph.
     shell_inner, shell_outer : float
         Shell radii in units of ``h``.
+    order : (N,) ndarray of int, optional
+        Visiting order of the points (cache locality only), when already computed.
 
     Returns
     -------
@@ -277,7 +279,7 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
     """
     return _k.shell_groups(
         np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
-        indptr, indices, float(shell_inner), float(shell_outer),
+        indptr, indices, float(shell_inner), float(shell_outer), order=order,
     )
 
 
@@ -425,7 +427,10 @@ def _reconstruct_robust(
         return net
 
     # 1. neighbours and spacing
-    dist, idx = knn(P, prm["k"])
+    # a cache-friendly visiting order of the points for the per-point work (k-NN query,
+    # tangents, shell test): computed once (the results never depend on it)
+    vis = _k._order(P) if N > 100_000 else None
+    dist, idx = knn(P, prm["k"], order=vis)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     if spacing is None:
@@ -439,7 +444,7 @@ def _reconstruct_robust(
         params_out["spacing_estimated"] = False
 
     # 2. linked graph
-    t, lin, rms = _tangents(P, idx, h)
+    t, lin, rms = _tangents(P, idx, h, order=vis)
     t, lin = _vote_tangents(t, lin, idx)
     sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
     params_out["noise"] = sigma  # estimated std of the noise per coordinate
@@ -453,7 +458,7 @@ def _reconstruct_robust(
     t1 = time.perf_counter()
     # noise blurs the junction over a few sigma: the shell grows with it
     hs = h + WIDEN * noise
-    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"])
+    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"], order=vis)
     tm["nodes"] = time.perf_counter() - t1
 
     # 4. regions and chains
