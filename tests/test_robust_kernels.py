@@ -164,6 +164,36 @@ def test_compiled_and_python_runs_agree(cloud, tmp_path):
         assert np.array_equal(x, ref[key], equal_nan=True), key
 
 
+def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
+    """The parallel kernels give the same arrays whether their loops run on all threads or on
+    one (:data:`_robust_kernels.PAR_MIN`), and as the plain-Python loops."""
+    P, dist, idx, h = cloud
+    cand = np.arange(0, len(P), 3, dtype=np.int64)
+
+    def run():
+        t, lin, chord = K.tangents(P, idx, h, 12)
+        e = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+        s = K.short_links(h, dist, idx, 2.5)
+        agree = K.vote_agreement(t, idx, 8)
+        u = K.vote_eig(t, idx, 8, cand)
+        indptr, indices = K.csr_union(len(P), e[0], e[1])
+        g = K.shell_groups(P, h, indptr, indices, 1.5, 3.3)
+        return (t, lin, chord, *e, *s, agree, *u, g)
+
+    monkeypatch.setattr(K, "PAR_MIN", {name: 1 << 62 for name in K.PAR_MIN})
+    one = run()
+    monkeypatch.setattr(K, "PAR_MIN", {name: 0 for name in K.PAR_MIN})
+    par = run()
+    for a, b in zip(one, par):
+        assert np.array_equal(a, b, equal_nan=True)
+    t, lin = par[0], par[1]
+    for got, ref in ((par[3:6], K._PY["linked_edges"](P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
+                     (par[6:8], K._PY["short_links"](h, dist, idx, 2.5)),
+                     ((par[8],), (K._PY["vote_agreement"](t, idx, 8),))):
+        for a, b in zip(got, ref):
+            assert np.array_equal(a, b)
+
+
 def test_linked_edges_match_the_array_formulas(cloud):
     P, dist, idx, h = cloud
     t, lin, _ = K.tangents(P, idx, h, 12)

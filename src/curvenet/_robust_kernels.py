@@ -551,10 +551,11 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
     k = idx.shape[1]
     d = P.shape[1]
     sel = np.zeros((n, k), dtype=np.bool_)
-    total = 0
-    for p in range(n):
+    cnt = np.zeros(n + 1, dtype=np.int64)  # kept edges of row p at cnt[p + 1]
+    for p in prange(n):  # rows are independent (parallel when compiled so)
         got_pos = False
         got_neg = False
+        row = 0
         for j in range(k):
             q = idx[p, j]
             dd = dist[p, j]
@@ -588,12 +589,16 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
                     keep = True
             if keep:
                 sel[p, j] = True
-                total += 1
+                row += 1
+        cnt[p + 1] = row
+    for p in range(n):
+        cnt[p + 1] += cnt[p]
+    total = cnt[n]
     src = np.empty(total, dtype=np.int64)
     dst = np.empty(total, dtype=np.int64)
     out_d = np.empty(total)
-    e = 0
-    for p in range(n):
+    for p in prange(n):
+        e = cnt[p]
         for j in range(k):
             if sel[p, j]:
                 src[e] = p
@@ -607,15 +612,20 @@ def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
     """The kNN pairs ``(p, q)`` with ``dist <= link * 0.5 * (h_p + h_q)``, in row order."""
     n = idx.shape[0]
     k = idx.shape[1]
-    total = 0
-    for p in range(n):
+    cnt = np.zeros(n + 1, dtype=np.int64)  # pairs of row p at cnt[p + 1]
+    for p in prange(n):  # rows are independent (parallel when compiled so)
+        row = 0
         for j in range(k):
             if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
-                total += 1
+                row += 1
+        cnt[p + 1] = row
+    for p in range(n):
+        cnt[p + 1] += cnt[p]
+    total = cnt[n]
     a = np.empty(total, dtype=np.int64)
     b = np.empty(total, dtype=np.int64)
-    e = 0
-    for p in range(n):
+    for p in prange(n):
+        e = cnt[p]
         for j in range(k):
             if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
                 a[e] = p
@@ -1468,11 +1478,35 @@ def _kernel(name):
     return _PY[name]
 
 
+#: Below this many points (the first argument's length) a parallel kernel runs on one thread:
+#: starting a parallel loop costs microseconds on an idle machine, but when another process
+#: keeps the other cores busy it waits for a time slice (10 to 20 ms measured on 2 cores), more
+#: than the whole work of a light kernel on a small input. Results never depend on it.
+PAR_MIN = {"tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000,
+           "short_links": 200_000, "vote_agreement": 200_000, "vote_eig": 200_000}
+
+
+@contextmanager
+def _threads_for(name: str, n: int):
+    """Run the enclosed parallel kernel ``name`` on ``n`` points on one thread when ``n`` is
+    under :data:`PAR_MIN` (and numba runs it)."""
+    if name not in PAR_MIN or n >= PAR_MIN[name] or not (HAVE_NUMBA and _COMPILED.get()):
+        yield
+        return
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(old)
+
+
 def _dispatch(name: str):
     """A function that runs the kernel ``name`` compiled or in plain Python (see compiled_for)."""
 
     def run(*args):
-        with held():  # Ctrl-C waits for the kernel (see curvenet._sigint)
+        # Ctrl-C waits for the kernel (see curvenet._sigint)
+        with held(), _threads_for(name, len(args[0]) if name in PAR_MIN else 0):
             return _kernel(name)(*args)
 
     run.__name__ = run.__qualname__ = name
@@ -1497,7 +1531,7 @@ vote_eig = _dispatch("vote_eig")
 def tangents(P, idx, h, m, order=None):
     """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`
     (``order``: the visiting order when already computed, see :func:`_order`)."""
-    with held():
+    with held(), _threads_for("tangents", len(P)):
         return _kernel("tangents")(P, idx, h, m, _order(P) if order is None else order)
 
 
@@ -1513,9 +1547,9 @@ def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
     elif order is None:
         order = _order(P)
     # blocks: a few per thread (balance); one scratch set (about 44 bytes a point) per thread
-    # (parallel from a few thousand points: the thread pool is running by then)
-    nblocks = 4 * numba.get_num_threads() if compiled and len(order) >= 4096 else 1
-    with held():
+    par = compiled and len(order) >= PAR_MIN["shell_groups"]
+    nblocks = 4 * numba.get_num_threads() if par else 1
+    with held(), _threads_for("shell_groups", len(order)):
         return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, order, nblocks)
 
 
@@ -1544,9 +1578,8 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
-        # prange over independent blocks of points (the vote kernels are cheap: compiled
-        # serially, their parallel versions cost more compile time than they save)
-        _PAR = ("tangents", "shell_groups")
+        # prange over independent points or blocks of points
+        _PAR = ("tangents", "shell_groups", "linked_edges", "short_links", "vote_agreement", "vote_eig")
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True
