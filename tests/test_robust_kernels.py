@@ -459,3 +459,22 @@ def test_components_match_scipy(py):
         lab, count = f(n, a, b, mask)
         ref, rcount = _components_reference(n, a, b, mask)
         assert count == rcount and np.array_equal(lab, ref)
+
+
+@pytest.mark.parametrize("k", [4, 5, 9, 16])
+def test_spacing_kernel_matches_the_numpy_formula(cloud, k):
+    """robust.local_spacing gives the same bits compiled (one pass) as by its numpy formula,
+    duplicate samples included."""
+    P = cloud[0]
+    rng = np.random.default_rng(3)
+    P = np.vstack([P, P[rng.choice(len(P), len(P) // 20)]])  # coincident samples
+    P = P[np.lexsort(P.T[::-1])]
+    dist, idx = knn(P, k)
+    got = R._spacing_floor(K.spacing(dist, idx, R.DUP, R.DUP_K))  # compiled when numba is there
+    py = R._spacing_floor(K._PY["spacing"](dist, idx, R.DUP, R.DUP_K))
+    token = K._COMPILED.set(False)
+    try:
+        ref = R.local_spacing(dist, idx)  # the numpy formula
+    finally:
+        K._COMPILED.reset(token)
+    assert np.array_equal(got, ref) and np.array_equal(py, ref)

@@ -17,7 +17,7 @@ from ._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
+__all__ = ["spacing", "shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _heap_pop(heap_k, heap_v, hs):  # pragma: no cover - compiled
@@ -1405,6 +1405,86 @@ def _vote_eig(t, idx, m, cand):  # pragma: no cover - compiled
     return U, coh
 
 
+def _spacing(dist, idx, dup, dup_k):  # pragma: no cover - compiled
+    """Local spacing of every point before its floor, in one pass (see robust.local_spacing,
+    whose numpy formula it reproduces bit for bit for ``k <= 128`` neighbours: the sums run in
+    numpy's order, the 4-term mean left to right and the k-term row sum pairwise).
+
+    Parameters
+    ----------
+    dist : (N, k) ndarray of float
+        Neighbour distances, ascending in each row (C order).
+    idx : (N, k) ndarray of int64
+    dup, dup_k : float
+        The duplicate thresholds (robust.DUP, robust.DUP_K).
+
+    Returns
+    -------
+    (N,) ndarray of float
+    """
+    n = dist.shape[0]
+    k = dist.shape[1]
+    m = 4 if k >= 4 else k
+    div = 1.5 if m >= 4 else 1.0
+    raw = np.empty(n)
+    buf = np.empty(k)
+    r = np.empty(8)
+    for p in range(n):
+        s = 0.0
+        for j in range(m):
+            s += dist[p, j]
+        raw0 = s / m / div
+        # neighbours under the duplicate threshold are skipped, the next m are averaged
+        t1 = dup * raw0
+        t2 = dup_k * dist[p, k - 1] / (0.5 * k)
+        thr = t1 if t1 >= t2 else t2
+        cnt = 0
+        for j in range(k):
+            x = dist[p, j]
+            if x >= thr and cnt < m:
+                buf[j] = x
+                cnt += 1
+            else:
+                buf[j] = 0.0
+        if cnt < m:
+            raw[p] = raw0
+            continue
+        # numpy's pairwise sum of a row (k <= 128: eight accumulators, then the rest)
+        if k < 8:
+            s = 0.0
+            for j in range(k):
+                s += buf[j]
+        else:
+            for j in range(8):
+                r[j] = buf[j]
+            top = k - k % 8
+            for i in range(8, top, 8):
+                for j in range(8):
+                    r[j] += buf[i + j]
+            s = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+            for i in range(top, k):
+                s += buf[i]
+        raw[p] = s / cnt / div
+    # the median over the point and its (up to) 8 nearest neighbours
+    jn = 8 if k >= 8 else k
+    h = np.empty(n)
+    v = np.empty(jn + 1)
+    for p in range(n):
+        v[0] = raw[p]
+        for j in range(jn):
+            v[j + 1] = raw[idx[p, j]]
+        for a in range(1, jn + 1):  # insertion sort
+            x = v[a]
+            b = a - 1
+            while b >= 0 and v[b] > x:
+                v[b + 1] = v[b]
+                b -= 1
+            v[b + 1] = x
+        c = (jn + 1) // 2
+        h[p] = v[c] if (jn + 1) % 2 else (v[c - 1] + v[c]) / 2.0
+    return h
+
+
 def _order(P):
     """A cache-friendly visiting order of the points (results never depend on it)."""
     if P.shape[0] <= 100_000:
@@ -1424,6 +1504,7 @@ _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
 # the plain-Python functions, kept under their own names (the compiled ones replace some globals)
 _PY = {
+    "spacing": _spacing,
     "components": _components,
     "chain_order": _chain_order,
     "chain_ends": _chain_ends,
@@ -1472,6 +1553,11 @@ def _compiled_already() -> bool:
     return any(getattr(f, "signatures", None) for f in _JIT.values())
 
 
+def compiled_active() -> bool:
+    """True when the kernels run compiled here (numba there, see :func:`compiled_for`)."""
+    return HAVE_NUMBA and _COMPILED.get()
+
+
 def _kernel(name):
     if HAVE_NUMBA and _COMPILED.get():
         return _JIT[name]
@@ -1514,6 +1600,7 @@ def _dispatch(name: str):
     return run
 
 
+spacing = _dispatch("spacing")
 components = _dispatch("components")
 chain_order = _dispatch("chain_order")
 chain_ends = _dispatch("chain_ends")
