@@ -340,6 +340,28 @@ def _fit_line(X):
     return c, vt[0]
 
 
+def _step_lengths(P, ids):
+    """Distance from every point ``P[ids[i]]`` to the next one ``P[ids[i + 1]]``, 0 after the last.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    ids : (n,) ndarray of int
+
+    Returns
+    -------
+    (n,) ndarray of float
+        The same values as ``np.linalg.norm(np.diff(P[ids], axis=0), axis=1)`` (one gather).
+    """
+    out = np.zeros(len(ids))
+    if len(ids) > 1:
+        X = P[ids]
+        D = X[1:] - X[:-1]
+        D *= D
+        out[:-1] = np.sqrt(D.sum(axis=1))
+    return out
+
+
 def _polylen(X):
     if len(X) < 2:
         return 0.0
@@ -666,7 +688,7 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     ends, touch = _k.chain_ends(np.ascontiguousarray(h, dtype=np.float64), ids_o, par_o, bounds,
                                 c_reg, c_par, cb)
     # polyline length of every ordered chain (steps inside a chain; a zigzag test below)
-    step = np.r_[np.sqrt(((P[ids_o[1:]] - P[ids_o[:-1]]) ** 2).sum(axis=1)), 0.0]
+    step = _step_lengths(P, ids_o)
     step[bounds[1:] - 1] = 0.0  # the step from a chain's last point to the next chain's first
     plen = np.add.reduceat(step, bounds[:-1]) if n_chn else np.zeros(0)
     length = par_o[bounds[1:] - 1]  # the distance of each chain's far end
@@ -986,9 +1008,12 @@ def _assemble(P, h, chains, regions, prm):
     opn = [ci for ci, c in enumerate(live) if not c.closed]
     trim = {}
     if opn:
-        nid, vl = new_id.tolist(), v.tolist()
-        ends = np.array([[nid[node_of[live[ci].ends[0]]], nid[node_of[live[ci].ends[1]]]]
-                         for ci in opn], dtype=np.int64).reshape(-1, 2)
+        vl = v.tolist()
+        node_arr = np.full(len(regions), -1, dtype=np.int64)
+        node_arr[list(node_of)] = list(node_of.values())
+        ends = np.fromiter(itertools.chain.from_iterable(live[ci].ends for ci in opn), dtype=np.int64,
+                           count=2 * len(opn))
+        ends = new_id[node_arr[ends]].reshape(-1, 2)
         do0 = np.array([(ci, 0) not in end_ext and vl[live[ci].ends[0]] >= 2 for ci in opn])
         do1 = np.array([(ci, 1) not in end_ext and vl[live[ci].ends[1]] >= 2 for ci in opn])
         flat = np.concatenate([live[ci].ids for ci in opn]).astype(np.int64, copy=False)
@@ -1039,8 +1064,7 @@ def _chain_lengths(P, h, chains):
     if len(nz):
         flat = np.concatenate([chains[i].ids for i in nz.tolist()]).astype(np.int64, copy=False)
         off = np.r_[0, np.cumsum(lens[nz])]
-        step = np.zeros(len(flat))
-        step[:-1] = np.sqrt(((P[flat[1:]] - P[flat[:-1]]) ** 2).sum(axis=1))
+        step = _step_lengths(P, flat)
         step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
         length[nz] = np.add.reduceat(step, off[:-1])
         hmax[nz] = np.maximum.reduceat(h[flat], off[:-1])
@@ -1152,7 +1176,7 @@ def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
     if not two or len(cand) < 2:
         return
     noise = prm.get("_noise", 0.0)
-    lab = np.concatenate([np.full(len(regions[r]), r) for r in cand])
+    lab = np.repeat(np.asarray(cand, dtype=np.int64), [len(regions[r]) for r in cand])
     ids = np.concatenate([regions[r] for r in cand])
     tree = cKDTree(P[ids])
     for r in two:
@@ -1197,7 +1221,7 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     tips = [r for r in range(len(regions)) if v[r] == 1]
     if not big or not tips:
         return
-    lab = np.concatenate([np.full(len(regions[r]), r) for r in big])
+    lab = np.repeat(np.asarray(big, dtype=np.int64), [len(regions[r]) for r in big])
     ids = np.concatenate([regions[r] for r in big])
     tree = cKDTree(P[ids])
     noise = prm.get("_noise", 0.0)
@@ -1210,10 +1234,19 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
             i, s = inc[0]
             one.append((r, i, s, chains[i].ids if s == 1 else chains[i].ids[::-1]))  # towards the tip
     ms = _end_counts(P, h, [x[3] for x in one], 4.0).tolist()
-    for (r, i, s, cids), m in zip(one, ms):
-        _, tip = _free_end(P, h, cids, regions[r], m=m)  # where the free end's node would be
-        gap = prm["link"] * 1.2 * float(h[cids[-1]]) + GAP * noise
-        d, k = tree.query(tip, distance_upper_bound=gap)
+    if not one:
+        return
+    # where each free end's node would be, then the nearest junction point of each (one query:
+    # the tree does not change below)
+    tip = np.array([_free_end(P, h, cids, regions[r], m=m)[1] for (r, _, _, cids), m in zip(one, ms)])
+    gap = prm["link"] * 1.2 * h[[int(x[3][-1]) for x in one]] + GAP * noise
+    dk, kk = tree.query(tip, distance_upper_bound=float(gap.max()))
+    # the bound is per tip: beyond it, none (as a query bounded by it; at the bound itself,
+    # within rounding, that query is run)
+    dk[dk > gap * (1 + 1e-9)] = np.inf
+    for j in np.flatnonzero(np.isfinite(dk) & (dk >= gap * (1 - 1e-9))).tolist():
+        dk[j], kk[j] = tree.query(tip[j], distance_upper_bound=float(gap[j]))
+    for (r, i, s, cids), d, k in zip(one, dk.tolist(), kk.tolist()):
         if not np.isfinite(d):
             continue
         t = int(lab[k])
@@ -1235,7 +1268,7 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     # MERGE_LEN times its largest spacing is longer than MERGE_LEN times its median one
     lens = [len(c.ids) for c in chains]
     flat = np.concatenate([c.ids for c in chains]).astype(np.int64) if chains else np.zeros(0, np.int64)
-    step = np.linalg.norm(np.diff(P[flat], axis=0), axis=1) if len(flat) > 1 else np.zeros(0)
+    step = _step_lengths(P, flat)[:-1]
     cum = np.r_[0.0, np.cumsum(step)]
     off = np.r_[0, np.cumsum(lens)].astype(np.int64)
     hmax = np.zeros(len(chains))
