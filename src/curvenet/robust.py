@@ -462,7 +462,8 @@ def _reconstruct_robust(
     # a cache-friendly visiting order of the points for the per-point work (k-NN query,
     # tangents, shell test): computed once (the results never depend on it)
     vis = _k._order(P) if N > 100_000 else None
-    dist, idx = knn(P, prm["k"], order=vis)
+    tree = build_tree(P)  # kept for the repairs (robust._attach_dangling)
+    dist, idx = knn(P, prm["k"], order=vis, tree=tree)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     if spacing is None:
@@ -512,7 +513,7 @@ def _reconstruct_robust(
 
     # 5. network
     t1 = time.perf_counter()
-    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise)
+    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise, _tree=tree)
     nodes, curves = _assemble(P, h, chains, regions, prm_int)
     tm["assemble"] = time.perf_counter() - t1
 
@@ -1399,7 +1400,13 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     pts = np.flatnonzero(owner >= 0)
     if len(pts) == 0:
         return
-    tree = build_tree(P[pts])  # unbalanced, not compacted: faster to build, same answers
+    if prm.get("_tree") is not None:
+        # the tree over all points (built for the k-NN query): the points of no chain it
+        # returns as well are left out below (owner -1), as are those of split-off cores
+        tree = prm["_tree"]
+        pts = np.arange(N)
+    else:
+        tree = build_tree(P[pts])  # unbalanced, not compacted: faster to build, same answers
     noise = prm.get("_noise", 0.0)
     tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
             for s in (0, 1) if v[c.ends[s]] == 1]
