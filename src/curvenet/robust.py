@@ -1681,12 +1681,28 @@ def _region_paths(P, items, prm):
     indptr, indices = prm["_graph"]
     if not items:
         return []
-    Ss = [np.r_[entry, np.setdiff1d(rid, [entry])].astype(np.int64) for rid, entry in items]
-    sizes = np.array([len(S) for S in Ss], dtype=np.int64)
+    # per item: the entry, then the other region points sorted and unique (as
+    # np.setdiff1d(rid, [entry])), all items in one sort
+    G = len(items)
+    ent = np.array([entry for _, entry in items], dtype=np.int64)
+    rl = np.array([len(rid) for rid, _ in items], dtype=np.int64)
+    flat = np.concatenate([np.asarray(rid, dtype=np.int64) for rid, _ in items])
+    fg = np.repeat(np.arange(G, dtype=np.int64), rl)
+    o = np.lexsort((flat, fg))
+    flat, fg = flat[o], fg[o]
+    keep = np.ones(len(flat), dtype=bool)
+    keep[1:] = (flat[1:] != flat[:-1]) | (fg[1:] != fg[:-1])
+    keep &= flat != ent[fg]
+    flat, fg = flat[keep], fg[keep]
+    sizes = 1 + np.bincount(fg, minlength=G).astype(np.int64)
     start = np.r_[0, np.cumsum(sizes)[:-1]]
-    U = np.concatenate(Ss)
-    grp = np.repeat(np.arange(len(Ss), dtype=np.int64), sizes)
-    G = len(Ss)
+    grp = np.repeat(np.arange(G, dtype=np.int64), sizes)
+    U = np.empty(int(sizes.sum()), dtype=np.int64)
+    U[start] = ent
+    rest = np.ones(len(U), dtype=bool)
+    rest[start] = False
+    U[rest] = flat
+    Ss = [U[a:a + n] for a, n in zip(start.tolist(), sizes.tolist())]
     # position in U of (point, group): key point * G + group (a point may be in two groups)
     key = U * G + grp
     srt = np.argsort(key, kind="stable")
