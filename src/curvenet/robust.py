@@ -469,7 +469,7 @@ def _reconstruct_robust(
     if spacing is None:
         h = local_spacing(dist, idx)
         params_out["spacing"] = float(np.median(h))
-        params_out["spacing_range"] = [float(np.percentile(h, 5)), float(np.percentile(h, 95))]
+        params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
         params_out["spacing_estimated"] = True
     else:
         h = np.full(N, float(spacing))
@@ -536,7 +536,8 @@ def _reconstruct_robust(
         params_out["smoothing"] = s
         curves = [_smooth_curve(c, nodes, s * hm**2) for c in curves]
         tm["smooth"] = time.perf_counter() - t1
-    params_out["groups_histogram"] = {str(g): int(c) for g, c in zip(*np.unique(groups, return_counts=True))}
+    # (counts of the small non-negative group numbers: a bincount, not a sort of all points)
+    params_out["groups_histogram"] = {str(g): c for g, c in enumerate(np.bincount(groups).tolist()) if c}
     net = CurveNetwork(nodes, curves, params_out, {"time": tm})
     return net
 
