@@ -670,10 +670,11 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
                                           np.ascontiguousarray(dd, dtype=np.float64), chn, int(n_chn))
 
     # contacts: linked edges between a chain point and a region point
-    cmask = (chn[src] >= 0) & (reg[dst] >= 0)
+    in_chn, in_reg = chn >= 0, reg >= 0  # (gathers of bytes below, not of int64)
+    cmask = in_chn[src] & in_reg[dst]
     c_pt = src[cmask]
     c_reg = reg[dst[cmask]]
-    cmask2 = (chn[dst] >= 0) & (reg[src] >= 0)
+    cmask2 = in_chn[dst] & in_reg[src]
     c_pt = np.r_[c_pt, dst[cmask2]]
     c_reg = np.r_[c_reg, reg[src[cmask2]]]
     c_chain = chn[c_pt]
