@@ -1568,8 +1568,7 @@ def _kernel(name):
 #: starting a parallel loop costs microseconds on an idle machine, but when another process
 #: keeps the other cores busy it waits for a time slice (10 to 20 ms measured on 2 cores), more
 #: than the whole work of a light kernel on a small input. Results never depend on it.
-PAR_MIN = {"tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000,
-           "short_links": 200_000, "vote_agreement": 200_000, "vote_eig": 200_000}
+PAR_MIN = {"tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000, "vote_eig": 200_000}
 
 
 @contextmanager
@@ -1666,7 +1665,9 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         }
         globals().update(_JIT_HELPERS)
         # prange over independent points or blocks of points
-        _PAR = ("tangents", "shell_groups", "linked_edges", "short_links", "vote_agreement", "vote_eig")
+        # (the light vote_agreement and short_links stay serial: their parallel versions cost
+        # about 2 s of compile each, more than they save)
+        _PAR = ("tangents", "shell_groups", "linked_edges", "vote_eig")
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True
