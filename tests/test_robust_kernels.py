@@ -164,6 +164,36 @@ def test_compiled_and_python_runs_agree(cloud, tmp_path):
         assert np.array_equal(x, ref[key], equal_nan=True), key
 
 
+def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
+    """The parallel kernels give the same arrays whether their loops run on all threads or on
+    one (:data:`_robust_kernels.PAR_MIN`), and as the plain-Python loops."""
+    P, dist, idx, h = cloud
+    cand = np.arange(0, len(P), 3, dtype=np.int64)
+
+    def run():
+        t, lin, chord = K.tangents(P, idx, h, 12)
+        e = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+        s = K.short_links(h, dist, idx, 2.5)
+        agree = K.vote_agreement(t, idx, 8)
+        u = K.vote_eig(t, idx, 8, cand)
+        indptr, indices = K.csr_union(len(P), e[0], e[1])
+        g = K.shell_groups(P, h, indptr, indices, 1.5, 3.3)
+        return (t, lin, chord, *e, *s, agree, *u, g)
+
+    monkeypatch.setattr(K, "PAR_MIN", {name: 1 << 62 for name in K.PAR_MIN})
+    one = run()
+    monkeypatch.setattr(K, "PAR_MIN", {name: 0 for name in K.PAR_MIN})
+    par = run()
+    for a, b in zip(one, par):
+        assert np.array_equal(a, b, equal_nan=True)
+    t, lin = par[0], par[1]
+    for got, ref in ((par[3:6], K._PY["linked_edges"](P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
+                     (par[6:8], K._PY["short_links"](h, dist, idx, 2.5)),
+                     ((par[8],), (K._PY["vote_agreement"](t, idx, 8),))):
+        for a, b in zip(got, ref):
+            assert np.array_equal(a, b)
+
+
 def test_linked_edges_match_the_array_formulas(cloud):
     P, dist, idx, h = cloud
     t, lin, _ = K.tangents(P, idx, h, 12)
@@ -429,3 +459,22 @@ def test_components_match_scipy(py):
         lab, count = f(n, a, b, mask)
         ref, rcount = _components_reference(n, a, b, mask)
         assert count == rcount and np.array_equal(lab, ref)
+
+
+@pytest.mark.parametrize("k", [4, 5, 9, 16])
+def test_spacing_kernel_matches_the_numpy_formula(cloud, k):
+    """robust.local_spacing gives the same bits compiled (one pass) as by its numpy formula,
+    duplicate samples included."""
+    P = cloud[0]
+    rng = np.random.default_rng(3)
+    P = np.vstack([P, P[rng.choice(len(P), len(P) // 20)]])  # coincident samples
+    P = P[np.lexsort(P.T[::-1])]
+    dist, idx = knn(P, k)
+    got = R._spacing_floor(K.spacing(dist, idx, R.DUP, R.DUP_K))  # compiled when numba is there
+    py = R._spacing_floor(K._PY["spacing"](dist, idx, R.DUP, R.DUP_K))
+    token = K._COMPILED.set(False)
+    try:
+        ref = R.local_spacing(dist, idx)  # the numpy formula
+    finally:
+        K._COMPILED.reset(token)
+    assert np.array_equal(got, ref) and np.array_equal(py, ref)

@@ -17,7 +17,7 @@ from ._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
+__all__ = ["spacing", "shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _heap_pop(heap_k, heap_v, hs):  # pragma: no cover - compiled
@@ -551,10 +551,11 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
     k = idx.shape[1]
     d = P.shape[1]
     sel = np.zeros((n, k), dtype=np.bool_)
-    total = 0
-    for p in range(n):
+    cnt = np.zeros(n + 1, dtype=np.int64)  # kept edges of row p at cnt[p + 1]
+    for p in prange(n):  # rows are independent (parallel when compiled so)
         got_pos = False
         got_neg = False
+        row = 0
         for j in range(k):
             q = idx[p, j]
             dd = dist[p, j]
@@ -588,12 +589,16 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
                     keep = True
             if keep:
                 sel[p, j] = True
-                total += 1
+                row += 1
+        cnt[p + 1] = row
+    for p in range(n):
+        cnt[p + 1] += cnt[p]
+    total = cnt[n]
     src = np.empty(total, dtype=np.int64)
     dst = np.empty(total, dtype=np.int64)
     out_d = np.empty(total)
-    e = 0
-    for p in range(n):
+    for p in prange(n):
+        e = cnt[p]
         for j in range(k):
             if sel[p, j]:
                 src[e] = p
@@ -607,15 +612,20 @@ def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
     """The kNN pairs ``(p, q)`` with ``dist <= link * 0.5 * (h_p + h_q)``, in row order."""
     n = idx.shape[0]
     k = idx.shape[1]
-    total = 0
-    for p in range(n):
+    cnt = np.zeros(n + 1, dtype=np.int64)  # pairs of row p at cnt[p + 1]
+    for p in prange(n):  # rows are independent (parallel when compiled so)
+        row = 0
         for j in range(k):
             if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
-                total += 1
+                row += 1
+        cnt[p + 1] = row
+    for p in range(n):
+        cnt[p + 1] += cnt[p]
+    total = cnt[n]
     a = np.empty(total, dtype=np.int64)
     b = np.empty(total, dtype=np.int64)
-    e = 0
-    for p in range(n):
+    for p in prange(n):
+        e = cnt[p]
         for j in range(k):
             if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
                 a[e] = p
@@ -1395,6 +1405,86 @@ def _vote_eig(t, idx, m, cand):  # pragma: no cover - compiled
     return U, coh
 
 
+def _spacing(dist, idx, dup, dup_k):  # pragma: no cover - compiled
+    """Local spacing of every point before its floor, in one pass (see robust.local_spacing,
+    whose numpy formula it reproduces bit for bit for ``k <= 128`` neighbours: the sums run in
+    numpy's order, the 4-term mean left to right and the k-term row sum pairwise).
+
+    Parameters
+    ----------
+    dist : (N, k) ndarray of float
+        Neighbour distances, ascending in each row (C order).
+    idx : (N, k) ndarray of int64
+    dup, dup_k : float
+        The duplicate thresholds (robust.DUP, robust.DUP_K).
+
+    Returns
+    -------
+    (N,) ndarray of float
+    """
+    n = dist.shape[0]
+    k = dist.shape[1]
+    m = 4 if k >= 4 else k
+    div = 1.5 if m >= 4 else 1.0
+    raw = np.empty(n)
+    buf = np.empty(k)
+    r = np.empty(8)
+    for p in range(n):
+        s = 0.0
+        for j in range(m):
+            s += dist[p, j]
+        raw0 = s / m / div
+        # neighbours under the duplicate threshold are skipped, the next m are averaged
+        t1 = dup * raw0
+        t2 = dup_k * dist[p, k - 1] / (0.5 * k)
+        thr = t1 if t1 >= t2 else t2
+        cnt = 0
+        for j in range(k):
+            x = dist[p, j]
+            if x >= thr and cnt < m:
+                buf[j] = x
+                cnt += 1
+            else:
+                buf[j] = 0.0
+        if cnt < m:
+            raw[p] = raw0
+            continue
+        # numpy's pairwise sum of a row (k <= 128: eight accumulators, then the rest)
+        if k < 8:
+            s = 0.0
+            for j in range(k):
+                s += buf[j]
+        else:
+            for j in range(8):
+                r[j] = buf[j]
+            top = k - k % 8
+            for i in range(8, top, 8):
+                for j in range(8):
+                    r[j] += buf[i + j]
+            s = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+            for i in range(top, k):
+                s += buf[i]
+        raw[p] = s / cnt / div
+    # the median over the point and its (up to) 8 nearest neighbours
+    jn = 8 if k >= 8 else k
+    h = np.empty(n)
+    v = np.empty(jn + 1)
+    for p in range(n):
+        v[0] = raw[p]
+        for j in range(jn):
+            v[j + 1] = raw[idx[p, j]]
+        for a in range(1, jn + 1):  # insertion sort
+            x = v[a]
+            b = a - 1
+            while b >= 0 and v[b] > x:
+                v[b + 1] = v[b]
+                b -= 1
+            v[b + 1] = x
+        c = (jn + 1) // 2
+        h[p] = v[c] if (jn + 1) % 2 else (v[c - 1] + v[c]) / 2.0
+    return h
+
+
 def _order(P):
     """A cache-friendly visiting order of the points (results never depend on it)."""
     if P.shape[0] <= 100_000:
@@ -1414,6 +1504,7 @@ _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
 # the plain-Python functions, kept under their own names (the compiled ones replace some globals)
 _PY = {
+    "spacing": _spacing,
     "components": _components,
     "chain_order": _chain_order,
     "chain_ends": _chain_ends,
@@ -1462,17 +1553,45 @@ def _compiled_already() -> bool:
     return any(getattr(f, "signatures", None) for f in _JIT.values())
 
 
+def compiled_active() -> bool:
+    """True when the kernels run compiled here (numba there, see :func:`compiled_for`)."""
+    return HAVE_NUMBA and _COMPILED.get()
+
+
 def _kernel(name):
     if HAVE_NUMBA and _COMPILED.get():
         return _JIT[name]
     return _PY[name]
 
 
+#: Below this many points (the first argument's length) a parallel kernel runs on one thread:
+#: starting a parallel loop costs microseconds on an idle machine, but when another process
+#: keeps the other cores busy it waits for a time slice (10 to 20 ms measured on 2 cores), more
+#: than the whole work of a light kernel on a small input. Results never depend on it.
+PAR_MIN = {"tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000, "vote_eig": 200_000}
+
+
+@contextmanager
+def _threads_for(name: str, n: int):
+    """Run the enclosed parallel kernel ``name`` on ``n`` points on one thread when ``n`` is
+    under :data:`PAR_MIN` (and numba runs it)."""
+    if name not in PAR_MIN or n >= PAR_MIN[name] or not (HAVE_NUMBA and _COMPILED.get()):
+        yield
+        return
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(old)
+
+
 def _dispatch(name: str):
     """A function that runs the kernel ``name`` compiled or in plain Python (see compiled_for)."""
 
     def run(*args):
-        with held():  # Ctrl-C waits for the kernel (see curvenet._sigint)
+        # Ctrl-C waits for the kernel (see curvenet._sigint)
+        with held(), _threads_for(name, len(args[0]) if name in PAR_MIN else 0):
             return _kernel(name)(*args)
 
     run.__name__ = run.__qualname__ = name
@@ -1480,6 +1599,7 @@ def _dispatch(name: str):
     return run
 
 
+spacing = _dispatch("spacing")
 components = _dispatch("components")
 chain_order = _dispatch("chain_order")
 chain_ends = _dispatch("chain_ends")
@@ -1494,22 +1614,28 @@ vote_agreement = _dispatch("vote_agreement")
 vote_eig = _dispatch("vote_eig")
 
 
-def tangents(P, idx, h, m):
-    """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`."""
-    with held():
-        return _kernel("tangents")(P, idx, h, m, _order(P))
+def tangents(P, idx, h, m, order=None):
+    """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`
+    (``order``: the visiting order when already computed, see :func:`_order`)."""
+    with held(), _threads_for("tangents", len(P)):
+        return _kernel("tangents")(P, idx, h, m, _order(P) if order is None else order)
 
 
-def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None):
+def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
     """Shell group count of every point (or of the points ``subset``, the others 0): see
-    :func:`_shell_groups`."""
+    :func:`_shell_groups` (``order``: the visiting order of all points when already computed,
+    see :func:`_order`)."""
     if P.shape[0] >= 2**31 - 1:
         raise ValueError("too many points for the shell test (int32 ids)")
     compiled = HAVE_NUMBA and _COMPILED.get()
-    order = _order(P) if subset is None else np.sort(np.asarray(subset, dtype=np.int64))
+    if subset is not None:
+        order = np.sort(np.asarray(subset, dtype=np.int64))
+    elif order is None:
+        order = _order(P)
     # blocks: a few per thread (balance); one scratch set (about 44 bytes a point) per thread
-    nblocks = 4 * numba.get_num_threads() if compiled and len(order) >= 50_000 else 1
-    with held():
+    par = compiled and len(order) >= PAR_MIN["shell_groups"]
+    nblocks = 4 * numba.get_num_threads() if par else 1
+    with held(), _threads_for("shell_groups", len(order)):
         return _kernel("shell_groups")(P, h, indptr, indices, r_in, r_out, order, nblocks)
 
 
@@ -1538,9 +1664,10 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
-        # prange over independent blocks of points (the vote kernels are cheap: compiled
-        # serially, their parallel versions cost more compile time than they save)
-        _PAR = ("tangents", "shell_groups")
+        # prange over independent points or blocks of points
+        # (the light vote_agreement and short_links stay serial: their parallel versions cost
+        # about 2 s of compile each, more than they save)
+        _PAR = ("tangents", "shell_groups", "linked_edges", "vote_eig")
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True

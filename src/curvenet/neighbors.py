@@ -22,7 +22,8 @@ def query(tree: cKDTree, x: np.ndarray, **kwargs):
         return tree.query(x, **kwargs)
 
 
-def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1):
+def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1,
+        order: np.ndarray | None = None):
     """The ``k`` nearest neighbours of every point, the point itself excluded.
 
     Parameters
@@ -35,6 +36,9 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
         A tree over ``points`` to reuse.
     workers : int
         Threads for the query (-1: all cores).
+    order : (N,) ndarray of int, optional
+        :func:`locality_order` of ``points`` when already computed (used above 100,000 points;
+        the result does not depend on it).
 
     Returns
     -------
@@ -54,7 +58,10 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds; the
     # rows are visited in spatial order (each query is independent: the result is the same, but
     # consecutive queries touch the same parts of the tree, which is much faster for large N)
-    order = locality_order(points) if n > 100_000 else None
+    if n <= 100_000:
+        order = None
+    elif order is None:
+        order = locality_order(points)
     step = max(1, (1 << 20) // (k + 1))
     for s in range(0, n, step):
         e = min(n, s + step)

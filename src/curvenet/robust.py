@@ -156,6 +156,11 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
         closer than ``DUP_K`` times the k-th neighbour's distance over k / 2 (about one
         spacing on a curve): several curves ending on one sample make the first mean tiny.
     """
+    if _k.compiled_active() and dist.shape[1] <= 128:
+        # compiled, one pass over the rows, the same numbers as the numpy formula below
+        h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                       float(DUP), float(DUP_K))
+        return _spacing_floor(h)
     m = min(4, dist.shape[1])
     div = 1.5 if m >= 4 else 1.0
     raw = np.empty(len(dist))
@@ -178,12 +183,17 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
             h[a:a + step] = np.partition(R, R.shape[1] // 2, axis=1)[:, R.shape[1] // 2]
         else:
             h[a:a + step] = np.median(R, axis=1)
+    return _spacing_floor(h)
+
+
+def _spacing_floor(h):
+    """``h`` raised to a thousandth of its smallest positive value (coincident clouds)."""
     pos = h[h > 0]
     floor = (pos.min() if len(pos) else 1.0) * 1e-3
     return np.maximum(h, floor)
 
 
-def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
+def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=None):
     """Local tangent and linearity of each point.
 
     A first direction from the 4 nearest neighbours (or towards one of them, when its narrow
@@ -199,7 +209,7 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12):
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
     t, lin, cr = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                             np.ascontiguousarray(h, dtype=np.float64), m)
+                             np.ascontiguousarray(h, dtype=np.float64), m, order)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
     rms = 1.28 * cr / np.sqrt(1.5 * max(dim - 1, 1))
@@ -257,7 +267,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
                            float(width), float(wmin), float(gap), float(EXTRA), float(LIN))
 
 
-def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
+def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None):
     """Number of connected groups of linked points in the shell around each point.
 
     Parameters
@@ -270,6 +280,8 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
         CSR adjacency of the linked graph.
     shell_inner, shell_outer : float
         Shell radii in units of ``h``.
+    order : (N,) ndarray of int, optional
+        Visiting order of the points (cache locality only), when already computed.
 
     Returns
     -------
@@ -277,7 +289,7 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer):
     """
     return _k.shell_groups(
         np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
-        indptr, indices, float(shell_inner), float(shell_outer),
+        indptr, indices, float(shell_inner), float(shell_outer), order=order,
     )
 
 
@@ -326,6 +338,28 @@ def _fit_line(X):
         return c, None
     _, _, vt = np.linalg.svd(X - c, full_matrices=False)
     return c, vt[0]
+
+
+def _step_lengths(P, ids):
+    """Distance from every point ``P[ids[i]]`` to the next one ``P[ids[i + 1]]``, 0 after the last.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    ids : (n,) ndarray of int
+
+    Returns
+    -------
+    (n,) ndarray of float
+        The same values as ``np.linalg.norm(np.diff(P[ids], axis=0), axis=1)`` (one gather).
+    """
+    out = np.zeros(len(ids))
+    if len(ids) > 1:
+        X = P[ids]
+        D = X[1:] - X[:-1]
+        D *= D
+        out[:-1] = np.sqrt(D.sum(axis=1))
+    return out
 
 
 def _polylen(X):
@@ -425,13 +459,17 @@ def _reconstruct_robust(
         return net
 
     # 1. neighbours and spacing
-    dist, idx = knn(P, prm["k"])
+    # a cache-friendly visiting order of the points for the per-point work (k-NN query,
+    # tangents, shell test): computed once (the results never depend on it)
+    vis = _k._order(P) if N > 100_000 else None
+    tree = build_tree(P)  # kept for the repairs (robust._attach_dangling)
+    dist, idx = knn(P, prm["k"], order=vis, tree=tree)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     if spacing is None:
         h = local_spacing(dist, idx)
         params_out["spacing"] = float(np.median(h))
-        params_out["spacing_range"] = [float(np.percentile(h, 5)), float(np.percentile(h, 95))]
+        params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
         params_out["spacing_estimated"] = True
     else:
         h = np.full(N, float(spacing))
@@ -439,7 +477,7 @@ def _reconstruct_robust(
         params_out["spacing_estimated"] = False
 
     # 2. linked graph
-    t, lin, rms = _tangents(P, idx, h)
+    t, lin, rms = _tangents(P, idx, h, order=vis)
     t, lin = _vote_tangents(t, lin, idx)
     sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
     params_out["noise"] = sigma  # estimated std of the noise per coordinate
@@ -453,7 +491,7 @@ def _reconstruct_robust(
     t1 = time.perf_counter()
     # noise blurs the junction over a few sigma: the shell grows with it
     hs = h + WIDEN * noise
-    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"])
+    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"], order=vis)
     tm["nodes"] = time.perf_counter() - t1
 
     # 4. regions and chains
@@ -475,7 +513,7 @@ def _reconstruct_robust(
 
     # 5. network
     t1 = time.perf_counter()
-    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise)
+    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise, _tree=tree)
     nodes, curves = _assemble(P, h, chains, regions, prm_int)
     tm["assemble"] = time.perf_counter() - t1
 
@@ -498,7 +536,8 @@ def _reconstruct_robust(
         params_out["smoothing"] = s
         curves = [_smooth_curve(c, nodes, s * hm**2) for c in curves]
         tm["smooth"] = time.perf_counter() - t1
-    params_out["groups_histogram"] = {str(g): int(c) for g, c in zip(*np.unique(groups, return_counts=True))}
+    # (counts of the small non-negative group numbers: a bincount, not a sort of all points)
+    params_out["groups_histogram"] = {str(g): c for g, c in enumerate(np.bincount(groups).tolist()) if c}
     net = CurveNetwork(nodes, curves, params_out, {"time": tm})
     return net
 
@@ -631,10 +670,11 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
                                           np.ascontiguousarray(dd, dtype=np.float64), chn, int(n_chn))
 
     # contacts: linked edges between a chain point and a region point
-    cmask = (chn[src] >= 0) & (reg[dst] >= 0)
+    in_chn, in_reg = chn >= 0, reg >= 0  # (gathers of bytes below, not of int64)
+    cmask = in_chn[src] & in_reg[dst]
     c_pt = src[cmask]
     c_reg = reg[dst[cmask]]
-    cmask2 = (chn[dst] >= 0) & (reg[src] >= 0)
+    cmask2 = in_chn[dst] & in_reg[src]
     c_pt = np.r_[c_pt, dst[cmask2]]
     c_reg = np.r_[c_reg, reg[src[cmask2]]]
     c_chain = chn[c_pt]
@@ -651,7 +691,7 @@ def _order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     ends, touch = _k.chain_ends(np.ascontiguousarray(h, dtype=np.float64), ids_o, par_o, bounds,
                                 c_reg, c_par, cb)
     # polyline length of every ordered chain (steps inside a chain; a zigzag test below)
-    step = np.r_[np.sqrt(((P[ids_o[1:]] - P[ids_o[:-1]]) ** 2).sum(axis=1)), 0.0]
+    step = _step_lengths(P, ids_o)
     step[bounds[1:] - 1] = 0.0  # the step from a chain's last point to the next chain's first
     plen = np.add.reduceat(step, bounds[:-1]) if n_chn else np.zeros(0)
     length = par_o[bounds[1:] - 1]  # the distance of each chain's far end
@@ -971,9 +1011,12 @@ def _assemble(P, h, chains, regions, prm):
     opn = [ci for ci, c in enumerate(live) if not c.closed]
     trim = {}
     if opn:
-        nid, vl = new_id.tolist(), v.tolist()
-        ends = np.array([[nid[node_of[live[ci].ends[0]]], nid[node_of[live[ci].ends[1]]]]
-                         for ci in opn], dtype=np.int64).reshape(-1, 2)
+        vl = v.tolist()
+        node_arr = np.full(len(regions), -1, dtype=np.int64)
+        node_arr[list(node_of)] = list(node_of.values())
+        ends = np.fromiter(itertools.chain.from_iterable(live[ci].ends for ci in opn), dtype=np.int64,
+                           count=2 * len(opn))
+        ends = new_id[node_arr[ends]].reshape(-1, 2)
         do0 = np.array([(ci, 0) not in end_ext and vl[live[ci].ends[0]] >= 2 for ci in opn])
         do1 = np.array([(ci, 1) not in end_ext and vl[live[ci].ends[1]] >= 2 for ci in opn])
         flat = np.concatenate([live[ci].ids for ci in opn]).astype(np.int64, copy=False)
@@ -1024,8 +1067,7 @@ def _chain_lengths(P, h, chains):
     if len(nz):
         flat = np.concatenate([chains[i].ids for i in nz.tolist()]).astype(np.int64, copy=False)
         off = np.r_[0, np.cumsum(lens[nz])]
-        step = np.zeros(len(flat))
-        step[:-1] = np.sqrt(((P[flat[1:]] - P[flat[:-1]]) ** 2).sum(axis=1))
+        step = _step_lengths(P, flat)
         step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
         length[nz] = np.add.reduceat(step, off[:-1])
         hmax[nz] = np.maximum.reduceat(h[flat], off[:-1])
@@ -1139,7 +1181,7 @@ def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
     if not two or len(cand) < 2:
         return
     noise = prm.get("_noise", 0.0)
-    lab = np.concatenate([np.full(len(regions[r]), r) for r in cand])
+    lab = np.repeat(np.asarray(cand, dtype=np.int64), [len(regions[r]) for r in cand])
     ids = np.concatenate([regions[r] for r in cand])
     tree = cKDTree(P[ids])
     for r in two:
@@ -1184,7 +1226,7 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     tips = [r for r in range(len(regions)) if v[r] == 1]
     if not big or not tips:
         return
-    lab = np.concatenate([np.full(len(regions[r]), r) for r in big])
+    lab = np.repeat(np.asarray(big, dtype=np.int64), [len(regions[r]) for r in big])
     ids = np.concatenate([regions[r] for r in big])
     tree = cKDTree(P[ids])
     noise = prm.get("_noise", 0.0)
@@ -1197,10 +1239,19 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
             i, s = inc[0]
             one.append((r, i, s, chains[i].ids if s == 1 else chains[i].ids[::-1]))  # towards the tip
     ms = _end_counts(P, h, [x[3] for x in one], 4.0).tolist()
-    for (r, i, s, cids), m in zip(one, ms):
-        _, tip = _free_end(P, h, cids, regions[r], m=m)  # where the free end's node would be
-        gap = prm["link"] * 1.2 * float(h[cids[-1]]) + GAP * noise
-        d, k = tree.query(tip, distance_upper_bound=gap)
+    if not one:
+        return
+    # where each free end's node would be, then the nearest junction point of each (one query:
+    # the tree does not change below)
+    tip = np.array([_free_end(P, h, cids, regions[r], m=m)[1] for (r, _, _, cids), m in zip(one, ms)])
+    gap = prm["link"] * 1.2 * h[[int(x[3][-1]) for x in one]] + GAP * noise
+    dk, kk = tree.query(tip, distance_upper_bound=float(gap.max()))
+    # the bound is per tip: beyond it, none (as a query bounded by it; at the bound itself,
+    # within rounding, that query is run)
+    dk[dk > gap * (1 + 1e-9)] = np.inf
+    for j in np.flatnonzero(np.isfinite(dk) & (dk >= gap * (1 - 1e-9))).tolist():
+        dk[j], kk[j] = tree.query(tip[j], distance_upper_bound=float(gap[j]))
+    for (r, i, s, cids), d, k in zip(one, dk.tolist(), kk.tolist()):
         if not np.isfinite(d):
             continue
         t = int(lab[k])
@@ -1222,7 +1273,7 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     # MERGE_LEN times its largest spacing is longer than MERGE_LEN times its median one
     lens = [len(c.ids) for c in chains]
     flat = np.concatenate([c.ids for c in chains]).astype(np.int64) if chains else np.zeros(0, np.int64)
-    step = np.linalg.norm(np.diff(P[flat], axis=0), axis=1) if len(flat) > 1 else np.zeros(0)
+    step = _step_lengths(P, flat)[:-1]
     cum = np.r_[0.0, np.cumsum(step)]
     off = np.r_[0, np.cumsum(lens)].astype(np.int64)
     hmax = np.zeros(len(chains))
@@ -1353,7 +1404,13 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     pts = np.flatnonzero(owner >= 0)
     if len(pts) == 0:
         return
-    tree = build_tree(P[pts])  # unbalanced, not compacted: faster to build, same answers
+    if prm.get("_tree") is not None:
+        # the tree over all points (built for the k-NN query): the points of no chain it
+        # returns as well are left out below (owner -1), as are those of split-off cores
+        tree = prm["_tree"]
+        pts = np.arange(N)
+    else:
+        tree = build_tree(P[pts])  # unbalanced, not compacted: faster to build, same answers
     noise = prm.get("_noise", 0.0)
     tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
             for s in (0, 1) if v[c.ends[s]] == 1]
@@ -1628,12 +1685,28 @@ def _region_paths(P, items, prm):
     indptr, indices = prm["_graph"]
     if not items:
         return []
-    Ss = [np.r_[entry, np.setdiff1d(rid, [entry])].astype(np.int64) for rid, entry in items]
-    sizes = np.array([len(S) for S in Ss], dtype=np.int64)
+    # per item: the entry, then the other region points sorted and unique (as
+    # np.setdiff1d(rid, [entry])), all items in one sort
+    G = len(items)
+    ent = np.array([entry for _, entry in items], dtype=np.int64)
+    rl = np.array([len(rid) for rid, _ in items], dtype=np.int64)
+    flat = np.concatenate([np.asarray(rid, dtype=np.int64) for rid, _ in items])
+    fg = np.repeat(np.arange(G, dtype=np.int64), rl)
+    o = np.lexsort((flat, fg))
+    flat, fg = flat[o], fg[o]
+    keep = np.ones(len(flat), dtype=bool)
+    keep[1:] = (flat[1:] != flat[:-1]) | (fg[1:] != fg[:-1])
+    keep &= flat != ent[fg]
+    flat, fg = flat[keep], fg[keep]
+    sizes = 1 + np.bincount(fg, minlength=G).astype(np.int64)
     start = np.r_[0, np.cumsum(sizes)[:-1]]
-    U = np.concatenate(Ss)
-    grp = np.repeat(np.arange(len(Ss), dtype=np.int64), sizes)
-    G = len(Ss)
+    grp = np.repeat(np.arange(G, dtype=np.int64), sizes)
+    U = np.empty(int(sizes.sum()), dtype=np.int64)
+    U[start] = ent
+    rest = np.ones(len(U), dtype=bool)
+    rest[start] = False
+    U[rest] = flat
+    Ss = [U[a:a + n] for a, n in zip(start.tolist(), sizes.tolist())]
     # position in U of (point, group): key point * G + group (a point may be in two groups)
     key = U * G + grp
     srt = np.argsort(key, kind="stable")
