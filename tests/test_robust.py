@@ -399,6 +399,32 @@ def test_fork_close_to_a_t_junction(stem, half_angle, noise):
     assert m["curve_f1"] == 1.0
 
 
+@pytest.mark.parametrize("half_angle", [30, 45])
+def test_fork_6h_from_a_t_with_strokes_drawn_twice(half_angle):
+    # sketches: the bar and the fork's branches are each drawn twice over the same path, so
+    # their samples coincide and the spacing (and shells) at the junctions came out too small
+    # to split the two junctions; the repeated samples are dropped first
+    a = np.radians(half_angle)
+    tip = np.array([30 * np.sin(a), 6 + 30 * np.cos(a), 0])
+    bar = [_seg([-30, 0, 0], [0, 0, 0]), _seg([0, 0, 0], [30, 0, 0])]
+    fork = [_seg([0, 6, 0], tip), _seg([0, 6, 0], tip * [-1, 1, 1])]
+    P = np.vstack(bar * 2 + [_seg([0, 0, 0], [0, 6, 0])] + fork * 2)
+    net = reconstruct_robust(P)
+    assert _contracted_valences(net) == [1, 1, 1, 1, 3, 3]
+    assert net.n_curves == 5
+    assert net.parameters["duplicates_dropped"] == len(P) - len(np.unique(P, axis=0))
+    J = net.nodes[net.valence == 3]
+    assert np.abs(J[np.argsort(J[:, 1])] - [[0, 0, 0], [0, 6, 0]]).max() < 0.5
+
+
+def test_close_samples_under_noise_are_kept():
+    # under noise two close samples are noise, not a second stroke: nothing is dropped
+    P = _noisy(np.vstack([_seg([-30, 0, 0], [30, 0, 0], h=0.5)]), 0.2)
+    net = reconstruct_robust(P)
+    assert net.parameters["duplicates_dropped"] == 0
+    assert net.n_curves == 1
+
+
 def test_sampled_mug_close_junctions_under_noise_and_density():
     # the handle meets the line 12.5h above the ring: with noise 0.3h and spacing up to 1.3h
     # the widened shell (about 10h) flags both junctions as one region

@@ -126,6 +126,10 @@ SHORT_REACH = 4.0
 #: neighbour distance over k / 2, is a duplicate sample.
 DUP = 0.1
 DUP_K = 0.3
+#: Noise-free samples (estimated noise under DEDUP_NOISE median spacings) closer than DEDUP
+#: median spacings to an earlier sample (sorted order) are dropped: overlapping strokes.
+DEDUP = 0.3
+DEDUP_NOISE = 0.05
 _DEFAULTS = {
     "k": 16,
     "shell_inner": 2.5,
@@ -291,6 +295,26 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
         np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
         indptr, indices, float(shell_inner), float(shell_outer), order=order,
     )
+
+
+def _coincident(dist, idx, r):
+    """Points with a neighbour earlier in the (sorted) order closer than ``r``.
+
+    Parameters
+    ----------
+    dist, idx : (N, k) ndarray
+        Distances and indices of the k nearest neighbours, ascending.
+    r : float
+
+    Returns
+    -------
+    (N,) bool ndarray
+    """
+    dup = np.zeros(len(dist), dtype=bool)
+    rows = np.flatnonzero(dist[:, 0] < r)
+    if len(rows):
+        dup[rows] = ((dist[rows] < r) & (idx[rows] < rows[:, None])).any(axis=1)
+    return dup
 
 
 def _components(n, a, b, mask):
@@ -459,27 +483,43 @@ def _reconstruct_robust(
         return net
 
     # 1. neighbours and spacing
-    # a cache-friendly visiting order of the points for the per-point work (k-NN query,
-    # tangents, shell test): computed once (the results never depend on it)
-    vis = _k._order(P) if N > 100_000 else None
-    tree = build_tree(P)  # kept for the repairs (robust._attach_dangling)
-    dist, idx = knn(P, prm["k"], order=vis, tree=tree)
+    def front(P):
+        # a cache-friendly visiting order of the points for the per-point work (k-NN query,
+        # tangents, shell test): computed once (the results never depend on it)
+        vis = _k._order(P) if len(P) > 100_000 else None
+        tree = build_tree(P)  # kept for the repairs (robust._attach_dangling)
+        dist, idx = knn(P, prm["k"], order=vis, tree=tree)
+        h = local_spacing(dist, idx) if spacing is None else np.full(len(P), float(spacing))
+        return vis, tree, dist, idx, h
+
+    vis, tree, dist, idx, h = front(P)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    if spacing is None:
-        h = local_spacing(dist, idx)
-        params_out["spacing"] = float(np.median(h))
-        params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
-        params_out["spacing_estimated"] = True
-    else:
-        h = np.full(N, float(spacing))
-        params_out["spacing"] = float(spacing)
-        params_out["spacing_estimated"] = False
 
     # 2. linked graph
     t, lin, rms = _tangents(P, idx, h, order=vis)
     t, lin = _vote_tangents(t, lin, idx)
     sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+    # noise-free samples closer than DEDUP median spacings are one place sampled twice
+    # (overlapping strokes, a curve given twice): the later ones (sorted order) are dropped and
+    # the steps above redone on the rest (under noise, close samples are noise: kept)
+    params_out["duplicates_dropped"] = 0
+    dup = _coincident(dist, idx, DEDUP * float(np.median(h))) if sigma < DEDUP_NOISE * np.median(h) else None
+    if dup is not None and dup.any() and N - dup.sum() >= 5:
+        params_out["duplicates_dropped"] = int(dup.sum())
+        keep = np.flatnonzero(~dup)
+        P, order, N = P[keep], order[keep], len(keep)
+        vis, tree, dist, idx, h = front(P)
+        t, lin, rms = _tangents(P, idx, h, order=vis)
+        t, lin = _vote_tangents(t, lin, idx)
+        sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+    if spacing is None:
+        params_out["spacing"] = float(np.median(h))
+        params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
+        params_out["spacing_estimated"] = True
+    else:
+        params_out["spacing"] = float(spacing)
+        params_out["spacing_estimated"] = False
     params_out["noise"] = sigma  # estimated std of the noise per coordinate
     noise = NOISE * sigma
     src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise,
