@@ -482,7 +482,7 @@ def _reconstruct_robust(
         params_out["spacing"] = float(spacing) if spacing is not None else None
         return net
 
-    # 1. neighbours and spacing
+    # 1. neighbours and spacing (and 2a. the tangents, redone with them when samples are dropped)
     def front(P):
         # a cache-friendly visiting order of the points for the per-point work (k-NN query,
         # tangents, shell test): computed once (the results never depend on it)
@@ -492,27 +492,29 @@ def _reconstruct_robust(
         h = local_spacing(dist, idx) if spacing is None else np.full(len(P), float(spacing))
         return vis, tree, dist, idx, h
 
+    def tangents(P, idx, h, vis):
+        t, lin, rms = _tangents(P, idx, h, order=vis)
+        t, lin = _vote_tangents(t, lin, idx)
+        return t, lin, float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+
     vis, tree, dist, idx, h = front(P)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
 
     # 2. linked graph
-    t, lin, rms = _tangents(P, idx, h, order=vis)
-    t, lin = _vote_tangents(t, lin, idx)
-    sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+    t, lin, sigma = tangents(P, idx, h, vis)
     # noise-free samples closer than DEDUP median spacings are one place sampled twice
     # (overlapping strokes, a curve given twice): the later ones (sorted order) are dropped and
     # the steps above redone on the rest (under noise, close samples are noise: kept)
     params_out["duplicates_dropped"] = 0
-    dup = _coincident(dist, idx, DEDUP * float(np.median(h))) if sigma < DEDUP_NOISE * np.median(h) else None
+    hmed = float(np.median(h))
+    dup = _coincident(dist, idx, DEDUP * hmed) if sigma < DEDUP_NOISE * hmed else None
     if dup is not None and dup.any() and N - dup.sum() >= 5:
         params_out["duplicates_dropped"] = int(dup.sum())
         keep = np.flatnonzero(~dup)
         P, order, N = P[keep], order[keep], len(keep)
         vis, tree, dist, idx, h = front(P)
-        t, lin, rms = _tangents(P, idx, h, order=vis)
-        t, lin = _vote_tangents(t, lin, idx)
-        sigma = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+        t, lin, sigma = tangents(P, idx, h, vis)
     if spacing is None:
         params_out["spacing"] = float(np.median(h))
         params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
