@@ -1,0 +1,46 @@
+"""The close-junction stress script runs (its quick form), so it cannot rot."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+pytestmark = pytest.mark.skipif(not (BENCH / "fork_stress.py").exists(), reason="benchmarks/ not in this checkout")
+
+
+@pytest.fixture(scope="module")
+def fork_stress():
+    sys.path.insert(0, str(BENCH))
+    try:
+        import fork_stress as mod
+    finally:
+        sys.path.remove(str(BENCH))
+    return mod
+
+
+def test_fork_network(fork_stress):
+    net = fork_stress.fork(7, 30)
+    assert net.n_nodes == 6 and net.n_curves == 5
+    assert sorted(net.valence.tolist()) == [1, 1, 1, 1, 3, 3]
+    tip = net.nodes[4]
+    assert np.isclose(np.linalg.norm(tip - [0, 7]), 30) and np.isclose(np.degrees(np.arctan2(tip[0], tip[1] - 7)), 30)
+
+
+def test_quick_run_counts_every_case(fork_stress):
+    res = fork_stress.run("robust", quick=True)
+    assert list(res) == ["clean", "noise", "ratio", "both"]
+    for ok, n, fails in res.values():
+        assert n == 4 and ok + len(fails) == n
+    # clean forks 5h and 9h from the T, 40 and 90 degrees wide: all two junctions
+    assert res["clean"][0] == 4
+
+
+def test_cli_quick():
+    out = subprocess.run([sys.executable, str(BENCH / "fork_stress.py"), "--quick"], capture_output=True,
+                         text=True, check=True, cwd=BENCH).stdout
+    assert out.count("exact") == 4 and "total" in out
