@@ -1443,16 +1443,11 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     for i, c in enumerate(chains):
         if alive[i]:
             owner[c.ids] = i
-    pts = np.flatnonzero(owner >= 0)
-    if len(pts) == 0:
+    if not (owner >= 0).any():
         return
-    if prm.get("_tree") is not None:
-        # the tree over all points (built for the k-NN query): the points of no chain it
-        # returns as well are left out below (owner -1), as are those of split-off cores
-        tree = prm["_tree"]
-        pts = np.arange(N)
-    else:
-        tree = build_tree(P[pts])  # unbalanced, not compacted: faster to build, same answers
+    # the tree over all points (built for the k-NN query): the points of no chain it returns
+    # as well are left out below (owner -1), as are those of split-off cores
+    tree = prm["_tree"]
     noise = prm.get("_noise", 0.0)
     tips = [(i, s) for i, c in enumerate(chains) if alive[i] and not c.closed
             for s in (0, 1) if v[c.ends[s]] == 1]
@@ -1471,7 +1466,7 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     with _sigint.held():
         near = tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
     cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
-    qall = pts[np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))]
+    qall = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))
     qoff = np.r_[0, np.cumsum(cnt)]
     toff = np.r_[0, np.cumsum([len(x) for x in tpts])].tolist()
     for t_, (i, s) in enumerate(tips):
@@ -1503,7 +1498,7 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
             cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
             if not cnt_t.sum():
                 continue
-            q = pts[np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])]
+            q = np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])
             tp = np.repeat(tip_pts, cnt_t)
         j = owner[q]
         vq = P[q] - P[e]
