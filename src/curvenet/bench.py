@@ -433,12 +433,13 @@ def seed_spread(method: str = "robust", seeds: int = 8, models=None, conditions=
             progress(f"seed spread: offset {k} done")
     out = []
     for c, rs in per.items():
+        ks = np.array([k for k, _ in rs], dtype=np.int64)
         f1 = np.array([float(r.get("curve_f1", 0.0)) for _, r in rs])
-        by_seed = [np.mean([float(r.get("curve_f1", 0.0)) for k, r in rs if k == s]) for s in range(seeds)]
-        miss = sorted(((float(r.get("curve_f1", 0.0)), r["model"], k) for k, r in rs if r.get("curve_f1", 0.0) < 1.0))
+        by_seed = [float(f1[ks == s].mean()) for s in range(seeds) if (ks == s).any()]
+        miss = sorted((float(v), r["model"], int(k)) for k, (_, r), v in zip(ks, rs, f1) if v < 1.0)
         out.append({"condition": c, "seeds": seeds, "mean": float(f1.mean()) if len(f1) else float("nan"),
-                    "seed0": float(by_seed[0]) if by_seed else float("nan"),
-                    "worst_seed": float(min(by_seed)) if by_seed else float("nan"),
+                    "seed0": by_seed[0] if by_seed else float("nan"),
+                    "worst_seed": min(by_seed) if by_seed else float("nan"),
                     "exact": float(np.mean([bool(r.get("exact_topology")) for _, r in rs])) if rs else float("nan"),
                     "misses": [f"{m} s{k} {v:.2f}" for v, m, k in miss]})
     return out

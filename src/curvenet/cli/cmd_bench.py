@@ -38,6 +38,10 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..bench import run_all, summarize
 
+    if args.spread_seeds < 0:
+        from ..errors import InputError
+
+        raise InputError(f"--spread-seeds must be 0 or more, got {args.spread_seeds}")
     quiet = getattr(args, "quiet", False)
     progress = None if quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     cmd = ["curvenet bench"]
@@ -48,10 +52,6 @@ def run(args) -> int:
             cmd.append(f"--{opt} " + " ".join(repr(v) if " " in v else v for v in getattr(args, opt)))
     cmd += ["--tune-each"] * args.tune_each + ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures
     cmd += [f"--spread-seeds {args.spread_seeds}"] * (args.spread_seeds != 8) + [f"--out {args.out}"]
-    if args.spread_seeds < 0:
-        from ..errors import InputError
-
-        raise InputError(f"--spread-seeds must be 0 or more, got {args.spread_seeds}")
     res = run_all(
         args.out,
         quick=args.quick,
