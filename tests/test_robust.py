@@ -251,6 +251,36 @@ def test_permutation_invariance():
         assert np.array_equal(perm[y.indices[ok]], x.indices[ok])
 
 
+def test_cell_numbering_of_large_clouds_changes_nothing(monkeypatch):
+    # clouds over LOCAL_MIN points are numbered cell by cell inside (cache locality): lowered
+    # here so that a small cloud takes that path; the network must be the one of the plain
+    # sorted numbering, and still not depend on the input order
+    import curvenet.robust as R
+
+    pts, _ = _cube()
+    pts = _noisy(pts, 0.1 * H, seed=3)
+    plain = reconstruct_robust(pts).canonical()
+    monkeypatch.setattr(R, "LOCAL_MIN", 50)
+    perm = np.random.default_rng(4).permutation(len(pts))
+    for net in (reconstruct_robust(pts), reconstruct_robust(pts[perm])):
+        c = net.canonical()
+        assert np.allclose(c.nodes, plain.nodes)
+        assert [(x.start, x.end) for x in c.curves] == [(x.start, x.end) for x in plain.curves]
+        for x, y in zip(c.curves, plain.curves):
+            assert np.allclose(x.points, y.points)
+
+
+def test_knn_ordered_gives_the_same_neighbours():
+    from curvenet.neighbors import knn, locality_order
+
+    P = np.random.default_rng(0).uniform(size=(120_000, 3))
+    d0, i0 = knn(P, 8)  # (visits the points in locality order itself: over 100,000)
+    o = locality_order(P)
+    d1, i1 = knn(P[o], 8, ordered=True)
+    assert np.array_equal(d1, d0[o])
+    assert np.array_equal(o[i1], i0[o])
+
+
 def test_indices_point_at_the_input_points():
     pts, _ = _star(3)
     net = reconstruct_robust(pts)

@@ -81,7 +81,7 @@ from . import _robust_kernels as _k
 from . import _sigint
 from .errors import InputError
 from .network import Curve, CurveNetwork
-from .neighbors import build_tree, knn
+from .neighbors import build_tree, knn, locality_order
 from .validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
@@ -127,9 +127,11 @@ SHORT_REACH = 4.0
 DUP = 0.1
 DUP_K = 0.3
 #: Noise-free samples (estimated noise under DEDUP_NOISE median spacings) closer than DEDUP
-#: median spacings to an earlier sample (sorted order) are dropped: overlapping strokes.
+#: median spacings to an earlier sample (internal order) are dropped: overlapping strokes.
 DEDUP = 0.3
 DEDUP_NOISE = 0.05
+#: Clouds of more points than this are numbered cell by cell inside (cache locality only).
+LOCAL_MIN = 100_000
 _DEFAULTS = {
     "k": 16,
     "shell_inner": 2.5,
@@ -473,7 +475,12 @@ def _reconstruct_robust(
         raise InputError(f"smoothing must be a non-negative number, got {smoothing!r}")
 
     N, dim = P0.shape
+    # the internal order: sorted (so that nothing depends on the input order); large clouds
+    # then cell by cell of a grid, so that near points get near ids and every per-point stage
+    # reads memory nearly in sequence (still a function of the point set alone)
     order = _lex_order(P0)
+    if N > LOCAL_MIN:
+        order = order[locality_order(P0[order])]
     P = P0[order]
     params_out = dict(prm)
     params_out["smooth"] = bool(smooth)
@@ -484,11 +491,10 @@ def _reconstruct_robust(
 
     # 1. neighbours and spacing (and 2a. the tangents, redone with them when samples are dropped)
     def front(P):
-        # a cache-friendly visiting order of the points for the per-point work (k-NN query,
-        # tangents, shell test): computed once (the results never depend on it)
-        vis = _k._order(P) if len(P) > 100_000 else None
+        # the points are visited as numbered (see above: already cache-friendly)
+        vis = np.arange(len(P), dtype=np.int64)
         tree = build_tree(P)  # kept for the repairs (robust._attach_dangling)
-        dist, idx = knn(P, prm["k"], order=vis, tree=tree)
+        dist, idx = knn(P, prm["k"], ordered=True, tree=tree)
         h = local_spacing(dist, idx) if spacing is None else np.full(len(P), float(spacing))
         return vis, tree, dist, idx, h
 
@@ -504,7 +510,7 @@ def _reconstruct_robust(
     # 2. linked graph
     t, lin, sigma = tangents(P, idx, h, vis)
     # noise-free samples closer than DEDUP median spacings are one place sampled twice
-    # (overlapping strokes, a curve given twice): the later ones (sorted order) are dropped and
+    # (overlapping strokes, a curve given twice): the later ones (internal order) are dropped and
     # the steps above redone on the rest (under noise, close samples are noise: kept)
     params_out["duplicates_dropped"] = 0
     hmed = float(np.median(h))
