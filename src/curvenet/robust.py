@@ -130,8 +130,9 @@ DUP_K = 0.3
 #: median spacings to an earlier sample (internal order) are dropped: overlapping strokes.
 DEDUP = 0.3
 DEDUP_NOISE = 0.05
-#: Clouds of more points than this are numbered cell by cell inside (cache locality only).
-LOCAL_MIN = 100_000
+#: Clouds of more points than this are numbered cell by cell inside (cache locality only: 6% at
+#: 34,000 points, 15% at 1e6).
+LOCAL_MIN = 20_000
 _DEFAULTS = {
     "k": 16,
     "shell_inner": 2.5,
