@@ -51,6 +51,41 @@ def test_eig_sym_matches_lapack(d):
             assert abs(abs(V[:, -1] @ vref[:, -1]) - 1) < 1e-10
 
 
+@pytest.mark.parametrize("d", [2, 3, 4])
+def test_eig_top_matches_lapack(d):
+    # closed form for d = 2, 3 (Jacobi for the rest and near-equal top eigenvalues): all the
+    # eigenvalues and the top eigenvector, the same bits compiled and in plain Python
+    rng = np.random.default_rng(10 + d)
+    jit = K._JIT_HELPERS.get("_eig_top")
+    for i in range(400):
+        A = rng.normal(size=(d, 5)) * rng.uniform(1e-6, 1e6)
+        C = A @ A.T
+        kind = i % 5
+        if kind == 1:  # rank one (a line)
+            C = np.outer(A[:, 0], A[:, 0])
+        elif kind == 2:  # nearly a line, with noise
+            C = np.outer(A[:, 0], A[:, 0]) + 1e-4 * (A[:, 1:3] @ A[:, 1:3].T)
+        elif kind == 3:  # two equal top eigenvalues (a plane): the Jacobi fallback
+            Qm = np.linalg.qr(rng.normal(size=(d, d)))[0]
+            C = Qm @ np.diag(np.r_[np.zeros(d - 2), 1.0, 1.0]) @ Qm.T
+        elif kind == 4:  # an offset from isotropic
+            C = C + 1e3 * abs(C).max() * np.eye(d)
+        V = np.zeros((d, d))
+        ev = np.zeros(d)
+        K._eig_top_py(C.copy(), V, ev)
+        ref, vref = np.linalg.eigh(C)
+        scale = max(abs(ref).max(), 1e-300)
+        assert np.allclose(ev, ref, atol=1e-9 * scale), (i, ev, ref)
+        assert abs(np.linalg.norm(V[:, -1]) - 1) < 1e-12
+        if ref[-1] - ref[-2] > 1e-6 * scale:  # a well-defined principal direction
+            assert abs(abs(V[:, -1] @ vref[:, -1]) - 1) < 1e-9, i
+        if jit is not None:
+            V2 = np.zeros((d, d))
+            ev2 = np.zeros(d)
+            jit(C.copy(), V2, ev2)
+            assert np.array_equal(V2[:, -1], V[:, -1]) and np.array_equal(ev2, ev)
+
+
 def test_end_count_matches_numpy_prefix_sums():
     rng = np.random.default_rng(0)
     P = rng.normal(size=(100, 3))
