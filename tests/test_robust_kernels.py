@@ -407,6 +407,67 @@ def test_shell_groups_of_a_subset_equal_those_of_all(cloud):
     assert np.all(part[rest] == 0) and np.any(full[sub] != 2)
 
 
+def _shell_groups_reference(P, h, indptr, indices, r_in, r_out, pts):
+    """Shell group counts of the points ``pts`` by scipy's dijkstra (numpy, one point at a time)."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components, dijkstra
+
+    n = len(P)
+    rows = np.repeat(np.arange(n), np.diff(indptr))
+    D = P[indices] - P[rows]
+    w = np.sqrt((D * D).sum(axis=1))
+    g = csr_matrix((np.maximum(w, 1e-300), indices, indptr), shape=(n, n))
+    out = []
+    for p in pts:
+        ro, ri = r_out * h[p], r_in * h[p]
+        gd = dijkstra(g, indices=p, limit=ro)
+        reach = np.flatnonzero(np.isfinite(gd))
+        sh = reach[(gd[reach] >= ri) & (((P[reach] - P[p]) ** 2).sum(axis=1) >= ri * ri)]
+        if len(sh) == 0:
+            out.append(0)
+            continue
+        _, lab = connected_components(g[sh][:, sh], directed=False)
+        top = np.zeros(lab.max() + 1)
+        np.maximum.at(top, lab, gd[sh])
+        out.append(int((top >= 0.5 * (ri + ro)).sum()))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_shell_groups_match_scipy_dijkstra(py, monkeypatch):
+    """The shell counts equal those from scipy's dijkstra on a cross with a dense clump at one
+    end (its frontier outgrows the short list: the heap takes over), compiled and as plain
+    Python; plain Python also with the list only and the heap only."""
+    rng = np.random.default_rng(3)
+    s = np.linspace(-20, 20, 81)
+    z = np.zeros_like(s)
+    clump = rng.normal(scale=1.0, size=(400, 3)) + [20.0, 0.0, 0.0]
+    P = np.vstack([np.c_[s, z, z], np.c_[z, s, z], clump]) + rng.normal(scale=0.05, size=(562, 3))
+    dist, idx = knn(P, 16)
+    h = R.local_spacing(dist, idx)
+    keep = dist < 2.5 * h[:, None]
+    src = np.repeat(np.arange(len(P)), 16)[keep.ravel()]
+    indptr, indices = K.csr_union(len(P), src, idx[keep])
+    pts = np.r_[np.arange(0, 162, 3), np.arange(162, 562, 9)]
+    ref = _shell_groups_reference(P, h, indptr, indices, 2.5, 5.5, pts)
+    assert set(ref.tolist()) >= {1, 2, 4}  # ends, curve, the crossing
+    if not py:
+        got = K.shell_groups(P, h, indptr, indices, 2.5, 5.5, subset=pts)
+        assert np.array_equal(got[pts], ref)
+        return
+    monkeypatch.setattr(K, "_compiled_already", lambda: False)
+    pushes = []
+    for fm in (K.FRONT_MAX, 0, 10**9):
+        monkeypatch.setattr(K, "FRONT_MAX", fm)
+        with K.compiled_for(0):  # plain Python kernels and helpers
+            push = K._heap_push  # (compiled_for puts the helpers back on leaving)
+            K._heap_push = lambda *a, _fm=fm: pushes.append(_fm) or push(*a)
+            got = K._PY["shell_groups"](P, h, indptr, indices, 2.5, 5.5, pts.astype(np.int64), 1)
+        assert np.array_equal(got[pts], ref), fm
+    # the clump fills the short list (the heap is used), the curve points never do
+    assert 0 < pushes.count(32) < pushes.count(0) and 10**9 not in pushes
+
+
 def _chain_order_reference(n, src, dst, dd, chn, n_chn):
     """scipy's double Dijkstra sweep of every chain, numpy (the former robust._order_chains)."""
     from scipy.sparse import coo_matrix

@@ -67,6 +67,11 @@ def _heap_push(heap_k, heap_v, hs, key, v):  # pragma: no cover - compiled
     return hs
 
 
+#: the shell test's Dijkstra keeps up to this many frontier points in a list scanned for the
+#: nearest (cheaper than a heap for the few on a curve), more in a heap
+FRONT_MAX = 32
+
+
 def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks):  # pragma: no cover - compiled
     """Groups of the geodesic shell around every point (see robust.shell_group_counts).
 
@@ -92,9 +97,12 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
     mark = np.full(n, -1, dtype=np.int32)  # == p when reached from p
     done = np.full(n, -1, dtype=np.int32)  # == p when settled
     gd = np.zeros(n, dtype=np.float64)  # tentative geodesic distance from p
+    pos = np.zeros(n, dtype=np.int32)  # place in the short frontier list
     comp = np.full(n, -1, dtype=np.int32)
     shell = np.full(n, -1, dtype=np.int32)
     reached = np.empty(n, dtype=np.int32)
+    fk = np.empty(FRONT_MAX + 1, dtype=np.float64)
+    fv = np.empty(FRONT_MAX + 1, dtype=np.int32)
     heap_k = np.empty(n + 1, dtype=np.float64)
     heap_v = np.empty(n + 1, dtype=np.int32)
     cap = n + 1
@@ -104,16 +112,40 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
         ro = r_out * h[p]
         ri = r_in * h[p]
         nreach = 0
-        # Dijkstra from p, bounded by ro (lazy deletion binary heap)
-        hs = 1
-        heap_k[0] = 0.0
-        heap_v[0] = p
+        # Dijkstra from p, bounded by ro. The frontier is a short list scanned for its nearest
+        # point (on curves it holds a few); past FRONT_MAX points (a dense clump) it moves to a
+        # binary heap with lazy deletion. Either way the distances are the same bits: each is
+        # the least of (settled distance + edge length) over the settled neighbours.
+        nf = 1
+        fk[0] = 0.0
+        fv[0] = p
+        pos[p] = 0
         mark[p] = p
         gd[p] = 0.0
-        while hs > 0:
-            key, a, hs = _heap_pop(heap_k, heap_v, hs)
-            if done[a] == p or key > gd[a]:
-                continue
+        hs = 0
+        heap = False
+        while True:
+            if not heap:
+                if nf == 0:
+                    break
+                j = 0
+                key = fk[0]
+                for q in range(1, nf):
+                    if fk[q] < key:
+                        key = fk[q]
+                        j = q
+                a = fv[j]
+                nf -= 1
+                if j != nf:
+                    fk[j] = fk[nf]
+                    fv[j] = fv[nf]
+                    pos[fv[j]] = j
+            else:
+                if hs == 0:
+                    break
+                key, a, hs = _heap_pop(heap_k, heap_v, hs)
+                if done[a] == p or key > gd[a]:
+                    continue
             done[a] = p
             reached[nreach] = a
             nreach += 1
@@ -128,13 +160,25 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
                 nk = key + np.sqrt(d2)
                 if nk > ro:
                     continue
-                if mark[b] == p and gd[b] <= nk:
+                new = mark[b] != p
+                if not new and gd[b] <= nk:
                     continue
                 mark[b] = p
                 gd[b] = nk
-                if hs >= cap:
-                    continue
-                hs = _heap_push(heap_k, heap_v, hs, nk, b)
+                if heap:
+                    if hs < cap:
+                        hs = _heap_push(heap_k, heap_v, hs, nk, b)
+                elif not new:
+                    fk[pos[b]] = nk
+                else:
+                    fk[nf] = nk
+                    fv[nf] = b
+                    pos[b] = nf
+                    nf += 1
+                    if nf > FRONT_MAX:
+                        heap = True
+                        for q in range(nf):
+                            hs = _heap_push(heap_k, heap_v, hs, fk[q], fv[q])
         # the shell: reached points at least ri away, both along the graph and in space
         for q in range(nreach):
             a = reached[q]
