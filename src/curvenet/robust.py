@@ -1476,9 +1476,25 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     qall = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))
     qoff = np.r_[0, np.cumsum(cnt)]
     toff = np.r_[0, np.cumsum([len(x) for x in tpts])].tolist()
+    # most tips have no point of another chain ahead within reach: found for all at once (a
+    # test a little looser than the one below, with the owners as they are now: a tip whose
+    # chain is unchanged when its turn comes has no more candidates then)
+    tip_of = np.repeat(np.repeat(np.arange(len(tips)), np.diff(toff)), cnt)  # the tip of each pair
+    e_t = np.array([int(ids[-1]) for ids in tids], dtype=np.int64)
+    b_t = np.array([int(ids[-m]) if m <= len(ids) else int(ids[0]) for ids, m in zip(tids, tms)], dtype=np.int64)
+    u_t = P[e_t] - P[b_t]
+    u_t /= np.maximum(np.sqrt((u_t * u_t).sum(axis=1)), 1e-300)[:, None]
+    jq = owner[qall]
+    vq_all = P[qall] - P[e_t[tip_of]]
+    cand = ((jq >= 0) & (jq != np.array([i for i, _ in tips], dtype=np.int64)[tip_of])
+            & ((vq_all * u_t[tip_of]).sum(axis=1)
+               >= (np.cos(np.radians(45.0)) - 1e-6) * np.sqrt((vq_all * vq_all).sum(axis=1))))
+    has_cand = np.bincount(tip_of[cand], minlength=len(tips)) > 0
     for t_, (i, s) in enumerate(tips):
         c = chains[i]
         if not alive[i] or c.closed or v[c.ends[s]] != 1:
+            continue
+        if not has_cand[t_] and c is tchain[t_]:
             continue
         r = c.ends[s]
         ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
