@@ -245,7 +245,7 @@ def _vote_tangents(t, lin, idx, m=8):
     cand = np.flatnonzero(agree <= bound * (1 + 1e-9))
     if len(cand) == 0:
         return t, lin
-    # the eigen-decomposition of C for the candidates (compiled, Jacobi rotations)
+    # the top eigenpair of C for the candidates (compiled, closed form: _robust_kernels._eig_top)
     u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m,
                          cand.astype(np.int64))
     swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < VOTE_COS) & (coh >= VOTE_COH)
