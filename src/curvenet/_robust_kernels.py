@@ -377,8 +377,8 @@ def _eig_top_py(C, V, ev):  # pragma: no cover - compiled
     traceless ``C - tr(C) / d`` by Newton's method from an upper bound (monotone there), the
     vector as the longest cross product of two rows of ``C - l_top I``, the other two
     eigenvalues from ``C`` restricted to the plane normal to it; a few times cheaper than the
-    Jacobi sweeps. Other sizes, and a top
-    eigenvalue within ``TOP_GAP`` of the next: :func:`_eig_sym_py` (``C`` overwritten).
+    Jacobi sweeps. Other sizes, and a top eigenvalue within ``TOP_GAP`` of the next:
+    :func:`_eig_sym_py` (``C`` overwritten).
     Only ``+ - * /`` and ``sqrt``: the compiled and the Python runs agree bit for bit.
     """
     d = C.shape[0]

@@ -23,7 +23,7 @@ def query(tree: cKDTree, x: np.ndarray, **kwargs):
 
 
 def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1,
-        order: np.ndarray | None = None, ordered: bool = False):
+        ordered: bool = False):
     """The ``k`` nearest neighbours of every point, the point itself excluded.
 
     Parameters
@@ -36,12 +36,10 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
         A tree over ``points`` to reuse.
     workers : int
         Threads for the query (-1: all cores).
-    order : (N,) ndarray of int, optional
-        :func:`locality_order` of ``points`` when already computed (used above 100,000 points;
-        the result does not depend on it).
     ordered : bool
         The points are already in a cache-friendly order (e.g. numbered by
-        :func:`locality_order`): they are queried as numbered, ``order`` is ignored.
+        :func:`locality_order`): they are queried as numbered. Otherwise, above 100,000 points,
+        they are queried in :func:`locality_order` (the result does not depend on it).
 
     Returns
     -------
@@ -61,10 +59,7 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds; the
     # rows are visited in spatial order (each query is independent: the result is the same, but
     # consecutive queries touch the same parts of the tree, which is much faster for large N)
-    if n <= 100_000 or ordered:
-        order = None
-    elif order is None:
-        order = locality_order(points)
+    order = None if n <= 100_000 or ordered else locality_order(points)
     step = max(1, (1 << 20) // (k + 1))
     for s in range(0, n, step):
         e = min(n, s + step)
