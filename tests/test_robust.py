@@ -447,6 +447,60 @@ def test_fork_6h_from_a_t_with_strokes_drawn_twice(half_angle):
     assert np.abs(J[np.argsort(J[:, 1])] - [[0, 0, 0], [0, 6, 0]]).max() < 0.5
 
 
+def _network_of(polys):
+    """The truth network of polylines: their end points (merged where equal) are the nodes."""
+    from curvenet.network import Curve, CurveNetwork
+
+    ends = np.round(np.vstack([[p[0], p[-1]] for p in polys]), 9)
+    V, inv = np.unique(ends, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    return CurveNetwork(V, [Curve(p, int(inv[2 * i]), int(inv[2 * i + 1])) for i, p in enumerate(polys)])
+
+
+def _spokes(n=4, L=30.0):
+    """``n`` straight curves from the origin, evenly spread but leaving the +x direction free."""
+    a = 2 * np.pi * np.arange(1, n + 1) / (n + 1)
+    return [_seg([0, 0, 0], [L * np.cos(x), L * np.sin(x), 0], h=0.1) for x in a]
+
+
+@pytest.mark.parametrize("run, bend", [(4, 18), (6, 18), (6, 25)])
+def test_two_strokes_into_a_hub_that_part_bent_are_one_junction(run, bend):
+    # sketches: two strokes drawn into a pole run together (0.5h apart: sampled twice as
+    # densely) for a few h, then part, one bending away by 18-25 degrees; the short doubled
+    # chain between the hub and the parting point is part of the hub (CASSIE hat)
+    from curvenet import synth
+    from curvenet.metrics import compare
+
+    t = np.radians(bend)
+    arc = np.array([[run + 8 * np.sin(s), 0.5 + 8 * (1 - np.cos(s)), 0] for s in np.linspace(0, t, 12)])
+    end = arc[-1] + 30 * np.array([np.cos(t), np.sin(t), 0])
+    bent = np.vstack([_seg([0, 0, 0], [1, 0.5, 0], h=0.1), _seg([1, 0.5, 0], [run, 0.5, 0], h=0.1)[1:],
+                      arc[1:], _seg(arc[-1], end, h=0.1)[1:]])
+    truth = _network_of(_spokes() + [_seg([0, 0, 0], [30, 0, 0], h=0.1), bent])
+    assert truth.n_nodes == 7
+    for seed in range(2):
+        pts, _ = synth.sample(truth, h=1.0, rng=seed)
+        m = compare(reconstruct_robust(pts), truth, h=1.0)
+        assert m["exact_topology"] and m["curve_f1"] == 1.0, seed
+
+
+@pytest.mark.parametrize("half_angle", [20, 25])
+def test_a_fork_near_a_hub_stays_a_junction(half_angle):
+    # a real fork (single curves, not doubled) on a stem 8h from a hub of 5 curves, its
+    # branches 20-25 degrees off the stem: not merged into the hub
+    from curvenet import synth
+    from curvenet.metrics import compare
+
+    a = np.radians(half_angle)
+    j = np.array([8.0, 0, 0])
+    fork = [_seg(j, j + 30 * np.array([np.cos(s * a), np.sin(s * a), 0]), h=0.1) for s in (1, -1)]
+    truth = _network_of(_spokes() + [_seg([0, 0, 0], j, h=0.1)] + fork)
+    assert truth.n_nodes == 8
+    pts, _ = synth.sample(truth, h=1.0, rng=0)
+    m = compare(reconstruct_robust(pts), truth, h=1.0)
+    assert m["exact_topology"] and m["curve_f1"] == 1.0
+
+
 def test_close_samples_under_noise_are_kept():
     # under noise two close samples are noise, not a second stroke: nothing is dropped
     P = _noisy(np.vstack([_seg([-30, 0, 0], [30, 0, 0], h=0.5)]), 0.2)

@@ -105,6 +105,13 @@ GAP = 3.0
 #: Junctions joined by a chain at most this many spacings long may be one junction.
 MERGE_LEN = 8.0
 MERGE_TAN = float(np.tan(np.radians(10.0)))
+#: Such a chain sampled DENSE times as densely as the median or more is two strokes run
+#: together: its length is measured in median spacings, and when the other junction is a hub
+#: of HUB_VAL curves or more, the branches may aim at it within MERGE_TAN_HUB (20 degrees:
+#: strokes drawn into a pole part from each other bent).
+DENSE = 1.5
+HUB_VAL = 5
+MERGE_TAN_HUB = float(np.tan(np.radians(20.0)))
 #: Directional links (nearest along the tangent) reach this many times the link length.
 EXTRA = 2.0
 #: A region point beyond this fraction of the shell radius from its junction node, in a
@@ -1312,10 +1319,12 @@ def _tips_to_junctions(P, h, chains, regions, alive, ends_at, v, prm):
 def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     """Merge junction b into junction a when a chain a-b is short and b's other branches aim at a.
 
-    "Short": at most ``MERGE_LEN`` spacings. "Aim at a": a's node (least-squares intersection)
+    "Short": at most ``MERGE_LEN`` spacings (median spacings for a chain sampled ``DENSE`` times
+    as densely: two strokes run together). "Aim at a": a's node (least-squares intersection)
     lies within ``max(link_width * h, NW * noise)`` of the line fitted on each of b's other
     branches, or within ``MERGE_TAN`` times its distance from the branch end (10 degrees: a fan
-    of curved strokes converging on one node parts a few degrees apart).
+    of curved strokes converging on one node parts a few degrees apart; ``MERGE_TAN_HUB``, 20
+    degrees, for a doubled chain into a junction of ``HUB_VAL`` curves or more).
     """
     noise = prm.get("_noise", 0.0)
     # lengths of all chains at once (the ids do not change below); a chain longer than
@@ -1329,9 +1338,14 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     nz = np.flatnonzero(np.asarray(lens) > 0)
     if len(nz):
         hmax[nz] = np.maximum.reduceat(h[flat], off[nz])
+    # (two strokes running together are sampled twice as densely: "short" is measured in the
+    # median spacing where the chain is sampled DENSE times as densely or more, else in its own;
+    # such a doubled chain into a hub gets the wider aim MERGE_TAN_HUB below)
+    hglob = float(np.median(h))
     # the short chains between two junctions (a merge only maps one junction onto another and
     # raises its valence, so no other chain can become one below)
     cand = []
+    doubled = {}
     for ci in range(len(chains)):
         c = chains[ci]
         if not alive[ci] or c.closed:
@@ -1341,12 +1355,13 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
             continue
         # polyline length: the steps inside the chain (not the one joining it to the next)
         length = cum[off[ci + 1] - 1] - cum[off[ci]] if lens[ci] > 1 else 0.0
-        if length > MERGE_LEN * hmax[ci] * (1 + 1e-9):
+        if length > MERGE_LEN * max(hmax[ci], hglob) * (1 + 1e-9):
             continue
-        hl = float(np.median(h[c.ids])) if len(c.ids) else float(np.median(h))
-        if _polylen(P[c.ids]) > MERGE_LEN * hl:
+        hl = float(np.median(h[c.ids])) if len(c.ids) else hglob
+        if _polylen(P[c.ids]) > MERGE_LEN * (hglob if hl * DENSE < hglob else hl):
             continue
         cand.append(ci)
+        doubled[ci] = hl * DENSE < hglob
 
     def incident(r):
         return [(i, s) for i, s in ends_at[r] if alive[i] and chains[i].ends[s] == r]
@@ -1382,7 +1397,8 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
                 d = np.sqrt(max(float(r @ r) - float(r @ u) ** 2, 0.0))
                 # within the strip, or within MERGE_ANG as seen from the branch end (a fan of
                 # curves converging on one node parts a few degrees apart)
-                lim = max(prm["_width"] * float(h[ids[-1]]), NW * noise, MERGE_TAN * float(np.linalg.norm(xpos - E[0])))
+                tan = MERGE_TAN_HUB if v[x_r] >= HUB_VAL and doubled[ci] else MERGE_TAN
+                lim = max(prm["_width"] * float(h[ids[-1]]), NW * noise, tan * float(np.linalg.norm(xpos - E[0])))
                 if d > lim or float((E[0] - cc) @ u) * float((xpos - cc) @ u) < 0:
                     ok = False
                     break
