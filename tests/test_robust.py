@@ -531,6 +531,16 @@ def test_sampled_eye_density_ratio_3():
     assert m["curve_f1"] == 1.0
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_sampled_eye_noise_0_2h(seed):
+    # where the middle curve's own samples are sparse, its 4-neighbour PCA took a point of an
+    # outer curve 2.4h away and pointed across the bundle (linearity 0.9+); the vote over the 8
+    # nearest neighbours did not outvote it, the one over 16 (under noise) does
+    m = _score("eye", seed=seed, noise=0.2)
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+
+
 @pytest.mark.parametrize("name", ["cube", "star8", "knot", "mug", "speaker"])
 def test_sampled_noise_0_3h_and_density_ratio_3(name):
     # speaker: a loop whose links bypass a point flagged by noise stays a closed loop

@@ -231,6 +231,10 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=
 
 
 VOTE_COS = np.cos(np.radians(10.0))
+#: neighbours in the tangent vote; under noise (estimated noise at least DEDUP_NOISE median
+#: spacings) VOTE_M_NOISY
+VOTE_M = 8
+VOTE_M_NOISY = 16
 VOTE_COH = 0.6
 
 
@@ -508,8 +512,12 @@ def _reconstruct_robust(
 
     def tangents(P, idx, h, vis):
         t, lin, rms = _tangents(P, idx, h, order=vis)
-        t, lin = _vote_tangents(t, lin, idx)
-        return t, lin, float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+        sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+        # under noise the vote takes in more neighbours (a tangent thrown across close curves
+        # by noise has more of its neighbours' to outvote it)
+        m = VOTE_M_NOISY if sig >= DEDUP_NOISE * float(np.median(h)) else VOTE_M
+        t, lin = _vote_tangents(t, lin, idx, m=min(m, idx.shape[1]))
+        return t, lin, sig
 
     vis, tree, dist, idx, h = front(P)
     tm["neighbors"] = time.perf_counter() - t0
