@@ -513,32 +513,33 @@ def _reconstruct_robust(
     def tangents(P, idx, h, vis):
         t, lin, rms = _tangents(P, idx, h, order=vis)
         sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
-        # under noise the vote takes in more neighbours (a tangent thrown across close curves
-        # by noise has more of its neighbours' to outvote it)
-        m = VOTE_M_NOISY if sig >= DEDUP_NOISE * float(np.median(h)) else VOTE_M
-        t, lin = _vote_tangents(t, lin, idx, m=min(m, idx.shape[1]))
-        return t, lin, sig
+        hmed = float(np.median(h))
+        # noise-free input: estimated noise under DEDUP_NOISE median spacings; under noise the
+        # vote takes in more neighbours (a tangent thrown across close curves by noise has more
+        # of its neighbours' to outvote it)
+        clean = sig < DEDUP_NOISE * hmed
+        t, lin = _vote_tangents(t, lin, idx, m=min(VOTE_M if clean else VOTE_M_NOISY, idx.shape[1]))
+        return t, lin, sig, hmed, clean
 
     vis, tree, dist, idx, h = front(P)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
 
     # 2. linked graph
-    t, lin, sigma = tangents(P, idx, h, vis)
+    t, lin, sigma, hmed, clean = tangents(P, idx, h, vis)
     # noise-free samples closer than DEDUP median spacings are one place sampled twice
     # (overlapping strokes, a curve given twice): the later ones (internal order) are dropped and
     # the steps above redone on the rest (under noise, close samples are noise: kept)
     params_out["duplicates_dropped"] = 0
-    hmed = float(np.median(h))
-    dup = _coincident(dist, idx, DEDUP * hmed) if sigma < DEDUP_NOISE * hmed else None
+    dup = _coincident(dist, idx, DEDUP * hmed) if clean else None
     if dup is not None and dup.any() and N - dup.sum() >= 5:
         params_out["duplicates_dropped"] = int(dup.sum())
         keep = np.flatnonzero(~dup)
         P, order, N = P[keep], order[keep], len(keep)
         vis, tree, dist, idx, h = front(P)
-        t, lin, sigma = tangents(P, idx, h, vis)
+        t, lin, sigma, hmed, clean = tangents(P, idx, h, vis)
     if spacing is None:
-        params_out["spacing"] = float(np.median(h))
+        params_out["spacing"] = hmed
         params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
         params_out["spacing_estimated"] = True
     else:
@@ -591,7 +592,7 @@ def _reconstruct_robust(
 
     if smooth:
         t1 = time.perf_counter()
-        hm = float(np.median(h))
+        hm = hmed
         if smoothing is None:
             # mean squared distance of a sample from the true curve, from the noise estimate
             s = max(sigma**2 * max(dim - 1, 1), 1e-4 * hm**2) / hm**2
