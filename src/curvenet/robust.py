@@ -312,7 +312,7 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
 
 
 def _coincident(dist, idx, r):
-    """Points with a neighbour earlier in the (sorted) order closer than ``r``.
+    """Points with a neighbour earlier in the (internal) order closer than ``r``.
 
     Parameters
     ----------
@@ -502,16 +502,16 @@ def _reconstruct_robust(
         return net
 
     # 1. neighbours and spacing (and 2a. the tangents, redone with them when samples are dropped)
+    # (the points are visited as numbered by the per-point kernels: see above, already
+    # cache-friendly)
     def front(P):
-        # the points are visited as numbered (see above: already cache-friendly)
-        vis = np.arange(len(P), dtype=np.int64)
         tree = build_tree(P)  # kept for the repairs (robust._attach_dangling)
         dist, idx = knn(P, prm["k"], ordered=True, tree=tree)
         h = local_spacing(dist, idx) if spacing is None else np.full(len(P), float(spacing))
-        return vis, tree, dist, idx, h
+        return tree, dist, idx, h
 
-    def tangents(P, idx, h, vis):
-        t, lin, rms = _tangents(P, idx, h, order=vis)
+    def tangents(P, idx, h):
+        t, lin, rms = _tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
         sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
         hmed = float(np.median(h))
         # noise-free input: estimated noise under DEDUP_NOISE median spacings; under noise the
@@ -521,12 +521,12 @@ def _reconstruct_robust(
         t, lin = _vote_tangents(t, lin, idx, m=min(VOTE_M if clean else VOTE_M_NOISY, idx.shape[1]))
         return t, lin, sig, hmed, clean
 
-    vis, tree, dist, idx, h = front(P)
+    tree, dist, idx, h = front(P)
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
 
     # 2. linked graph
-    t, lin, sigma, hmed, clean = tangents(P, idx, h, vis)
+    t, lin, sigma, hmed, clean = tangents(P, idx, h)
     # noise-free samples closer than DEDUP median spacings are one place sampled twice
     # (overlapping strokes, a curve given twice): the later ones (internal order) are dropped and
     # the steps above redone on the rest (under noise, close samples are noise: kept)
@@ -536,8 +536,8 @@ def _reconstruct_robust(
         params_out["duplicates_dropped"] = int(dup.sum())
         keep = np.flatnonzero(~dup)
         P, order, N = P[keep], order[keep], len(keep)
-        vis, tree, dist, idx, h = front(P)
-        t, lin, sigma, hmed, clean = tangents(P, idx, h, vis)
+        tree, dist, idx, h = front(P)
+        t, lin, sigma, hmed, clean = tangents(P, idx, h)
     if spacing is None:
         params_out["spacing"] = hmed
         params_out["spacing_range"] = [float(x) for x in np.percentile(h, [5, 95])]
@@ -556,7 +556,8 @@ def _reconstruct_robust(
     t1 = time.perf_counter()
     # noise blurs the junction over a few sigma: the shell grows with it
     hs = h + WIDEN * noise
-    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"], order=vis)
+    groups = shell_group_counts(P, hs, indptr, indices, prm["shell_inner"], prm["shell_outer"],
+                                order=np.arange(N, dtype=np.int64))
     tm["nodes"] = time.perf_counter() - t1
 
     # 4. regions and chains
@@ -1235,6 +1236,8 @@ def _close_tip_pairs(P, tips, r):
 #: A free end attaches to a chain at most ATT link lengths (plus GAP times the noise) ahead of it:
 #: a link lost to noise. A longer gap on clean samples is in the data: the end stays free.
 ATT = 1.0
+#: (and within 45 degrees of the direction of its end: cosine ATT_COS)
+ATT_COS = float(np.cos(np.radians(45.0)))
 
 
 def _merge_near_pass_through(P, h, chains, regions, alive, ends_at, v, prm):
@@ -1367,10 +1370,11 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
         if length > MERGE_LEN * max(hmax[ci], hglob) * (1 + 1e-9):
             continue
         hl = float(np.median(h[c.ids])) if len(c.ids) else hglob
-        if _polylen(P[c.ids]) > MERGE_LEN * (hglob if hl * DENSE < hglob else hl):
+        dbl = hl * DENSE < hglob
+        if _polylen(P[c.ids]) > MERGE_LEN * (hglob if dbl else hl):
             continue
         cand.append(ci)
-        doubled[ci] = hl * DENSE < hglob
+        doubled[ci] = dbl
 
     def incident(r):
         return [(i, s) for i, s in ends_at[r] if alive[i] and chains[i].ends[s] == r]
@@ -1513,7 +1517,7 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     vq_all = P[qall] - P[e_t[tip_of]]
     cand = ((jq >= 0) & (jq != np.array([i for i, _ in tips], dtype=np.int64)[tip_of])
             & ((vq_all * u_t[tip_of]).sum(axis=1)
-               >= (np.cos(np.radians(45.0)) - 1e-6) * np.sqrt((vq_all * vq_all).sum(axis=1))))
+               >= (ATT_COS - 1e-6) * np.sqrt((vq_all * vq_all).sum(axis=1))))
     has_cand = np.bincount(tip_of[cand], minlength=len(tips)) > 0
     for t_, (i, s) in enumerate(tips):
         c = chains[i]
@@ -1550,7 +1554,7 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
             tp = np.repeat(tip_pts, cnt_t)
         j = owner[q]
         vq = P[q] - P[e]
-        ok = (j >= 0) & (j != i) & ((vq @ u) >= np.cos(np.radians(45.0)) * np.sqrt((vq * vq).sum(axis=1)))
+        ok = (j >= 0) & (j != i) & ((vq @ u) >= ATT_COS * np.sqrt((vq * vq).sum(axis=1)))
         ok[ok] = [alive[x] for x in j[ok].tolist()]
         if not ok.any():
             continue
