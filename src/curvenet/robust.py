@@ -1510,6 +1510,8 @@ def _attach_dangling(P, h, chains, regions, alive, ends_at, v, prm):
     # chain is unchanged when its turn comes has no more candidates then)
     tip_of = np.repeat(np.repeat(np.arange(len(tips)), np.diff(toff)), cnt)  # the tip of each pair
     e_t = np.array([int(ids[-1]) for ids in tids], dtype=np.int64)
+    # (the tip direction as below: from the first point of _end_portion's end piece, ids[-m], to
+    # the tip; a prefilter only: the exact test below still runs on every tip kept)
     b_t = np.array([int(ids[-m]) if m <= len(ids) else int(ids[0]) for ids, m in zip(tids, tms)], dtype=np.int64)
     u_t = P[e_t] - P[b_t]
     u_t /= np.maximum(np.sqrt((u_t * u_t).sum(axis=1)), 1e-300)[:, None]
