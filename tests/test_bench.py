@@ -65,6 +65,36 @@ def test_summary_means(rows):
     assert clean["n"] == 2 and clean["curve_f1"] == pytest.approx(np.mean(vals))
 
 
+def _row(model, method, f1, cond="clean", dataset="synthetic", error=None):
+    return {"dataset": dataset, "condition": cond, "model": model, "method": method,
+            "curve_f1": None if error else f1, "error": error}
+
+
+def test_head_to_head_counts_model_by_model():
+    rows = [
+        _row("a", "robust", 1.0), _row("a", "emst", 1.0), _row("a", "paper-tuned", 0.5),
+        _row("b", "robust", 0.8), _row("b", "emst", 0.9), _row("b", "paper-tuned", 0.8),
+        _row("c", "robust", 0.9), _row("c", "emst", 0.1), _row("c", "paper-tuned", None, error="boom"),
+        _row("d", "robust", 0.500), _row("d", "emst", 0.497),  # under the tables' two decimals
+        _row("a", "robust", 0.0, cond="noise"), _row("a", "emst", None, cond="noise", error="boom"),
+    ]
+    h = {(e["condition"], e["other"]): e for e in bench.head_to_head(rows)}
+    assert set(h) == {("clean", "paper-tuned"), ("clean", "emst"), ("noise", "emst")}
+    e = h[("clean", "emst")]
+    assert [m for m, _, _ in e["better"]] == ["c"]
+    assert [m for m, _, _ in e["same"]] == ["a", "d"]
+    assert e["worse"] == [("b", 0.8, 0.9)]
+    e = h[("clean", "paper-tuned")]
+    # a failed run of the other method counts for robust; d has no paper-tuned row
+    assert [m for m, _, _ in e["better"]] == ["a", "c"] and [m for m, _, _ in e["same"]] == ["b"]
+    assert [m for m, _, _ in h[("noise", "emst")]["better"]] == ["a"]
+    lines = bench._head_to_head_lines(rows)
+    assert "## Head to head (curve F1, model by model)" in lines
+    assert "| synthetic | clean | emst | 1 | 2 | 1 | b 0.80 / 0.90, a 1.00 / 1.00, d 0.50 / 0.50 |" in lines
+    assert "| synthetic | noise | emst | 1 | 0 | 0 | none |" in lines
+    assert bench._head_to_head_lines([_row("a", "emst", 1.0)]) == []
+
+
 def test_bad_names():
     with pytest.raises(InputError):
         bench.run_bench(["nope"], ["cube"], quick=True)

@@ -41,6 +41,7 @@ __all__ = [
     "run_cassie",
     "eps_sweep",
     "summarize",
+    "head_to_head",
     "write_markdown",
     "write_json",
     "machine",
@@ -464,6 +465,58 @@ def summarize(rows: list[dict]) -> list[dict[str, Any]]:
     return out
 
 
+def head_to_head(rows: list[dict], method: str = "robust", others=("paper-tuned", "emst")) -> list[dict[str, Any]]:
+    """``method`` against each of ``others`` on the same inputs, model by model, by curve F1.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`run_bench` or :func:`run_cassie`.
+    method : str
+        The method compared.
+    others : sequence of str
+        The methods it is compared with (those absent from ``rows`` are skipped).
+
+    Returns
+    -------
+    list of dict
+        One entry per (dataset, condition, other method) with ``better``, ``same`` and ``worse``:
+        lists of ``(model, F1 of method, F1 of other)``, in the order of the rows. A model where
+        either run failed counts as worse for the method that failed (as same when both did).
+    """
+    f1: dict[tuple, float] = {}
+    order: list[tuple] = []
+    for r in rows:
+        key = (r["dataset"], r["condition"], r["model"])
+        if key not in order:
+            order.append(key)
+        v = r.get("curve_f1")
+        f1[key + (r["method"],)] = float(v) if v is not None and not r.get("error") else float("nan")
+    out = []
+    groups: list[tuple] = []
+    for ds, cond, _ in order:
+        for o in others:
+            if (ds, cond, o) not in groups:
+                groups.append((ds, cond, o))
+    for ds, cond, o in groups:
+        res: dict[str, Any] = {"dataset": ds, "condition": cond, "method": method, "other": o,
+                               "better": [], "same": [], "worse": []}
+        for d2, c2, model in order:
+            if (d2, c2) != (ds, cond) or (d2, c2, model, method) not in f1 or (d2, c2, model, o) not in f1:
+                continue
+            a, b = f1[(d2, c2, model, method)], f1[(d2, c2, model, o)]
+            a_ok, b_ok = np.isfinite(a), np.isfinite(b)
+            if a_ok and b_ok:
+                # the table's two decimals: a difference under 0.005 is shown (and counted) as same
+                kind = "same" if abs(a - b) < 0.005 else ("better" if a > b else "worse")
+            else:
+                kind = "same" if a_ok == b_ok else ("better" if a_ok else "worse")
+            res[kind].append((model, a, b))
+        if res["better"] or res["same"] or res["worse"]:
+            out.append(res)
+    return out
+
+
 def machine() -> dict[str, Any]:
     """The machine and software the benchmark ran on."""
     cpu = platform.processor() or platform.machine()
@@ -545,6 +598,25 @@ def _summary_table(summary: list[dict], dataset: str) -> list[str]:
                 _f(s["node_offset_h"]), _f(s["coverage"]), _f(s["chamfer_h"]), _f(s["time"], 1),
             ]) + " |")
     return lines
+
+
+def _head_to_head_lines(rows: list[dict]) -> list[str]:
+    """The head-to-head section of the report (:func:`head_to_head`), empty without rivals."""
+    h2h = head_to_head(rows)
+    if not h2h:
+        return []
+    names = {"synthetic": "synthetic", "cassie": "CASSIE free creations", "cassie-study": "CASSIE study"}
+    L = ["", "## Head to head (curve F1, model by model)", "",
+         "`robust` against `paper-tuned` and `emst` on the same points: the number of models where its "
+         "curve F1 is higher, the same (to the tables' two decimals) and lower, and every model where "
+         "it is not higher (F1 of `robust` / of the other).", "",
+         "| Data | Condition | against | better | same | worse | not better (robust / other) |",
+         "|---|---|---|---|---|---|---|"]
+    for e in h2h:
+        rest = [f"{m} {a:.2f} / {b:.2f}" for m, a, b in e["worse"] + e["same"]]
+        L.append(f"| {names.get(e['dataset'], e['dataset'])} | {e['condition']} | {e['other']} | "
+                 f"{len(e['better'])} | {len(e['same'])} | {len(e['worse'])} | {', '.join(rest) or 'none'} |")
+    return L
 
 
 def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, info: dict | None = None,
@@ -647,6 +719,7 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
               "the synthetic models and the free creations above; these sketches check that a choice holds "
               "on drawings it was not chosen on.", ""]
         L += _summary_table(summary, "cassie-study")
+    L += _head_to_head_lines(rows)
     if spread:
         L += ["", f"## Seed spread ({spread[0]['seeds']} samplings, `robust`)", "",
               "The tables use one sampling per model and condition (seed offset 0). The same models sampled "
