@@ -18,11 +18,8 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from curvenet import synth
 from curvenet.metrics import compare
-from curvenet.network import Curve, CurveNetwork
 from curvenet.reconstruct import reconstruct
 
 try:
@@ -31,33 +28,7 @@ except ImportError:  # imported as benchmarks.fork_stress
     from benchmarks.robust_eval import CONDITIONS
 
 
-def fork(stem: float, half_angle: float, length: float = 30.0) -> CurveNetwork:
-    """The true network (2D, spacing 1): a T whose stem forks ``stem`` away from the line.
-
-    Parameters
-    ----------
-    stem : float
-        Length of the stem between the two junctions.
-    half_angle : float
-        Angle of each branch from the stem's direction, degrees.
-    length : float
-        Length of the line's halves and of the branches.
-
-    Returns
-    -------
-    CurveNetwork
-        6 nodes (2 junctions, 4 free ends) and 5 straight curves sampled every 0.1.
-    """
-    a = np.radians(half_angle)
-    V = np.array([[-length, 0.0], [length, 0.0], [0.0, 0.0], [0.0, stem],
-                  [length * np.sin(a), stem + length * np.cos(a)],
-                  [-length * np.sin(a), stem + length * np.cos(a)]])
-    curves = []
-    for i, j in [(0, 2), (2, 1), (2, 3), (3, 4), (3, 5)]:
-        n = max(int(np.ceil(np.linalg.norm(V[j] - V[i]) / 0.1)), 1)
-        t = np.linspace(0.0, 1.0, n + 1)[:, None]
-        curves.append(Curve(V[i] + t * (V[j] - V[i]), i, j))
-    return CurveNetwork(V, curves)
+fork = synth.fork  # the true network (curvenet.synth.fork)
 
 
 def run(method: str = "robust", quick: bool = False) -> dict[str, tuple[int, int, list]]:

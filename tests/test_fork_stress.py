@@ -23,14 +23,6 @@ def fork_stress():
     return mod
 
 
-def test_fork_network(fork_stress):
-    net = fork_stress.fork(7, 30)
-    assert net.n_nodes == 6 and net.n_curves == 5
-    assert sorted(net.valence.tolist()) == [1, 1, 1, 1, 3, 3]
-    tip = net.nodes[4]
-    assert np.isclose(np.linalg.norm(tip - [0, 7]), 30) and np.isclose(np.degrees(np.arctan2(tip[0], tip[1] - 7)), 30)
-
-
 def test_quick_run_counts_every_case(fork_stress):
     res = fork_stress.run("robust", quick=True)
     assert list(res) == ["clean", "noise", "ratio", "both"]

@@ -416,13 +416,8 @@ def test_fork_close_to_a_t_junction(stem, half_angle, noise):
     # size still sees the 40 degree fork as one group (0.7 does not)
     from curvenet import synth
     from curvenet.metrics import compare
-    from curvenet.network import Curve, CurveNetwork
 
-    a = np.radians(half_angle)
-    V = np.array([[-30, 0], [30, 0], [0, 0], [0, stem], [30 * np.sin(a), stem + 30 * np.cos(a)],
-                  [-30 * np.sin(a), stem + 30 * np.cos(a)]])
-    edges = [(0, 2), (2, 1), (2, 3), (3, 4), (3, 5)]
-    truth = CurveNetwork(V, [Curve(_seg(V[i], V[j], h=0.1), i, j) for i, j in edges])
+    truth = synth.fork(stem, half_angle)
     pts, _ = synth.sample(truth, h=1.0, rng=0, noise=noise)
     m = compare(reconstruct_robust(pts), truth, h=1.0)
     assert m["exact_topology"]

@@ -196,3 +196,20 @@ def test_cassie_hat():
     assert synth.cassie.min_separation(net, within=0.006) == float("inf")
     P, L = synth.sample(net, h=0.002)
     assert abs(len(P) - sum(c.length for c in net.curves) / 0.002) < 0.02 * len(P)
+
+
+def test_fork_network():
+    net = synth.fork(7, 30)
+    assert net.n_nodes == 6 and net.n_curves == 5 and net.parameters["h"] == 1.0
+    assert sorted(net.valence.tolist()) == [1, 1, 1, 1, 3, 3]
+    tip = net.nodes[4]
+    assert np.isclose(np.linalg.norm(tip - [0, 7]), 30) and np.isclose(np.degrees(np.arctan2(tip[0], tip[1] - 7)), 30)
+    for c in net.curves:  # straight, sampled every 0.1 h, ending at its nodes
+        assert np.allclose(c.points[0], net.nodes[c.start]) and np.allclose(c.points[-1], net.nodes[c.end])
+        assert np.linalg.norm(np.diff(c.points, axis=0), axis=1).max() <= 0.1 + 1e-12
+
+
+@pytest.mark.parametrize("args", [(0, 30), (7, 0), (7, 90), (7, 30, -1.0)])
+def test_fork_bad_arguments(args):
+    with pytest.raises(InputError):
+        synth.fork(*args)

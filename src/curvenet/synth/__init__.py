@@ -6,7 +6,7 @@
 """
 
 from . import cassie
-from .models import MODELS, h_of, model, model_names
+from .models import MODELS, fork, h_of, model, model_names
 from .sampler import sample
 
-__all__ = ["cassie", "MODELS", "model", "model_names", "h_of", "sample"]
+__all__ = ["cassie", "MODELS", "model", "model_names", "h_of", "fork", "sample"]

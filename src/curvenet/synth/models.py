@@ -371,6 +371,47 @@ def _fig8() -> CurveNetwork:
     return b.build("fig8", "2D (the paper's Figure 8): a circle and an open curve passing 3h from it")
 
 
+def fork(stem: float, half_angle: float, length: float = 30.0) -> CurveNetwork:
+    """Two close junctions (2D, spacing h = 1): a T whose stem forks ``stem`` away from the line.
+
+    A line from (-length, 0) to (length, 0); a stem from (0, 0) to (0, stem); two branches of
+    ``length`` from (0, stem) at +- ``half_angle`` from the stem's direction. The parametric case
+    of ``benchmarks/fork_stress.py`` (not one of :data:`MODELS`).
+
+    Parameters
+    ----------
+    stem : float
+        Length of the stem between the two junctions, in h.
+    half_angle : float
+        Angle of each branch from the stem's direction, degrees.
+    length : float
+        Length of the line's halves and of the branches, in h.
+
+    Returns
+    -------
+    CurveNetwork
+        6 nodes (2 junctions, 4 free ends) and 5 straight curves sampled every 0.1 h;
+        ``parameters["h"] = 1``.
+
+    Raises
+    ------
+    InputError
+        For a non-positive ``stem`` or ``length``, or a half-angle outside (0, 90) degrees.
+    """
+    if not (stem > 0 and length > 0):
+        raise InputError(f"stem and length must be positive, got {stem!r} and {length!r}")
+    if not 0 < half_angle < 90:
+        raise InputError(f"half_angle must be between 0 and 90 degrees, got {half_angle!r}")
+    a = np.radians(half_angle)
+    b = _Builder(1.0)
+    V = [b.node([x, y]) for x, y in [(-length, 0.0), (length, 0.0), (0.0, 0.0), (0.0, stem),
+                                      (length * np.sin(a), stem + length * np.cos(a)),
+                                      (-length * np.sin(a), stem + length * np.cos(a))]]
+    for i, j in [(0, 2), (2, 1), (2, 3), (3, 4), (3, 5)]:
+        b.curve(_poly([b.nodes[V[i]], b.nodes[V[j]]], b.step), V[i], V[j])
+    return b.build("fork", f"2D; a T whose stem forks {stem:g}h away, branches {half_angle:g} degrees from it")
+
+
 #: Model name -> builder (no argument, returns a CurveNetwork).
 MODELS: dict[str, Callable[[], CurveNetwork]] = {
     "cube": _cube,
