@@ -485,35 +485,34 @@ def head_to_head(rows: list[dict], method: str = "robust", others=("paper-tuned"
         either run failed counts as worse for the method that failed (as same when both did).
     """
     f1: dict[tuple, float] = {}
-    order: list[tuple] = []
     for r in rows:
-        key = (r["dataset"], r["condition"], r["model"])
-        if key not in order:
-            order.append(key)
         v = r.get("curve_f1")
-        f1[key + (r["method"],)] = float(v) if v is not None and not r.get("error") else float("nan")
+        f1[(r["dataset"], r["condition"], r["model"], r["method"])] = (
+            float(v) if v is not None and not r.get("error") else float("nan"))
+    # (dataset, condition) -> models, in the order of the rows
+    cells: dict[tuple, list[str]] = {}
+    for ds, cond, model, _ in f1:
+        ms = cells.setdefault((ds, cond), [])
+        if model not in ms:
+            ms.append(model)
     out = []
-    groups: list[tuple] = []
-    for ds, cond, _ in order:
+    for (ds, cond), models in cells.items():
         for o in others:
-            if (ds, cond, o) not in groups:
-                groups.append((ds, cond, o))
-    for ds, cond, o in groups:
-        res: dict[str, Any] = {"dataset": ds, "condition": cond, "method": method, "other": o,
-                               "better": [], "same": [], "worse": []}
-        for d2, c2, model in order:
-            if (d2, c2) != (ds, cond) or (d2, c2, model, method) not in f1 or (d2, c2, model, o) not in f1:
-                continue
-            a, b = f1[(d2, c2, model, method)], f1[(d2, c2, model, o)]
-            a_ok, b_ok = np.isfinite(a), np.isfinite(b)
-            if a_ok and b_ok:
-                # the table's two decimals: a difference under 0.005 is shown (and counted) as same
-                kind = "same" if abs(a - b) < 0.005 else ("better" if a > b else "worse")
-            else:
-                kind = "same" if a_ok == b_ok else ("better" if a_ok else "worse")
-            res[kind].append((model, a, b))
-        if res["better"] or res["same"] or res["worse"]:
-            out.append(res)
+            res: dict[str, Any] = {"dataset": ds, "condition": cond, "method": method, "other": o,
+                                   "better": [], "same": [], "worse": []}
+            for model in models:
+                if (ds, cond, model, method) not in f1 or (ds, cond, model, o) not in f1:
+                    continue
+                a, b = f1[(ds, cond, model, method)], f1[(ds, cond, model, o)]
+                a_ok, b_ok = np.isfinite(a), np.isfinite(b)
+                if a_ok and b_ok:
+                    # the table's two decimals: a difference under 0.005 is shown (and counted) as same
+                    kind = "same" if abs(a - b) < 0.005 else ("better" if a > b else "worse")
+                else:
+                    kind = "same" if a_ok == b_ok else ("better" if a_ok else "worse")
+                res[kind].append((model, a, b))
+            if res["better"] or res["same"] or res["worse"]:
+                out.append(res)
     return out
 
 
