@@ -579,7 +579,8 @@ def _reconstruct_robust(
 
     # 5. network
     t1 = time.perf_counter()
-    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise, _tree=tree)
+    prm_int = dict(prm, _graph=(indptr, indices), _width=max(prm["link_width"], 0.0), _noise=noise, _tree=tree,
+                   _hmed=hmed)
     nodes, curves = _assemble(P, h, chains, regions, prm_int)
     tm["assemble"] = time.perf_counter() - t1
 
@@ -895,7 +896,7 @@ def _assemble(P, h, chains, regions, prm):
         e = np.fromiter(itertools.chain.from_iterable(e), dtype=np.int64, count=2 * len(e))
         return np.bincount(e, minlength=len(regions)).astype(np.int64)
 
-    hmed = float(np.median(h))
+    hmed = prm["_hmed"]  # the median spacing (of the tangent step)
     # a region passed through by one curve (valence 2) right next to a junction region is a
     # piece of that junction cut off by noise (a crossing split in two): merge it
     _merge_near_pass_through(P, h, chains, regions, alive, ends_at, valence(), prm)
@@ -1353,7 +1354,7 @@ def _merge_close_junctions(P, h, chains, regions, alive, ends_at, v, prm):
     # (two strokes running together are sampled twice as densely: "short" is measured in the
     # median spacing where the chain is sampled DENSE times as densely or more, else in its own;
     # such a doubled chain into a hub gets the wider aim MERGE_TAN_HUB below)
-    hglob = float(np.median(h))
+    hglob = prm["_hmed"]
     # the short chains between two junctions (a merge only maps one junction onto another and
     # raises its valence, so no other chain can become one below)
     cand = []
