@@ -570,7 +570,7 @@ def _strip_score(Q, m, u, hp):  # pragma: no cover - compiled
     return s
 
 
-def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no cover - compiled
+def _tangents_block(P, idx, h, m, order, p0, p1, margin, T, lin, chord, gain):  # pragma: no cover - compiled
     """Points ``order[p0:p1]`` of :func:`_tangents` (own scratch arrays)."""
     d = P.shape[1]
     Q = np.empty((m + 1, d))
@@ -602,8 +602,11 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
         if lam < 1e-300:
             lam = 1e-300
         best = np.inf
+        s4 = np.inf
+        top = -np.inf  # the best score of the neighbours' directions
         if 1.0 - ev[d - 2] / lam < CAND_LIN:  # (4 nearly collinear neighbours: t is theirs)
-            best = _strip_score(Q, m, t, h[p]) + CAND_MARGIN
+            s4 = _strip_score(Q, m, t, h[p])
+            best = s4 + margin
         for k in range(1, 5 if best < np.inf else 1):
             r2 = 0.0
             for c in range(d):
@@ -615,11 +618,14 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
             for c in range(d):
                 u[c] = (Q[k, c] - Q[0, c]) / r
             sc = _strip_score(Q, m, u, h[p])
+            if sc > top:
+                top = sc
             if sc > best:
                 best = sc
                 kb = k
                 for c in range(d):
                     ub[c] = u[c]
+        gain[p] = top - s4 if s4 < np.inf and top > -np.inf else -np.inf
         if kb > 0:
             for c in range(d):
                 t[c] = ub[c]
@@ -684,18 +690,19 @@ def _tangents_block(P, idx, h, m, order, p0, p1, T, lin, chord):  # pragma: no c
         chord[p] = np.sqrt(q2) if q2 > 0.0 else 0.0
 
 
-def _tangents(P, idx, h, m, order):  # pragma: no cover - compiled
+def _tangents(P, idx, h, m, order, margin):  # pragma: no cover - compiled
     """Tangent, linearity and strip chord distance of every point (see robust._tangents).
 
     A first direction from the point and its 4 nearest neighbours, replaced by the direction
-    towards one of those neighbours when that scores ``CAND_MARGIN`` more (:func:`_strip_score`:
+    towards one of those neighbours when that scores ``margin`` more (:func:`_strip_score`:
     a close parallel curve, within two spacings, can pull the PCA across); twice, the point and its
     ``m`` nearest neighbours within ``h`` of the current line are weighted 1 (others 0) and the
     weighted PCA gives the next direction. The linearity is ``1 - l2 / l1`` of the last PCA.
     The chord distance is that of the point from the segment joining its nearest neighbours
     (among the ``m``) inside the strip ahead and behind along the tangent (NaN without both).
     No (N, m, d) temporaries: one point at a time, in the given ``order`` (any permutation:
-    the result does not depend on it), blocks of points on all cores.
+    the result does not depend on it; or a subset: the other points get zeros), blocks of
+    points on all cores.
 
     Returns
     -------
@@ -703,18 +710,24 @@ def _tangents(P, idx, h, m, order):  # pragma: no cover - compiled
         Unit tangents (sign arbitrary).
     lin : (N,) ndarray
     chord : (N,) ndarray
+    gain : (N,) ndarray
+        Best score of the 4 neighbours' directions minus the 4-neighbour direction's (``-inf``
+        where they were not tried: a linear 4-neighbour PCA). The direction changes where
+        ``gain > margin``.
     """
     n = P.shape[0]
     d = P.shape[1]
+    no = order.shape[0]
     T = np.zeros((n, d))
     lin = np.zeros(n)
     chord = np.zeros(n)
+    gain = np.full(n, -np.inf)
     bs = 2048
-    nb = (n + bs - 1) // bs
+    nb = (no + bs - 1) // bs
     for b in prange(nb):
         p1 = (b + 1) * bs
-        _tangents_block(P, idx, h, m, order, b * bs, p1 if p1 < n else n, T, lin, chord)
-    return T, lin, chord
+        _tangents_block(P, idx, h, m, order, b * bs, p1 if p1 < no else no, margin, T, lin, chord, gain)
+    return T, lin, chord, gain
 
 
 def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, lin_min):  # pragma: no cover - compiled
@@ -1801,11 +1814,14 @@ vote_agreement = _dispatch("vote_agreement")
 vote_eig = _dispatch("vote_eig")
 
 
-def tangents(P, idx, h, m, order=None):
-    """Tangent, linearity and strip chord distance of every point: see :func:`_tangents`
-    (``order``: the visiting order when already computed, see :func:`_order`)."""
-    with held(), _threads_for("tangents", len(P)):
-        return _kernel("tangents")(P, idx, h, m, _order(P) if order is None else order)
+def tangents(P, idx, h, m, order=None, margin=None):
+    """Tangent, linearity, strip chord distance and candidate gain of every point: see
+    :func:`_tangents` (``order``: the visiting order when already computed, see :func:`_order`,
+    or a subset of the points; ``margin``: default :data:`CAND_MARGIN`)."""
+    margin = CAND_MARGIN if margin is None else float(margin)
+    order = _order(P) if order is None else np.ascontiguousarray(order, dtype=np.int64)
+    with held(), _threads_for("tangents", len(order)):
+        return _kernel("tangents")(P, idx, h, m, order, margin)
 
 
 def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):

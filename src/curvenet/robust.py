@@ -214,6 +214,18 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=
     strip holds clearly more points: a close parallel curve can pull the PCA across) is refined
     by a PCA of the ``m`` nearest that lie within one spacing of its line (a strip that leaves
     out a close parallel curve). The linearity ``1 - l2 / l1`` is that of the last strip PCA.
+
+    Returns
+    -------
+    t : (N, d) ndarray
+        Unit tangents.
+    lin : (N,) ndarray
+        Linearity.
+    rms : (N,) ndarray
+        Noise estimate of each point (NaN where there is none).
+    gain : (N,) ndarray
+        How much more a neighbour's direction scores than the 4-neighbour direction (``-inf``
+        where none was tried); see :func:`_retry_tangents`.
     """
     m = min(m, idx.shape[1])
     # compiled, one point at a time: the 4-neighbour PCA, then twice the PCA of the point and
@@ -222,12 +234,35 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=
     # and the noise: distance of each point from the chord between its nearest strip neighbours
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
-    t, lin, cr = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                             np.ascontiguousarray(h, dtype=np.float64), m, order)
+    t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                                   np.ascontiguousarray(h, dtype=np.float64), m, order)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
     rms = 1.28 * cr / np.sqrt(1.5 * max(dim - 1, 1))
-    return t, lin, rms
+    return t, lin, rms, gain
+
+
+#: on noise-free input a neighbour's direction replaces the 4-neighbour direction when it scores
+#: this much more (under noise, the kernels' CAND_MARGIN): a sparse curve between two close
+#: parallel curves has its 4 nearest neighbours half across, and its true direction scores only a
+#: little more; under noise the smaller margin turns tangents at sharp corners onto one leg
+CAND_MARGIN_CLEAN = 1.5
+
+
+def _retry_tangents(P, idx, h, t, lin, gain, m: int = 12):
+    """Tangents of noise-free input: the points whose best neighbour direction scores between
+    :data:`CAND_MARGIN_CLEAN` and the kernels' margin more than the 4-neighbour direction are
+    done again with the smaller margin (few points: near close curves, junctions, corners)."""
+    redo = np.flatnonzero((gain > CAND_MARGIN_CLEAN) & (gain <= _k.CAND_MARGIN))
+    if len(redo) == 0:
+        return t, lin
+    t2, lin2, _, _ = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                                 np.ascontiguousarray(h, dtype=np.float64), m, redo, margin=CAND_MARGIN_CLEAN)
+    t = t.copy()
+    lin = lin.copy()
+    t[redo] = t2[redo]
+    lin[redo] = lin2[redo]
+    return t, lin
 
 
 VOTE_COS = np.cos(np.radians(10.0))
@@ -511,13 +546,15 @@ def _reconstruct_robust(
         return tree, dist, idx, h
 
     def tangents(P, idx, h):
-        t, lin, rms = _tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
+        t, lin, rms, gain = _tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
         sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
         hmed = float(np.median(h))
         # noise-free input: estimated noise under DEDUP_NOISE median spacings; under noise the
         # vote takes in more neighbours (a tangent thrown across close curves by noise has more
         # of its neighbours' to outvote it)
         clean = sig < DEDUP_NOISE * hmed
+        if clean:
+            t, lin = _retry_tangents(P, idx, h, t, lin, gain)
         t, lin = _vote_tangents(t, lin, idx, m=min(VOTE_M if clean else VOTE_M_NOISY, idx.shape[1]))
         return t, lin, sig, hmed, clean
 
