@@ -518,6 +518,31 @@ def test_sampled_mug_close_junctions_under_noise_and_density():
     assert m["curve_f1"] == 1.0
 
 
+def test_sampled_sharp_spike_is_not_a_zigzag():
+    # the corners model's spike (legs about 10 degrees apart) under noise 0.3h + density x3:
+    # its legs are linked across near the apex and a junction-like region there was ordered
+    # along a chord across the spike, so the curve ran back and forth between the legs (its
+    # Hausdorff distance 2.05h); the curve's points are now reordered into a shorter path
+    from curvenet import synth
+    from curvenet.bench import _seed
+    from curvenet.metrics import compare
+
+    truth = synth.model("corners")
+    pts, _ = synth.sample(truth, rng=_seed("corners", "noise 0.3h + density x3") + 4, noise=0.3,
+                          density_ratio=3.0)
+    net = reconstruct_robust(pts)
+    m = compare(net, truth, h=synth.h_of(truth))
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+    # two steps in a row turn back (over 120 degrees) only at the spike's apex and at the
+    # curve's 115-degree corner (with noise), not between the legs (5 times before)
+    (c,) = [c for c in net.curves if not c.closed]
+    d = np.diff(c.points[1:-1], axis=0)  # (the steps from and to the nodes left out)
+    d = d[np.linalg.norm(d, axis=1) > 0]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    assert ((d[1:] * d[:-1]).sum(axis=1) < -0.5).sum() <= 2
+
+
 @pytest.mark.parametrize("seed", [3, 29])
 def test_sampled_eye_density_ratio_3(seed):
     # where the spacing reaches 1.5h the three curves (2.5h apart) are closer than two

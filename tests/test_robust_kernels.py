@@ -598,3 +598,53 @@ def test_spacing_kernel_matches_the_numpy_formula(cloud, k):
     finally:
         K._COMPILED.reset(token)
     assert np.array_equal(got, ref) and np.array_equal(py, ref)
+
+
+def _spike(dim, rng, n=20, shuffle=True):
+    """A sharp spike (two legs 10 degrees apart meeting at an apex) sampled every 1, and the
+    order of its points along it: with ``shuffle``, the points near the apex are given
+    alternately from either leg (by distance from the apex), as a chain linked across the
+    legs comes out ordered."""
+    a = np.radians(5.0)
+    s = np.arange(1, n + 1, dtype=float)
+    true = np.r_[np.c_[s * np.cos(a), s * np.sin(a)][::-1], np.zeros((1, 2)), np.c_[s * np.cos(a), -s * np.sin(a)]]
+    true = true + 0.02 * rng.normal(size=true.shape)
+    if dim == 3:
+        true = np.c_[true, 0.02 * rng.normal(size=len(true))]
+    o = np.arange(len(true))
+    if shuffle:
+        inner = np.arange(n - 8, n + 9)  # the apex is point n
+        o[n - 8:n + 9] = inner[np.argsort(np.abs(inner - n), kind="stable")]
+    return true[o], np.argsort(o)
+
+
+def _polylen(X):
+    return float(np.linalg.norm(np.diff(X, axis=0), axis=1).sum())
+
+
+@pytest.mark.parametrize("py", [False, True])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_untangle_makes_a_zigzag_a_path(py, dim):
+    rng = np.random.default_rng(dim)
+    X1, back = _spike(dim, rng)
+    X2, _ = _spike(dim, rng, n=12, shuffle=False)  # already a path: left alone
+    X = np.r_[X1, X2, X1[:3]]
+    off = np.array([0, len(X1), len(X1) + len(X2), len(X)], dtype=np.int64)
+    which = np.array([0, 1, 2], dtype=np.int64)
+    f = K._PY["untangle"] if py else K.untangle
+    order = f(X, off, which, 32, -0.5)
+    assert sorted(order.tolist()) == list(range(len(X)))
+    for c in range(3):
+        seg = order[off[c]:off[c + 1]]
+        assert sorted(seg.tolist()) == list(range(off[c], off[c + 1]))  # within its curve
+        assert seg[0] == off[c] and seg[-1] == off[c + 1] - 1  # ends kept
+    Y = X[order[:len(X1)]]
+    # the zigzag is much longer than the spike; untangled, it is the spike walked in order
+    assert _polylen(X1) > 1.2 * _polylen(X1[back])
+    assert _polylen(Y) <= _polylen(X1[back]) * (1 + 1e-9)
+    d = np.diff(Y, axis=0)
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    assert ((d[1:] * d[:-1]).sum(axis=1) < -0.5).sum() == 1  # only at the apex
+    assert np.array_equal(order[len(X1):], np.arange(len(X1), len(X)))  # the path, the short one
+    # compiled and Python runs agree
+    assert np.array_equal(order, K._PY["untangle"](X, off, which, 32, -0.5))

@@ -1227,9 +1227,40 @@ def _open_curves(P, nodes, ids, nids, a, b, last0, last1):
     at_b = ~inner & (k >= 0)
     pts[at_a] = nodes[a[cid[at_a]]]
     pts[at_b] = nodes[b[cid[at_b]]]
-    lo_, hi_ = np.where(rev, b, a).tolist(), np.where(rev, a, b).tolist()
+    # a curve whose points turn back (two steps in a row more than 120 degrees apart) zigzags
+    # (a sharp spike whose legs were linked across, a region's points ordered along a chord
+    # that crosses the spike): its inner points are reordered into a shorter path
+    which = _turning_back(pts, off)
+    if len(which):
+        order = _k.untangle(pts, off.astype(np.int64), which.astype(np.int64), UNTANGLE_W, TURN_BACK_COS)
+        pts = pts[order]
+        ind = ind[order]
     o = off.tolist()
+    lo_, hi_ = np.where(rev, b, a).tolist(), np.where(rev, a, b).tolist()
     return [Curve(pts[o[i]:o[i + 1]], lo_[i], hi_[i], False, ind[o[i]:o[i + 1]]) for i in range(nc)]
+
+
+#: two successive steps of a curve more than this apart (cosine below) turn back
+TURN_BACK_COS = -0.5
+#: the reach (in points along the curve) of one reordering move (see
+#: :func:`curvenet._robust_kernels._untangle`)
+UNTANGLE_W = 32
+
+
+def _turning_back(X, off):
+    """The curves (points ``X[off[i]:off[i + 1]]``, concatenated) with two successive steps
+    whose directions are more than 120 degrees apart (``TURN_BACK_COS``)."""
+    d = np.diff(X, axis=0)
+    L = np.linalg.norm(d, axis=1)
+    # steps inside a curve of nonzero length, and pairs of them inside one curve
+    cid = np.repeat(np.arange(len(off) - 1), np.diff(off))
+    inside = (cid[1:] == cid[:-1]) & (L > 0)
+    u = d / np.where(L > 0, L, 1.0)[:, None]
+    idx = np.flatnonzero(inside)
+    # consecutive nonzero steps of the same curve (zero steps skipped)
+    pair = (cid[idx[1:]] == cid[idx[:-1]])
+    cosang = np.einsum("nd,nd->n", u[idx[1:]], u[idx[:-1]])
+    return np.unique(cid[idx[1:]][pair & (cosang < TURN_BACK_COS)])
 
 
 def _sort_curves(curves):
