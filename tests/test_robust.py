@@ -518,6 +518,55 @@ def test_sampled_mug_close_junctions_under_noise_and_density():
     assert m["curve_f1"] == 1.0
 
 
+def test_sampled_loop_with_a_sharp_corner_is_not_a_zigzag():
+    # the corners model's triangle (a 30-degree corner) under noise 0.3h + density x3
+    # (sampling 7): links across the corner's legs made the loop, ordered by its distance
+    # from the cut point, run back and forth between them all along; reordered, it is exact
+    from curvenet import synth
+    from curvenet.bench import _seed
+    from curvenet.metrics import compare
+
+    truth = synth.model("corners")
+    pts, _ = synth.sample(truth, rng=_seed("corners", "noise 0.3h + density x3") + 7, noise=0.3,
+                          density_ratio=3.0)
+    m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+
+
+def test_untangle_loops_keeps_the_cut_point_and_shortens():
+    from curvenet.robust import _untangle_loops
+
+    # a triangle-like loop with a 20-degree corner, sampled every 1, its corner legs
+    # interleaved (as a distance order across the corner comes out); and a plain circle
+    rng = np.random.default_rng(0)
+    a = np.radians(10.0)
+    s = np.arange(1, 30, dtype=float)
+    leg1 = np.c_[s * np.cos(a), s * np.sin(a)]
+    leg2 = np.c_[s * np.cos(a), -s * np.sin(a)][::-1]
+    base = np.c_[np.full(9, 30 * np.cos(a)), np.linspace(30 * np.sin(a), -30 * np.sin(a), 11)[1:-1]]
+    tri = np.r_[np.zeros((1, 2)), leg1, base, leg2] + 0.02 * rng.normal(size=(68, 2))
+    circ = np.c_[np.cos(np.linspace(0, 2 * np.pi, 40, endpoint=False)),
+                 np.sin(np.linspace(0, 2 * np.pi, 40, endpoint=False))] * 8.0 + 100.0
+    P = np.r_[tri, circ]
+    good = np.arange(68)
+    # start on the base (index 34), around through leg 2 to the corner, leg 1 interleaved
+    # with leg 2 near the corner
+    order = np.r_[np.arange(34, 68), 0, np.arange(1, 34)]
+    bad = order.copy()
+    k = np.arange(20, 48)  # the positions around the corner: legs interleaved by distance
+    mid = 34  # the corner (point 0) sits at position 34
+    bad[k] = order[k[np.argsort(np.abs(k - mid), kind="stable")]]
+    loops = [bad, np.arange(68, 108)]
+    out = _untangle_loops(P, loops)
+    L = lambda ids: float(np.linalg.norm(np.diff(P[np.r_[ids, ids[:1]]], axis=0), axis=1).sum())
+    assert out[0][0] == bad[0] and sorted(out[0].tolist()) == good.tolist()
+    assert L(bad) > 1.3 * L(order)
+    assert L(out[0]) <= L(order) * (1 + 1e-9)
+    assert np.array_equal(out[1], loops[1])  # no turn back: unchanged
+    assert _untangle_loops(P, []) == []
+
+
 def test_sampled_sharp_spike_is_not_a_zigzag():
     # the corners model's spike (legs about 10 degrees apart) under noise 0.3h + density x3:
     # its legs are linked across near the apex and a junction-like region there was ordered

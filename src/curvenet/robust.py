@@ -1129,9 +1129,9 @@ def _assemble(P, h, chains, regions, prm):
                               nodes[ends[:, 0]], nodes[ends[:, 1]], 2.0 * SPAN)
         trim = {ci: flat[lo[i]:hi[i]] for i, ci in enumerate(opn)}
     curves: list = [None] * len(live)
-    for ci, c in enumerate(live):
-        if c.closed:
-            curves[ci] = Curve(P[c.ids], None, None, True, c.ids.copy())
+    loops = [ci for ci, c in enumerate(live) if c.closed]
+    for ci, ids in zip(loops, _untangle_loops(P, [live[ci].ids for ci in loops])):
+        curves[ci] = Curve(P[ids], None, None, True, ids)
     if opn:
         # the open curves all at once: each runs from node a through its free-end extension
         # (reversed), trimmed chain points and the other extension to node b
@@ -1244,7 +1244,25 @@ def _open_curves(P, nodes, ids, nids, a, b, last0, last1):
 TURN_BACK_COS = -0.5
 #: the reach (in points along the curve) of one reordering move (see
 #: :func:`curvenet._robust_kernels._untangle`)
-UNTANGLE_W = 32
+UNTANGLE_W = 64
+
+
+def _untangle_loops(P, loops):
+    """The closed loops' point ids (each a list from its cut point around), those that turn
+    back reordered into a shorter cycle from the same cut point (see :func:`_turning_back`)."""
+    if not loops:
+        return []
+    # each loop as a path from its first point around and back to it (both ends kept)
+    ids = np.concatenate([np.r_[c, c[:1]] for c in loops]).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum([len(c) + 1 for c in loops])].astype(np.int64)
+    which = _turning_back(P[ids], off)
+    out = [np.array(c, dtype=np.int64, copy=True) for c in loops]
+    if len(which):
+        order = _k.untangle(P[ids], off, which.astype(np.int64), UNTANGLE_W, TURN_BACK_COS)
+        ids = ids[order]
+        for i in which.tolist():
+            out[i] = ids[off[i]:off[i + 1] - 1].copy()
+    return out
 
 
 def _turning_back(X, off):
