@@ -518,6 +518,24 @@ def test_sampled_mug_close_junctions_under_noise_and_density():
     assert m["curve_f1"] == 1.0
 
 
+@pytest.mark.parametrize("offset", [6, 7])
+def test_sampled_tree_short_leaves_under_noise_and_density(offset):
+    # the tree's last leaves (17h long) in its sparse part (spacing up to 2h) under noise
+    # 0.3h: the widened shell (outer radius about 13h) sees a leaf's points in one group, as
+    # at a free end, and the leaf joined its junction's region; the split of large regions
+    # now also keeps a junction and a free-end tip apart (joined by the leaf)
+    from curvenet import synth
+    from curvenet.bench import _seed
+    from curvenet.metrics import compare
+
+    truth = synth.model("tree")
+    pts, _ = synth.sample(truth, rng=_seed("tree", "noise 0.3h + density x3") + offset, noise=0.3,
+                          density_ratio=3.0)
+    m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0
+
+
 def test_sampled_loop_with_a_sharp_corner_is_not_a_zigzag():
     # the corners model's triangle (a 30-degree corner) under noise 0.3h + density x3
     # (sampling 7): links across the corner's legs made the loop, ordered by its distance

@@ -603,7 +603,7 @@ def _reconstruct_robust(
     # regions: flagged points joined by plain short links (any direction)
     ka, kb = _k.short_links(h, dist, idx, float(prm["link"]))  # kNN pairs within link * h
     # two junctions closer than about two shell radii flag one region: re-test large ones
-    flagged, reg, n_reg = _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm)
+    flagged, reg, n_reg = _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, dict(prm, _noisy=not clean))
     del ka, kb, dist, idx  # memory: the kNN lists are not needed below
     chn, n_chn = _components(N, src, dst, ~flagged)
 
@@ -665,7 +665,9 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
     the freed points (linked graph), no freed chain touching three, at least one joining two,
     and the joined sub-regions over ``SPLIT_SEP`` fine outer radii apart: two junctions and the
     short segment between them. Two chains between the same two (a crossing seen in two halves
-    by the smaller shell) keep the region whole.
+    by the smaller shell) keep the region whole. Under noise (``prm["_noisy"]``) a sub-region
+    with a free-end point (1 group) counts too when another has a junction point: a junction
+    and the tip of a branch shorter than the widened shell, joined by the branch.
 
     Parameters
     ----------
@@ -679,7 +681,7 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
     ka, kb : (E,) int ndarray
         Short kNN links (the region graph).
     prm : dict
-        Parameters (``shell_inner``, ``shell_outer``).
+        Parameters (``shell_inner``, ``shell_outer``; ``_noisy``: the input is noisy).
 
     Returns
     -------
@@ -722,6 +724,8 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
     tcut = np.searchsorted(touch[:, 0], np.arange(lab.max() + 2))
     is_j = np.zeros(N, dtype=bool)  # points of the fine test in 3 or more groups
     is_j[sub] = fine[sub] >= 3
+    is_e = np.zeros(N, dtype=bool)  # and in 1 group (a free end)
+    is_e[sub] = fine[sub] == 1
     # the points of each big region, grouped (one sort, not one pass per region)
     bsel = big[r]
     bi, br = ids[bsel], r[bsel]
@@ -735,8 +739,18 @@ def _split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm):
         kept = pts[nf[pts]]
         labs, c2 = np.unique(reg2[kept], return_counts=True)
         # sub-regions of 2 or more points with a junction point (3 or more groups)
-        good = labs[(c2 >= SPLIT_MIN) & np.isin(labs, reg2[kept[is_j[kept]]])]
-        ok = len(good) >= 2
+        jun = np.isin(labs, reg2[kept[is_j[kept]]])
+        if prm.get("_noisy", False):
+            # under noise also with a free end point, when another is a junction: the shell,
+            # widened for noise, can be longer than a short branch, whose points then all
+            # look like its free end and join the junction's region (the finer shell sees
+            # the branch)
+            tip = np.isin(labs, reg2[kept[is_e[kept]]]) & ~jun
+            good = labs[(c2 >= SPLIT_MIN) & (jun | tip)]
+            ok = len(good) >= 2 and bool(np.isin(good, labs[jun]).any())
+        else:
+            good = labs[(c2 >= SPLIT_MIN) & jun]
+            ok = len(good) >= 2
         if ok:
             links = []
             for c in np.unique(lab[pts[freed[pts]]]):
