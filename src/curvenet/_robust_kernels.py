@@ -369,6 +369,15 @@ _eig_sym = _eig_sym_py
 TOP_GAP = 1e-3
 
 
+def _sym2(m00, m11, m01):  # pragma: no cover - compiled
+    """The symmetric 2 x 2 matrix ``[[m00, m01], [m01, m11]]``: its eigenvalues are
+    ``q -+ r``, with ``q`` the mean of the diagonal, ``b`` half its difference and
+    ``r = sqrt(b^2 + m01^2)``; returns ``(q, b, r)``."""
+    q = 0.5 * (m00 + m11)
+    b = 0.5 * (m00 - m11)
+    return q, b, np.sqrt(b * b + m01 * m01)
+
+
 def _eig_top_py(C, V, ev):  # pragma: no cover - compiled
     """Eigenvalues (ascending, into ``ev``) and top eigenvector (into ``V[:, d - 1]``; the other
     columns are not set) of a small symmetric matrix ``C`` (d, d).
@@ -383,9 +392,7 @@ def _eig_top_py(C, V, ev):  # pragma: no cover - compiled
     """
     d = C.shape[0]
     if d == 2:
-        q = 0.5 * (C[0, 0] + C[1, 1])
-        b = 0.5 * (C[0, 0] - C[1, 1])
-        r = np.sqrt(b * b + C[0, 1] * C[0, 1])
+        q, b, r = _sym2(C[0, 0], C[1, 1], C[0, 1])
         if not r > TOP_GAP * (abs(q) + r):
             _eig_sym(C, V, ev)
             return
@@ -496,9 +503,7 @@ def _eig_top_py(C, V, ev):  # pragma: no cover - compiled
     m00 = ux * cux + uy * cuy + uz * cuz
     m11 = wx * cwx + wy * cwy + wz * cwz
     m01 = ux * cwx + uy * cwy + uz * cwz
-    q2 = 0.5 * (m00 + m11)
-    b2 = 0.5 * (m00 - m11)
-    r2 = np.sqrt(b2 * b2 + m01 * m01)
+    q2, b2, r2 = _sym2(m00, m11, m01)
     ev[0] = q2 - r2
     ev[1] = q2 + r2
     if ev[1] > ev[2]:  # (rounding, within the gap test's margin)
@@ -1828,7 +1833,7 @@ _PY = {
     "vote_eig": _vote_eig,
 }
 _PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
-               "_eig_sym": _eig_sym_py, "_eig_top": _eig_top_py, "_pca01": _pca01, "_strip_score": _strip_score,
+               "_eig_sym": _eig_sym_py, "_eig_top": _eig_top_py, "_sym2": _sym2, "_pca01": _pca01, "_strip_score": _strip_score,
                "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
@@ -1962,6 +1967,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_heap_pop": numba.njit(cache=True, nogil=True, inline="always")(_heap_pop),
             "_heap_push": numba.njit(cache=True, nogil=True, inline="always")(_heap_push),
             "_eig_sym": _jit(_eig_sym_py),
+            "_sym2": numba.njit(cache=True, nogil=True, inline="always")(_sym2),
             "_eig_top": _jit(_eig_top_py),
             "_pca01": _jit(_pca01),
             "_strip_score": _jit(_strip_score),
