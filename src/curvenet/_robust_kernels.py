@@ -1527,6 +1527,15 @@ def _behind_count(P, h, ids, lo, hi, step, x, span2):  # pragma: no cover - comp
     return j if j < n - 2 else n - 2
 
 
+def _dist2(X, a, b):  # pragma: no cover - compiled
+    """Squared distance between the rows ``a`` and ``b`` of ``X``."""
+    s = 0.0
+    for q in range(X.shape[1]):
+        t = X[b, q] - X[a, q]
+        s += t * t
+    return s
+
+
 def _untangle(X, off, which, w, cos_back):  # pragma: no cover - compiled
     """A shorter order of the inner points of the curves ``which`` (windowed 2-opt).
 
@@ -1564,10 +1573,7 @@ def _untangle(X, off, which, w, cos_back):  # pragma: no cover - compiled
             for k in range(n - 1):
                 a = order[s0 + k]
                 b = order[s0 + k + 1]
-                L2 = 0.0
-                for q in range(d):
-                    t = X[b, q] - X[a, q]
-                    L2 += t * t
+                L2 = _dist2(X, a, b)
                 if not L2 > 0.0:
                     continue
                 L = np.sqrt(L2)
@@ -1594,27 +1600,14 @@ def _untangle(X, off, which, w, cos_back):  # pragma: no cover - compiled
                     j1 = n - 1
                 a = order[s0 + i]
                 b = order[s0 + i + 1]
-                dab = 0.0
-                for q in range(d):
-                    t = X[a, q] - X[b, q]
-                    dab += t * t
-                dab = np.sqrt(dab)
+                dab = np.sqrt(_dist2(X, a, b))
                 best = 0.0
                 bj = -1
                 for j in range(i + 2, j1):
                     cc = order[s0 + j]
                     dd = order[s0 + j + 1]
-                    dac = 0.0
-                    dbd = 0.0
-                    dcd = 0.0
-                    for q in range(d):
-                        t = X[cc, q] - X[a, q]
-                        dac += t * t
-                        t = X[dd, q] - X[b, q]
-                        dbd += t * t
-                        t = X[cc, q] - X[dd, q]
-                        dcd += t * t
-                    delta = np.sqrt(dac) + np.sqrt(dbd) - dab - np.sqrt(dcd)
+                    delta = (np.sqrt(_dist2(X, cc, a)) + np.sqrt(_dist2(X, dd, b)) - dab
+                             - np.sqrt(_dist2(X, cc, dd)))
                     if bj < 0 or delta < best:
                         best = delta
                         bj = j
@@ -1833,7 +1826,7 @@ _PY = {
     "vote_eig": _vote_eig,
 }
 _PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
-               "_eig_sym": _eig_sym_py, "_eig_top": _eig_top_py, "_sym2": _sym2, "_pca01": _pca01, "_strip_score": _strip_score,
+               "_eig_sym": _eig_sym_py, "_eig_top": _eig_top_py, "_sym2": _sym2, "_dist2": _dist2, "_pca01": _pca01, "_strip_score": _strip_score,
                "_tangents_block": _tangents_block, "prange": range,
                "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
@@ -1968,6 +1961,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_heap_push": numba.njit(cache=True, nogil=True, inline="always")(_heap_push),
             "_eig_sym": _jit(_eig_sym_py),
             "_sym2": numba.njit(cache=True, nogil=True, inline="always")(_sym2),
+            "_dist2": numba.njit(cache=True, nogil=True, inline="always")(_dist2),
             "_eig_top": _jit(_eig_top_py),
             "_pca01": _jit(_pca01),
             "_strip_score": _jit(_strip_score),
