@@ -207,13 +207,16 @@ def _spacing_floor(h):
     return np.maximum(h, floor)
 
 
-def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=None):
+def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=None, margin=None):
     """Local tangent and linearity of each point.
 
     A first direction from the 4 nearest neighbours (or towards one of them, when its narrow
     strip holds clearly more points: a close parallel curve can pull the PCA across) is refined
     by a PCA of the ``m`` nearest that lie within one spacing of its line (a strip that leaves
     out a close parallel curve). The linearity ``1 - l2 / l1`` is that of the last strip PCA.
+    ``order``: the points to do (all, in this order; or a subset, the others get zeros);
+    ``margin``: the score a neighbour's direction needs above the 4-neighbour direction's
+    (default: the kernels' ``CAND_MARGIN``).
 
     Returns
     -------
@@ -235,7 +238,7 @@ def _tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = 12, order=
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
     t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                                   np.ascontiguousarray(h, dtype=np.float64), m, order)
+                                   np.ascontiguousarray(h, dtype=np.float64), m, order, margin=margin)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
     rms = 1.28 * cr / np.sqrt(1.5 * max(dim - 1, 1))
@@ -256,8 +259,7 @@ def _retry_tangents(P, idx, h, t, lin, gain, m: int = 12):
     redo = np.flatnonzero((gain > CAND_MARGIN_CLEAN) & (gain <= _k.CAND_MARGIN))
     if len(redo) == 0:
         return t, lin
-    t2, lin2, _, _ = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                                 np.ascontiguousarray(h, dtype=np.float64), m, redo, margin=CAND_MARGIN_CLEAN)
+    t2, lin2, _, _ = _tangents(P, idx, h, m, order=redo, margin=CAND_MARGIN_CLEAN)
     t = t.copy()
     lin = lin.copy()
     t[redo] = t2[redo]
@@ -1244,9 +1246,8 @@ def _open_curves(P, nodes, ids, nids, a, b, last0, last1):
     # a curve whose points turn back (two steps in a row more than 120 degrees apart) zigzags
     # (a sharp spike whose legs were linked across, a region's points ordered along a chord
     # that crosses the spike): its inner points are reordered into a shorter path
-    which = _turning_back(pts, off)
-    if len(which):
-        order = _k.untangle(pts, off.astype(np.int64), which.astype(np.int64), UNTANGLE_W, TURN_BACK_COS)
+    order, _ = _untangled(pts, off)
+    if order is not None:
         pts = pts[order]
         ind = ind[order]
     o = off.tolist()
@@ -1269,14 +1270,25 @@ def _untangle_loops(P, loops):
     # each loop as a path from its first point around and back to it (both ends kept)
     ids = np.concatenate([np.r_[c, c[:1]] for c in loops]).astype(np.int64, copy=False)
     off = np.r_[0, np.cumsum([len(c) + 1 for c in loops])].astype(np.int64)
-    which = _turning_back(P[ids], off)
+    order, which = _untangled(P[ids], off)
     out = [np.array(c, dtype=np.int64, copy=True) for c in loops]
-    if len(which):
-        order = _k.untangle(P[ids], off, which.astype(np.int64), UNTANGLE_W, TURN_BACK_COS)
+    if order is not None:
         ids = ids[order]
         for i in which.tolist():
             out[i] = ids[off[i]:off[i + 1] - 1].copy()
     return out
+
+
+def _untangled(X, off):
+    """The curves ``X[off[i]:off[i + 1]]`` (concatenated) that turn back, and the order of the
+    rows of ``X`` that reorders their inner points into shorter paths (their ends kept; the
+    other curves as they are), or ``None`` when none turns back
+    (:func:`curvenet._robust_kernels._untangle`)."""
+    which = _turning_back(X, off)
+    if not len(which):
+        return None, which
+    order = _k.untangle(X, np.asarray(off, dtype=np.int64), which.astype(np.int64), UNTANGLE_W, TURN_BACK_COS)
+    return order, which
 
 
 def _turning_back(X, off):
