@@ -753,3 +753,18 @@ def test_sampled_noise_0_3h_and_density_ratio_3_short_free_branches(name, seed):
     m = _score(name, seed=seed, noise=0.3, ratio=3.0)
     assert m["exact_topology"]
     assert m["curve_f1"] == 1.0
+
+
+@pytest.mark.parametrize("offset", [3, 4])
+def test_sampled_eye_under_noise_and_density(offset):
+    # three curves 2.5h apart under noise 0.3h and spacing up to 2h: links across the strands
+    # (rungs of a ladder) flagged the plateau as junctions; the strand test cuts them
+    from curvenet import synth
+    from curvenet.bench import _seed
+    from curvenet.metrics import compare
+
+    truth = synth.model("eye")
+    pts, _ = synth.sample(truth, rng=_seed("eye", "noise 0.3h + density x3") + offset, noise=0.3, density_ratio=3.0)
+    m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
+    assert m["exact_topology"]
+    assert m["curve_f1"] == 1.0

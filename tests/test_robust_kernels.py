@@ -648,3 +648,51 @@ def test_untangle_makes_a_zigzag_a_path(py, dim):
     assert np.array_equal(order[len(X1):], np.arange(len(X1), len(X)))  # the path, the short one
     # compiled and Python runs agree
     assert np.array_equal(order, K._PY["untangle"](X, off, which, 32, -0.5))
+
+
+def _strands(gap, n=60, sigma=0.3, seed=0):
+    """Points of parallel lines ``gap`` apart along x (one line for ``gap=None``), spacing 1.5,
+    Gaussian noise ``sigma`` per coordinate; with their line labels."""
+    rng = np.random.default_rng(seed)
+    x = np.arange(n) * 1.5
+    ys = [0.0] if gap is None else [0.0, gap]
+    P = np.vstack([np.column_stack([x, np.full(n, y), np.zeros(n)]) for y in ys])
+    lab = np.repeat(np.arange(len(ys)), n)
+    return P + rng.normal(scale=sigma, size=P.shape), lab
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_strand_cuts_cut_only_links_across_strands(compiled):
+    if compiled and not K.HAVE_NUMBA:
+        pytest.skip("numba not installed")
+    for gap in (None, 2.5):
+        P, lab = _strands(gap)
+        dist, idx = knn(P, 16, ordered=True)
+        h = R.local_spacing(dist, idx)
+        t, lin = R._noisy_tangents(P, h, 0.3, R.build_tree(P))
+        src = np.repeat(np.arange(len(P)), 16)
+        dst = idx.ravel()
+        with K.compiled_for(10**6 if compiled else 0):
+            cut = K.strand_cuts(P, h, idx, t, src, dst, 0.3)
+        across = lab[src] != lab[dst]
+        assert not (cut & ~across).any()  # no link along a strand is cut
+        if gap is not None:
+            assert cut[across].mean() > 0.5  # most links across are
+            # the noisy tangents run along the strands
+            assert np.median(np.abs(t[:, 0])) > 0.99
+
+
+def test_noisy_tangents_compiled_and_python_agree():
+    if not K.HAVE_NUMBA:
+        pytest.skip("numba not installed")
+    P, _ = _strands(2.5, n=30)
+    dist, idx = knn(P, 32, ordered=True)
+    h = R.local_spacing(dist[:, :16], idx[:, :16])
+    out = []
+    for n in (0, 10**6):
+        with K.compiled_for(n):
+            out.append(K.noisy_tangents(P, idx, h, 0.3))
+    t0, l0 = out[0]
+    t1, l1 = out[1]
+    np.testing.assert_allclose(np.abs(np.einsum("nd,nd->n", t0, t1)), 1.0, atol=1e-9)
+    np.testing.assert_allclose(l0, l1, atol=1e-9)

@@ -17,7 +17,7 @@ from ._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
-__all__ = ["spacing", "shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "untangle", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
+__all__ = ["spacing", "shell_groups", "csr_union", "components", "chain_order", "end_count", "end_counts", "tangents", "linked_edges", "short_links", "chain_ends", "junction_nodes", "trim_ends", "untangle", "noisy_tangents", "strand_cuts", "vote_agreement", "vote_eig", "HAVE_NUMBA"]
 
 
 def _heap_pop(heap_k, heap_v, hs):  # pragma: no cover - compiled
@@ -1536,6 +1536,328 @@ def _dist2(X, a, b):  # pragma: no cover - compiled
     return s
 
 
+#: noisy tangents (see _noisy_tangents): directions to the NOISY_CAND nearest are scored; the
+#: strip reaches NOISY_A spacings (+ 2 sigma) along, is max(NOISY_WH h, NOISY_WF sigma) wide; the
+#: refining PCA takes the points within max(h, NOISY_RW sigma) of the line
+NOISY_CAND = 16
+NOISY_A = 5.0
+NOISY_WF = 2.0
+NOISY_WH = 0.5
+NOISY_RW = 2.5
+
+
+def _noisy_tangents(P, idx, h, sig):  # pragma: no cover - compiled
+    """Tangent and linearity of every point of a noisy cloud.
+
+    Where sparse, noisy curves run 2 to 3 spacings apart, the nearest neighbours of a point lie
+    as often across as along: the best line is found over a longer reach. The direction towards
+    each of the ``NOISY_CAND`` nearest neighbours is scored by the sum, over all ``k`` neighbours
+    (``idx``: (N, k)) within ``NOISY_A * h + 2 sig`` along it, of ``exp(-(r / w)^2)``, ``r`` the
+    distance from the line through the point and ``w = max(NOISY_WH * h, NOISY_WF * sig)``; the
+    best (the first of equal scores) is refined twice by the PCA of the point and its neighbours
+    within ``max(h, NOISY_RW * sig)`` of the current line and twice that reach along it. The
+    linearity is ``1 - l2 / l1`` of the last PCA.
+
+    Returns
+    -------
+    T : (N, d) ndarray
+        Unit tangents (sign arbitrary).
+    lin : (N,) ndarray
+    """
+    n = P.shape[0]
+    d = P.shape[1]
+    k = idx.shape[1]
+    nc = NOISY_CAND if NOISY_CAND < k else k
+    T = np.zeros((n, d))
+    lin = np.zeros(n)
+    for p in prange(n):
+        Q = np.empty((k + 1, d))
+        w = np.zeros(k + 1)
+        C = np.zeros((d, d))
+        V = np.zeros((d, d))
+        ev = np.zeros(d)
+        mu = np.zeros(d)
+        t = np.zeros(d)
+        u = np.zeros(d)
+        for c in range(d):
+            Q[0, c] = 0.0
+        for j in range(k):
+            for c in range(d):
+                Q[j + 1, c] = P[idx[p, j], c] - P[p, c]
+        W = NOISY_WH * h[p]
+        if NOISY_WF * sig > W:
+            W = NOISY_WF * sig
+        w2 = W * W
+        amax = NOISY_A * h[p] + 2.0 * sig
+        best = -np.inf
+        for j in range(nc):
+            r = 0.0
+            for c in range(d):
+                r += Q[j + 1, c] * Q[j + 1, c]
+            r = np.sqrt(r)
+            if r < 1e-300:
+                r = 1e-300
+            for c in range(d):
+                u[c] = Q[j + 1, c] / r
+            sc = 0.0
+            for i in range(1, k + 1):
+                al = 0.0
+                r2 = 0.0
+                for c in range(d):
+                    al += Q[i, c] * u[c]
+                    r2 += Q[i, c] * Q[i, c]
+                if al > amax or al < -amax:
+                    continue
+                q2 = r2 - al * al
+                if q2 < 0.0:
+                    q2 = 0.0
+                sc += np.exp(-q2 / w2)
+            if sc > best:
+                best = sc
+                for c in range(d):
+                    t[c] = u[c]
+        rw = h[p]
+        if NOISY_RW * sig > rw:
+            rw = NOISY_RW * sig
+        rw2 = rw * rw
+        lp = 0.0
+        for it in range(2):
+            w[0] = 1.0
+            for i in range(1, k + 1):
+                al = 0.0
+                r2 = 0.0
+                for c in range(d):
+                    al += Q[i, c] * t[c]
+                    r2 += Q[i, c] * Q[i, c]
+                w[i] = 1.0 if (r2 - al * al <= rw2 and abs(al) <= 2.0 * amax) else 0.0
+            for c in range(d):
+                u[c] = t[c]
+            _pca01(Q, k + 1, w, C, V, ev, mu, t)
+            sg = 0.0
+            for c in range(d):
+                sg += t[c] * u[c]
+            if sg < 0.0:
+                for c in range(d):
+                    t[c] = -t[c]
+            lam = ev[d - 1]
+            if lam < 1e-300:
+                lam = 1e-300
+            lp = 1.0 - ev[d - 2] / lam
+        lin[p] = lp
+        for c in range(d):
+            T[p, c] = t[c]
+    return T, lin
+
+
+#: the strand test (see _strand_cuts)
+STRAND_COS = float(np.cos(np.radians(20.0)))
+STRAND_T0 = 2.0
+STRAND_A = 4.0
+STRAND_B = 1.5
+STRAND_BH = 0.35
+STRAND_THR = 3.0
+STRAND_DMIN = 1.5
+STRAND_NMIN = 3
+STRAND_SIDE = 0.5
+STRAND_LCOS = float(np.cos(np.radians(15.0)))
+STRAND_IT = 30
+
+
+def _shift_mode(L, cnt, x0, b, out):  # pragma: no cover - compiled
+    """Mean shift (Gaussian kernel of width ``b``) over the rows ``L[:cnt]`` from ``x0``: the
+    mode into ``out``."""
+    d = L.shape[1]
+    for c in range(d):
+        out[c] = x0[c]
+    x2 = np.zeros(d)
+    for it in range(STRAND_IT):
+        sw = 0.0
+        for c in range(d):
+            x2[c] = 0.0
+        for i in range(cnt):
+            r2 = 0.0
+            for c in range(d):
+                z = L[i, c] - out[c]
+                r2 += z * z
+            wi = np.exp(-0.5 * r2 / (b * b))
+            sw += wi
+            for c in range(d):
+                x2[c] += wi * L[i, c]
+        mv = 0.0
+        for c in range(d):
+            x2[c] /= sw
+            z = x2[c] - out[c]
+            mv += z * z
+            out[c] = x2[c]
+        if mv < 1e-12 * b * b:
+            break
+
+
+def _density(L, cnt, x, b):  # pragma: no cover - compiled
+    """Kernel density (unnormalized) of the rows ``L[:cnt]`` at ``x``."""
+    d = L.shape[1]
+    f = 0.0
+    for i in range(cnt):
+        r2 = 0.0
+        for c in range(d):
+            z = L[i, c] - x[c]
+            r2 += z * z
+        f += np.exp(-0.5 * r2 / (b * b))
+    return f
+
+
+def _strand_cuts(P, h, idx, t, src, dst, sig):  # pragma: no cover - compiled
+    """The links of a noisy cloud that join two parallel strands (close parallel curves).
+
+    For the link ``p -> q`` between nearly parallel tangents (``STRAND_COS``) whose far end lies
+    more than ``max(STRAND_T0 sig, STRAND_DMIN h_p / 2)`` from the tangent line at ``p``: the
+    offsets across the strand of ``p`` and of its neighbours within ``STRAND_A h_p`` along it
+    (each from the line through ``p`` along the mean of the two tangents, which follows a bend)
+    are searched for modes by mean shift (width ``max(STRAND_B sig, STRAND_BH h_p)``), once from
+    ``p`` and once from ``q``. The link is cut when the two modes lie more than
+    ``max(STRAND_THR sig, STRAND_DMIN h_p)`` apart with a density valley between them, and each
+    mode holds at least ``STRAND_NMIN`` points that run parallel to ``t_p`` (``STRAND_LCOS``) on
+    both sides of the link (beyond ``STRAND_SIDE h_p`` along): two strands, not one strand's
+    noise, bend or crossing.
+
+    Returns
+    -------
+    (E,) ndarray of bool
+    """
+    d = P.shape[1]
+    k = idx.shape[1]
+    ne = src.shape[0]
+    cut = np.zeros(ne, dtype=np.bool_)
+    L = np.empty((k + 1, d))
+    X = np.empty((k + 1, d))
+    A = np.empty(k + 1)
+    w = np.zeros(k + 1)
+    C = np.zeros((d, d))
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    mu = np.zeros(d)
+    u = np.zeros(d)
+    tb = np.zeros(d)
+    v = np.zeros(d)
+    lq = np.zeros(d)
+    zero = np.zeros(d)
+    ms = np.zeros(d)
+    mq = np.zeros(d)
+    mid = np.zeros(d)
+    for e in range(ne):
+        p = src[e]
+        q = dst[e]
+        dot = 0.0
+        for c in range(d):
+            dot += t[p, c] * t[q, c]
+        if abs(dot) < STRAND_COS:
+            continue
+        al = 0.0
+        r2 = 0.0
+        for c in range(d):
+            v[c] = P[q, c] - P[p, c]
+            al += v[c] * t[p, c]
+            r2 += v[c] * v[c]
+        lat2 = r2 - al * al
+        lim = STRAND_T0 * sig
+        if 0.5 * STRAND_DMIN * h[p] > lim:
+            lim = 0.5 * STRAND_DMIN * h[p]
+        if not (lat2 > lim * lim):
+            continue
+        al_pq = al
+        # q's offset from the line along the mean tangent of p and q
+        sg = 1.0 if dot >= 0.0 else -1.0
+        nn = 0.0
+        for c in range(d):
+            tb[c] = sg * t[q, c] + t[p, c]
+            nn += tb[c] * tb[c]
+        nn = np.sqrt(nn)
+        a2 = 0.0
+        for c in range(d):
+            tb[c] /= nn
+            a2 += v[c] * tb[c]
+        for c in range(d):
+            lq[c] = v[c] - a2 * tb[c]
+        # the window: p and its neighbours within STRAND_A h_p along t_p
+        cnt = 0
+        for j in range(-1, k):
+            i = p if j < 0 else idx[p, j]
+            aj = 0.0
+            dj = 0.0
+            for c in range(d):
+                aj += (P[i, c] - P[p, c]) * t[p, c]
+                dj += t[i, c] * t[p, c]
+            if aj > STRAND_A * h[p] or aj < -STRAND_A * h[p]:
+                continue
+            sg = 1.0 if dj >= 0.0 else -1.0
+            nn = 0.0
+            for c in range(d):
+                tb[c] = sg * t[i, c] + t[p, c]
+                nn += tb[c] * tb[c]
+            nn = np.sqrt(nn)
+            a2 = 0.0
+            for c in range(d):
+                tb[c] /= nn
+                a2 += (P[i, c] - P[p, c]) * tb[c]
+            for c in range(d):
+                L[cnt, c] = P[i, c] - P[p, c] - a2 * tb[c]
+                X[cnt, c] = P[i, c]
+            A[cnt] = aj
+            cnt += 1
+        b = STRAND_B * sig
+        if STRAND_BH * h[p] > b:
+            b = STRAND_BH * h[p]
+        _shift_mode(L, cnt, zero, b, ms)
+        _shift_mode(L, cnt, lq, b, mq)
+        sep = 0.0
+        for c in range(d):
+            z = ms[c] - mq[c]
+            sep += z * z
+            mid[c] = 0.5 * (ms[c] + mq[c])
+        lim = STRAND_THR * sig
+        if STRAND_DMIN * h[p] > lim:
+            lim = STRAND_DMIN * h[p]
+        if not (sep > lim * lim):
+            continue
+        fs = _density(L, cnt, ms, b)
+        fq = _density(L, cnt, mq, b)
+        if not (_density(L, cnt, mid, b) < min(fs, fq)):
+            continue
+        ok = True
+        for which in range(2):
+            nm = 0
+            lo = np.inf
+            hi = -np.inf
+            for i in range(cnt):
+                r2 = 0.0
+                for c in range(d):
+                    z = L[i, c] - (ms[c] if which == 0 else mq[c])
+                    r2 += z * z
+                if r2 <= (1.5 * b) * (1.5 * b):
+                    w[i] = 1.0
+                    nm += 1
+                    am = A[i] - 0.5 * al_pq
+                    if am < lo:
+                        lo = am
+                    if am > hi:
+                        hi = am
+                else:
+                    w[i] = 0.0
+            if nm < STRAND_NMIN or not (lo < -STRAND_SIDE * h[p] and hi > STRAND_SIDE * h[p]):
+                ok = False
+                break
+            _pca01(X, cnt, w, C, V, ev, mu, u)
+            dj = 0.0
+            for c in range(d):
+                dj += u[c] * t[p, c]
+            if abs(dj) < STRAND_LCOS:
+                ok = False
+                break
+        if ok:
+            cut[e] = True
+    return cut
+
+
 def _untangle(X, off, which, w, cos_back):  # pragma: no cover - compiled
     """A shorter order of the inner points of the curves ``which`` (windowed 2-opt).
 
@@ -1822,6 +2144,8 @@ _PY = {
     "junction_nodes": _junction_nodes,
     "trim_ends": _trim_ends,
     "untangle": _untangle,
+    "noisy_tangents": _noisy_tangents,
+    "strand_cuts": _strand_cuts,
     "vote_agreement": _vote_agreement,
     "vote_eig": _vote_eig,
 }
@@ -1831,7 +2155,8 @@ _PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
                "_shell_groups_block": _shell_groups_block,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
                "_extend_into_region": _extend_into_region, "_behind_count": _behind_count,
-               "_branch_buffer": _branch_buffer}
+               "_branch_buffer": _branch_buffer,
+               "_shift_mode": _shift_mode, "_density": _density}
 _JIT: dict = {}
 _JIT_HELPERS: dict = {}
 
@@ -1873,7 +2198,7 @@ def _kernel(name):
 #: starting a parallel loop costs microseconds on an idle machine, but when another process
 #: keeps the other cores busy it waits for a time slice (10 to 20 ms measured on 2 cores), more
 #: than the whole work of a light kernel on a small input. Results never depend on it.
-PAR_MIN = {"tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000, "vote_eig": 200_000}
+PAR_MIN = {"tangents": 20_000, "noisy_tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000, "vote_eig": 200_000}
 
 
 @contextmanager
@@ -1916,6 +2241,8 @@ end_counts = _dispatch("end_counts")
 junction_nodes = _dispatch("junction_nodes")
 trim_ends = _dispatch("trim_ends")
 untangle = _dispatch("untangle")
+noisy_tangents = _dispatch("noisy_tangents")
+strand_cuts = _dispatch("strand_cuts")
 vote_agreement = _dispatch("vote_agreement")
 vote_eig = _dispatch("vote_eig")
 
@@ -1973,13 +2300,15 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_extend_into_region": _jit(_extend_into_region),
             "_behind_count": _jit(_behind_count),
             "_branch_buffer": _jit(_branch_buffer),
+            "_shift_mode": _jit(_shift_mode),
+            "_density": _jit(_density),
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
         # prange over independent points or blocks of points
         # (the light vote_agreement and short_links stay serial: their parallel versions cost
         # about 2 s of compile each, more than they save)
-        _PAR = ("tangents", "shell_groups", "linked_edges", "vote_eig")
+        _PAR = ("tangents", "shell_groups", "linked_edges", "vote_eig", "noisy_tangents")
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True
