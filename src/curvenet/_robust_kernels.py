@@ -1706,6 +1706,28 @@ def _density(L, cnt, x, b):  # pragma: no cover - compiled
     return f
 
 
+def _mean_line_offset(P, t, p, i, tb, out):  # pragma: no cover - compiled
+    """Offset of ``P[i]`` from the line through ``P[p]`` along the mean of the tangents ``t[p]``
+    and ``t[i]`` (``t[i]`` turned to agree with ``t[p]``), into ``out`` (d,); ``tb`` (d,) is
+    scratch (left holding the mean direction)."""
+    d = P.shape[1]
+    dj = 0.0
+    for c in range(d):
+        dj += t[p, c] * t[i, c]
+    sg = 1.0 if dj >= 0.0 else -1.0
+    nn = 0.0
+    for c in range(d):
+        tb[c] = sg * t[i, c] + t[p, c]
+        nn += tb[c] * tb[c]
+    nn = np.sqrt(nn)
+    a2 = 0.0
+    for c in range(d):
+        tb[c] /= nn
+        a2 += (P[i, c] - P[p, c]) * tb[c]
+    for c in range(d):
+        out[c] = P[i, c] - P[p, c] - a2 * tb[c]
+
+
 def _strand_cuts(P, h, idx, t, src, dst, sig):  # pragma: no cover - compiled
     """The links of a noisy cloud that join two parallel strands (close parallel curves).
 
@@ -1765,42 +1787,18 @@ def _strand_cuts(P, h, idx, t, src, dst, sig):  # pragma: no cover - compiled
         if not (lat2 > lim * lim):
             continue
         al_pq = al
-        # q's offset from the line along the mean tangent of p and q
-        sg = 1.0 if dot >= 0.0 else -1.0
-        nn = 0.0
-        for c in range(d):
-            tb[c] = sg * t[q, c] + t[p, c]
-            nn += tb[c] * tb[c]
-        nn = np.sqrt(nn)
-        a2 = 0.0
-        for c in range(d):
-            tb[c] /= nn
-            a2 += v[c] * tb[c]
-        for c in range(d):
-            lq[c] = v[c] - a2 * tb[c]
+        _mean_line_offset(P, t, p, q, tb, lq)  # q's offset
         # the window: p and its neighbours within STRAND_A h_p along t_p
         cnt = 0
         for j in range(-1, k):
             i = p if j < 0 else idx[p, j]
             aj = 0.0
-            dj = 0.0
             for c in range(d):
                 aj += (P[i, c] - P[p, c]) * t[p, c]
-                dj += t[i, c] * t[p, c]
             if aj > STRAND_A * h[p] or aj < -STRAND_A * h[p]:
                 continue
-            sg = 1.0 if dj >= 0.0 else -1.0
-            nn = 0.0
+            _mean_line_offset(P, t, p, i, tb, L[cnt])
             for c in range(d):
-                tb[c] = sg * t[i, c] + t[p, c]
-                nn += tb[c] * tb[c]
-            nn = np.sqrt(nn)
-            a2 = 0.0
-            for c in range(d):
-                tb[c] /= nn
-                a2 += (P[i, c] - P[p, c]) * tb[c]
-            for c in range(d):
-                L[cnt, c] = P[i, c] - P[p, c] - a2 * tb[c]
                 X[cnt, c] = P[i, c]
             A[cnt] = aj
             cnt += 1
@@ -2156,7 +2154,7 @@ _PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
                "_extend_into_region": _extend_into_region, "_behind_count": _behind_count,
                "_branch_buffer": _branch_buffer,
-               "_shift_mode": _shift_mode, "_density": _density}
+               "_shift_mode": _shift_mode, "_density": _density, "_mean_line_offset": _mean_line_offset}
 _JIT: dict = {}
 _JIT_HELPERS: dict = {}
 
@@ -2302,6 +2300,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_branch_buffer": _jit(_branch_buffer),
             "_shift_mode": _jit(_shift_mode),
             "_density": _jit(_density),
+            "_mean_line_offset": numba.njit(cache=True, nogil=True, inline="always")(_mean_line_offset),
             "prange": numba.prange,
         }
         globals().update(_JIT_HELPERS)
