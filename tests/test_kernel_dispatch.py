@@ -46,3 +46,30 @@ def test_small_inputs_use_compiled_kernels_once_loaded(monkeypatch):
     assert K._compiled_already()
     with K.compiled_for(10) as use:
         assert use is True
+
+
+@pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed")
+def test_small_noisy_input_runs_the_strand_kernels_compiled(monkeypatch):
+    # the strand test costs about 9 ms a point in plain Python: over NUMBA_MIN_POINTS_NOISY
+    # points its kernels run compiled, the rest of a small input as plain Python; same result
+    truth = synth.model("crossing")
+    pts, _ = synth.sample(truth, noise=0.3, density_ratio=3, rng=4)
+    assert K.NUMBA_MIN_POINTS_NOISY <= len(pts) < K.NUMBA_MIN_POINTS
+    monkeypatch.setattr(K, "_compiled_already", lambda: False)  # as in a fresh process
+    seen: dict[str, set] = {}
+    kernel = K._kernel
+
+    def spy(name):
+        f = kernel(name)
+        seen.setdefault(name, set()).add(f is K._PY[name])
+        return f
+
+    monkeypatch.setattr(K, "_kernel", spy)
+    a = curvenet.reconstruct(pts)
+    assert seen["noisy_tangents"] == {False} and seen["strand_cuts"] == {False}
+    assert seen["tangents"] == {True} and seen["shell_groups"] == {True}
+    monkeypatch.setattr(K, "NUMBA_MIN_POINTS_NOISY", 10**9)
+    seen.clear()
+    b = curvenet.reconstruct(pts)
+    assert seen["strand_cuts"] == {True}
+    assert _sig(a) == _sig(b)

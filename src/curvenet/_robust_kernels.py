@@ -2124,6 +2124,12 @@ def _order(P):
 #: and far less than compiling them on a first run (15 to 20 s).
 NUMBA_MIN_POINTS = 2000
 
+#: The same threshold for the kernels of the strand test, which run on noisy input only
+#: (:func:`_noisy_tangents`, :func:`_strand_cuts`, and the vote of the noisy tangents): in plain
+#: Python they take about 9 ms a point (a 500-point cloud: 4.5 s), loading them compiled from
+#: numba's cache about 0.4 s (compiling them on a first run about 18 s).
+NUMBA_MIN_POINTS_NOISY = 200
+
 _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
 # the plain-Python functions, kept under their own names (the compiled ones replace some globals)
@@ -2160,10 +2166,12 @@ _JIT_HELPERS: dict = {}
 
 
 @contextmanager
-def compiled_for(n: int):
+def compiled_for(n: int, min_points: int | None = None):
     """Run the kernels of the enclosed block compiled when numba is there and ``n`` (the number
-    of points) is at least :data:`NUMBA_MIN_POINTS`, as plain Python otherwise (same results)."""
-    use = HAVE_NUMBA and (n >= NUMBA_MIN_POINTS or _compiled_already())
+    of points) is at least ``min_points`` (default :data:`NUMBA_MIN_POINTS`), as plain Python
+    otherwise (same results). Blocks nest: the inner one decides for its kernels."""
+    lim = NUMBA_MIN_POINTS if min_points is None else min_points
+    use = HAVE_NUMBA and (n >= lim or _compiled_already())
     token = _COMPILED.set(use)
     helpers = _JIT_HELPERS if use else _PY_HELPERS
     saved = {k: globals()[k] for k in helpers}
@@ -2176,9 +2184,10 @@ def compiled_for(n: int):
 
 
 def _compiled_already() -> bool:
-    """True once a compiled kernel ran in this process: numba's cache is then warm, and small
-    inputs gain from the compiled kernels too."""
-    return any(getattr(f, "signatures", None) for f in _JIT.values())
+    """True once the compiled tangent kernel (which every robust run calls) ran in this process:
+    numba's cache is then warm, and small inputs gain from the compiled kernels too. (The
+    strand test's kernels run compiled on their own, see :data:`NUMBA_MIN_POINTS_NOISY`.)"""
+    return bool(getattr(_JIT.get("tangents"), "signatures", None))
 
 
 def compiled_active() -> bool:

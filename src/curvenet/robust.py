@@ -629,9 +629,10 @@ def _reconstruct_robust(
     src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise,
                                  GAP * noise)
     if not clean:  # links between two close parallel strands are cut
-        tn, ln = _noisy_tangents(P, h, sigma, tree)
-        tn, _ = _vote_tangents(tn, ln, idx, m=min(VOTE_M_NOISY, idx.shape[1]))
-        src, dst, dd = _cut_strand_links(P, h, idx, tn, src, dst, dd, sigma)
+        with _k.compiled_for(N, min_points=_k.NUMBA_MIN_POINTS_NOISY):  # (slow in plain Python)
+            tn, ln = _noisy_tangents(P, h, sigma, tree)
+            tn, _ = _vote_tangents(tn, ln, idx, m=min(VOTE_M_NOISY, idx.shape[1]))
+            src, dst, dd = _cut_strand_links(P, h, idx, tn, src, dst, dd, sigma)
     indptr, indices = _k.csr_union(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64))
     tm["graph"] = time.perf_counter() - t1
 
