@@ -669,7 +669,7 @@ def test_strand_cuts_cut_only_links_across_strands(compiled):
         P, lab = _strands(gap)
         dist, idx = knn(P, 16, ordered=True)
         h = R.local_spacing(dist, idx)
-        t, lin = R._noisy_tangents(P, h, 0.3, R.build_tree(P))
+        t, lin = R._noisy_tangents(P, h, 0.3, R.build_tree(P), dist, idx)
         src = np.repeat(np.arange(len(P)), 16)
         dst = idx.ravel()
         with K.compiled_for(10**6 if compiled else 0):
@@ -691,8 +691,23 @@ def test_noisy_tangents_compiled_and_python_agree():
     out = []
     for n in (0, 10**6):
         with K.compiled_for(n):
-            out.append(K.noisy_tangents(P, idx, h, 0.3))
+            out.append(K.noisy_tangents(P, np.arange(len(P)), idx, h, 0.3))
     t0, l0 = out[0]
     t1, l1 = out[1]
     np.testing.assert_allclose(np.abs(np.einsum("nd,nd->n", t0, t1)), 1.0, atol=1e-9)
     np.testing.assert_allclose(l0, l1, atol=1e-9)
+
+
+def test_noisy_tangents_read_nothing_beyond_their_reach():
+    # points whose 16th neighbour lies beyond noisy_reach take the method's 16 neighbours
+    # instead of a 32-neighbour query: the same tangents to the bit
+    P, _ = _strands(2.5, n=60)
+    P = np.vstack([P, _strands(None, n=120)[0] + [0.0, 40.0, 0.0]])  # plus a lone strand
+    dist, idx = knn(P, 16, ordered=True)
+    h = R.local_spacing(dist, idx)
+    short = dist[:, -1] > K.noisy_reach(h, 0.3)
+    assert 0.2 < short.mean() < 0.9  # both paths taken
+    tree = R.build_tree(P)
+    t1, l1 = R._noisy_tangents(P, h, 0.3, tree, dist, idx)
+    t2, l2 = R._noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)  # all queried (32)
+    assert np.array_equal(t1, t2) and np.array_equal(l1, l2)

@@ -1537,41 +1537,56 @@ def _dist2(X, a, b):  # pragma: no cover - compiled
 
 
 #: noisy tangents (see _noisy_tangents): directions to the NOISY_CAND nearest are scored; the
-#: strip reaches NOISY_A spacings (+ 2 sigma) along, is max(NOISY_WH h, NOISY_WF sigma) wide; the
-#: refining PCA takes the points within max(h, NOISY_RW sigma) of the line
+#: strip reaches NOISY_A spacings (+ 2 sigma) along, is max(NOISY_WH h, NOISY_WF sigma) wide
+#: (Gaussian weights, cut at NOISY_CUT widths); the refining PCA takes the points within
+#: max(h, NOISY_RW sigma) of the line
 NOISY_CAND = 16
 NOISY_A = 5.0
 NOISY_WF = 2.0
 NOISY_WH = 0.5
+NOISY_CUT = 3.0
 NOISY_RW = 2.5
+#: rows per block of the noisy-tangent kernel (one set of scratch arrays per block)
+NOISY_ROWS = 256
 
 
-def _noisy_tangents(P, idx, h, sig):  # pragma: no cover - compiled
-    """Tangent and linearity of every point of a noisy cloud.
+def noisy_reach(h, sig):
+    """How far from a point the noisy tangent reads its neighbours (see :func:`_noisy_tangents`):
+    a neighbour farther away changes nothing. Works on arrays of ``h``."""
+    amax = NOISY_A * h + 2.0 * sig
+    lat = np.maximum(np.maximum(NOISY_CUT * NOISY_WH * h, NOISY_CUT * NOISY_WF * sig), np.maximum(h, NOISY_RW * sig))
+    return np.sqrt(amax * amax + lat * lat)
+
+
+def _noisy_tangents(P, rows, idx, h, sig):  # pragma: no cover - compiled
+    """Tangent and linearity of the points ``rows`` ((R,) ids) of a noisy cloud, whose ``k``
+    nearest neighbours are the rows of ``idx`` ((R, k)).
 
     Where sparse, noisy curves run 2 to 3 spacings apart, the nearest neighbours of a point lie
     as often across as along: the best line is found over a longer reach. The direction towards
     each of the ``NOISY_CAND`` nearest neighbours is scored by the sum, over all ``k`` neighbours
-    (``idx``: (N, k)) within ``NOISY_A * h + 2 sig`` along it, of ``exp(-(r / w)^2)``, ``r`` the
-    distance from the line through the point and ``w = max(NOISY_WH * h, NOISY_WF * sig)``; the
-    best (the first of equal scores) is refined twice by the PCA of the point and its neighbours
-    within ``max(h, NOISY_RW * sig)`` of the current line and twice that reach along it. The
-    linearity is ``1 - l2 / l1`` of the last PCA.
+    within ``amax = NOISY_A * h + 2 sig`` along it and ``NOISY_CUT * w`` across, of
+    ``exp(-(r / w)^2)``, ``r`` the distance from the line through the point and
+    ``w = max(NOISY_WH * h, NOISY_WF * sig)``; the best (the first of equal scores) is refined
+    twice by the PCA of the point and its neighbours within ``max(h, NOISY_RW * sig)`` of the
+    current line and ``amax`` along it. The linearity is ``1 - l2 / l1`` of the last PCA.
+    Neighbours beyond :func:`noisy_reach` take no part.
 
     Returns
     -------
-    T : (N, d) ndarray
+    T : (R, d) ndarray
         Unit tangents (sign arbitrary).
-    lin : (N,) ndarray
+    lin : (R,) ndarray
     """
-    n = P.shape[0]
+    n = rows.shape[0]
     d = P.shape[1]
     k = idx.shape[1]
-    nc = NOISY_CAND if NOISY_CAND < k else k
     T = np.zeros((n, d))
     lin = np.zeros(n)
-    for p in prange(n):
+    nblk = (n + NOISY_ROWS - 1) // NOISY_ROWS
+    for bi in prange(nblk):  # blocks of rows, each with one set of scratch arrays
         Q = np.empty((k + 1, d))
+        R2 = np.empty(k + 1)
         w = np.zeros(k + 1)
         C = np.zeros((d, d))
         V = np.zeros((d, d))
@@ -1579,74 +1594,85 @@ def _noisy_tangents(P, idx, h, sig):  # pragma: no cover - compiled
         mu = np.zeros(d)
         t = np.zeros(d)
         u = np.zeros(d)
-        for c in range(d):
-            Q[0, c] = 0.0
-        for j in range(k):
+        for ri in range(bi * NOISY_ROWS, min(n, (bi + 1) * NOISY_ROWS)):
+            lin[ri] = _noisy_tangent_at(P, rows[ri], idx[ri], h[rows[ri]], sig, Q, R2, w, C, V, ev, mu, t, u)
             for c in range(d):
-                Q[j + 1, c] = P[idx[p, j], c] - P[p, c]
-        W = NOISY_WH * h[p]
-        if NOISY_WF * sig > W:
-            W = NOISY_WF * sig
-        w2 = W * W
-        amax = NOISY_A * h[p] + 2.0 * sig
-        best = -np.inf
-        for j in range(nc):
-            r = 0.0
-            for c in range(d):
-                r += Q[j + 1, c] * Q[j + 1, c]
-            r = np.sqrt(r)
-            if r < 1e-300:
-                r = 1e-300
-            for c in range(d):
-                u[c] = Q[j + 1, c] / r
-            sc = 0.0
-            for i in range(1, k + 1):
-                al = 0.0
-                r2 = 0.0
-                for c in range(d):
-                    al += Q[i, c] * u[c]
-                    r2 += Q[i, c] * Q[i, c]
-                if al > amax or al < -amax:
-                    continue
-                q2 = r2 - al * al
-                if q2 < 0.0:
-                    q2 = 0.0
-                sc += np.exp(-q2 / w2)
-            if sc > best:
-                best = sc
-                for c in range(d):
-                    t[c] = u[c]
-        rw = h[p]
-        if NOISY_RW * sig > rw:
-            rw = NOISY_RW * sig
-        rw2 = rw * rw
-        lp = 0.0
-        for it in range(2):
-            w[0] = 1.0
-            for i in range(1, k + 1):
-                al = 0.0
-                r2 = 0.0
-                for c in range(d):
-                    al += Q[i, c] * t[c]
-                    r2 += Q[i, c] * Q[i, c]
-                w[i] = 1.0 if (r2 - al * al <= rw2 and abs(al) <= 2.0 * amax) else 0.0
-            for c in range(d):
-                u[c] = t[c]
-            _pca01(Q, k + 1, w, C, V, ev, mu, t)
-            sg = 0.0
-            for c in range(d):
-                sg += t[c] * u[c]
-            if sg < 0.0:
-                for c in range(d):
-                    t[c] = -t[c]
-            lam = ev[d - 1]
-            if lam < 1e-300:
-                lam = 1e-300
-            lp = 1.0 - ev[d - 2] / lam
-        lin[p] = lp
-        for c in range(d):
-            T[p, c] = t[c]
+                T[ri, c] = t[c]
     return T, lin
+
+
+def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u):  # pragma: no cover - compiled
+    """The noisy tangent of the point ``p`` (neighbour ids ``nb``, (k,); local spacing ``hp``)
+    into ``t``; returns its linearity. The other arrays are scratch (see
+    :func:`_noisy_tangents`)."""
+    d = P.shape[1]
+    k = nb.shape[0]
+    nc = NOISY_CAND if NOISY_CAND < k else k
+    for c in range(d):
+        Q[0, c] = 0.0
+    R2[0] = 0.0
+    for j in range(k):
+        r2 = 0.0
+        for c in range(d):
+            Q[j + 1, c] = P[nb[j], c] - P[p, c]
+            r2 += Q[j + 1, c] * Q[j + 1, c]
+        R2[j + 1] = r2
+    W = NOISY_WH * hp
+    if NOISY_WF * sig > W:
+        W = NOISY_WF * sig
+    w2 = W * W
+    qmax = NOISY_CUT * NOISY_CUT * w2
+    amax = NOISY_A * hp + 2.0 * sig
+    best = -np.inf
+    for j in range(nc):
+        r = np.sqrt(R2[j + 1])
+        if r < 1e-300:
+            r = 1e-300
+        for c in range(d):
+            u[c] = Q[j + 1, c] / r
+        sc = 0.0
+        for i in range(1, k + 1):
+            al = 0.0
+            for c in range(d):
+                al += Q[i, c] * u[c]
+            if al > amax or al < -amax:
+                continue
+            q2 = R2[i] - al * al
+            if q2 < 0.0:
+                q2 = 0.0
+            if q2 > qmax:
+                continue
+            sc += np.exp(-q2 / w2)
+        if sc > best:
+            best = sc
+            for c in range(d):
+                t[c] = u[c]
+    rw = hp
+    if NOISY_RW * sig > rw:
+        rw = NOISY_RW * sig
+    rw2 = rw * rw
+    lp = 0.0
+    for it in range(2):
+        w[0] = 1.0
+        for i in range(1, k + 1):
+            al = 0.0
+            for c in range(d):
+                al += Q[i, c] * t[c]
+            w[i] = 1.0 if (R2[i] - al * al <= rw2 and abs(al) <= amax) else 0.0
+        for c in range(d):
+            u[c] = t[c]
+        _pca01(Q, k + 1, w, C, V, ev, mu, t)
+        sg = 0.0
+        for c in range(d):
+            sg += t[c] * u[c]
+        if sg < 0.0:
+            for c in range(d):
+                t[c] = -t[c]
+        lam = ev[d - 1]
+        if lam < 1e-300:
+            lam = 1e-300
+        lp = 1.0 - ev[d - 2] / lam
+    return lp
 
 
 #: the strand test (see _strand_cuts)
@@ -2160,7 +2186,8 @@ _PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
                "_end_count": _end_count, "_fit_end": _fit_end, "_solve_small": _solve_small,
                "_extend_into_region": _extend_into_region, "_behind_count": _behind_count,
                "_branch_buffer": _branch_buffer,
-               "_shift_mode": _shift_mode, "_density": _density, "_mean_line_offset": _mean_line_offset}
+               "_shift_mode": _shift_mode, "_density": _density, "_mean_line_offset": _mean_line_offset,
+               "_noisy_tangent_at": _noisy_tangent_at}
 _JIT: dict = {}
 _JIT_HELPERS: dict = {}
 
@@ -2248,7 +2275,6 @@ end_counts = _dispatch("end_counts")
 junction_nodes = _dispatch("junction_nodes")
 trim_ends = _dispatch("trim_ends")
 untangle = _dispatch("untangle")
-noisy_tangents = _dispatch("noisy_tangents")
 strand_cuts = _dispatch("strand_cuts")
 vote_agreement = _dispatch("vote_agreement")
 vote_eig = _dispatch("vote_eig")
@@ -2262,6 +2288,12 @@ def tangents(P, idx, h, m, order=None, margin=None):
     order = _order(P) if order is None else np.ascontiguousarray(order, dtype=np.int64)
     with held(), _threads_for("tangents", len(order)):
         return _kernel("tangents")(P, idx, h, m, order, margin)
+
+
+def noisy_tangents(P, rows, idx, h, sig):
+    """Noisy tangents and linearity of the points ``rows``: see :func:`_noisy_tangents`."""
+    with held(), _threads_for("noisy_tangents", len(rows)):
+        return _kernel("noisy_tangents")(P, rows, idx, h, sig)
 
 
 def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
@@ -2309,6 +2341,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_branch_buffer": _jit(_branch_buffer),
             "_shift_mode": _jit(_shift_mode),
             "_density": _jit(_density),
+            "_noisy_tangent_at": _jit(_noisy_tangent_at),
             "_mean_line_offset": numba.njit(cache=True, nogil=True, inline="always")(_mean_line_offset),
             "prange": numba.prange,
         }

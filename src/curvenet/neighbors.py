@@ -23,7 +23,7 @@ def query(tree: cKDTree, x: np.ndarray, **kwargs):
 
 
 def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1,
-        ordered: bool = False):
+        ordered: bool = False, rows: np.ndarray | None = None):
     """The ``k`` nearest neighbours of every point, the point itself excluded.
 
     Parameters
@@ -40,45 +40,51 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
         The points are already in a cache-friendly order (e.g. numbered by
         :func:`locality_order`): they are queried as numbered. Otherwise, above 100,000 points,
         they are queried in :func:`locality_order` (the result does not depend on it).
+    rows : (R,) ndarray of int, optional
+        Only these points (ids into ``points``, queried in the order given): the result has
+        their ``R`` rows.
 
     Returns
     -------
-    dist : (N, k) ndarray of float
+    dist : (N, k) or (R, k) ndarray of float
         Distances, ascending in each row.
-    idx : (N, k) ndarray of int64
+    idx : (N, k) or (R, k) ndarray of int64
         Neighbour indices. Ties are broken by index, so the result does not depend on the
         order of the input points up to that relabelling.
     """
     n = len(points)
+    sel = None if rows is None else np.asarray(rows, dtype=np.int64)
+    n_out = n if sel is None else len(sel)
     k = int(min(k, max(n - 1, 0)))
     if k == 0:
-        return np.zeros((n, 0)), np.zeros((n, 0), dtype=np.int64)
+        return np.zeros((n_out, 0)), np.zeros((n_out, 0), dtype=np.int64)
     tree = tree if tree is not None else build_tree(points)
-    dist = np.empty((n, k))
-    idx = np.empty((n, k), dtype=np.int64)
+    dist = np.empty((n_out, k))
+    idx = np.empty((n_out, k), dtype=np.int64)
     # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds; the
     # rows are visited in spatial order (each query is independent: the result is the same, but
     # consecutive queries touch the same parts of the tree, which is much faster for large N)
-    order = None if n <= 100_000 or ordered else locality_order(points)
+    order = None if sel is not None or n <= 100_000 or ordered else locality_order(points)
     step = max(1, (1 << 20) // (k + 1))
-    for s in range(0, n, step):
-        e = min(n, s + step)
-        rows = np.arange(s, e) if order is None else order[s:e]
-        d, i = query(tree, points[rows] if order is not None else points[s:e], k=k + 1, workers=workers)
+    for s in range(0, n_out, step):
+        e = min(n_out, s + step)
+        ids = np.arange(s, e) if order is None and sel is None else (order if sel is None else sel)[s:e]
+        out = ids if order is not None else slice(s, e)  # (a slice: no scatter)
+        d, i = query(tree, points[ids] if sel is not None or order is not None else points[s:e], k=k + 1,
+                     workers=workers)
         d = np.atleast_2d(d)
         i = np.atleast_2d(i)
-        if np.array_equal(i[:, 0], rows):  # the usual case: each point first in its own list
-            out = slice(s, e) if order is None else rows  # (a slice: no scatter)
+        if np.array_equal(i[:, 0], ids):  # the usual case: each point first in its own list
             dist[out] = d[:, 1:]
             idx[out] = i[:, 1:]
             continue
         # drop the point itself (it may not be in column 0 when duplicates exist)
-        self_mask = i == rows[:, None]
+        self_mask = i == ids[:, None]
         has_self = self_mask.any(axis=1)
         drop = np.where(has_self[:, None], self_mask, np.arange(k + 1)[None, :] == k)
         keep = ~drop
-        dist[rows] = d[keep].reshape(e - s, k)
-        idx[rows] = i[keep].reshape(e - s, k)
+        dist[out] = d[keep].reshape(e - s, k)
+        idx[out] = i[keep].reshape(e - s, k)
     return dist, idx
 
 

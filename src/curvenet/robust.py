@@ -307,9 +307,11 @@ def _vote_tangents(t, lin, idx, m=8):
 
 #: neighbours of the noisy tangents (see _noisy_tangents)
 NOISY_K = 32
+#: points per block of the noisy tangents' own neighbour query (its rows are not kept)
+NOISY_BLOCK = 1 << 16
 
 
-def _noisy_tangents(P, h, sig, tree):
+def _noisy_tangents(P, h, sig, tree, dist, idx):
     """Tangents and linearity of a noisy cloud found over a longer reach
     (:func:`_robust_kernels._noisy_tangents`, over the ``NOISY_K`` nearest neighbours): the
     frames of the strand test (:func:`_cut_strand_links`).
@@ -319,14 +321,42 @@ def _noisy_tangents(P, h, sig, tree):
     points across (on the "eye" under noise 0.3h and density x3, after the vote: 8.6% of the
     points more than 30 degrees off; 0.1% with these). Used as the tangents of the whole method
     they cost the mug's junctions (bench samplings 0 and 1), so they serve this test only.
+
+    The method's own neighbours (``dist``, ``idx``: (N, k)) serve the points whose k-th
+    neighbour lies beyond the kernel's reach (:func:`_robust_kernels.noisy_reach`): the farther
+    ones would change nothing (on a lone curve, most points). The others get their ``NOISY_K``
+    nearest from ``tree``, in blocks.
+
+    Returns
+    -------
+    T : (N, d) ndarray
+    lin : (N,) ndarray
     """
-    k = min(NOISY_K, len(P) - 1)
-    _, idx = knn(P, k, ordered=True, tree=tree)
-    return _k.noisy_tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
-                             np.ascontiguousarray(h, dtype=np.float64), float(sig))
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    h = np.ascontiguousarray(h, dtype=np.float64)
+    sig = float(sig)
+    N = len(P)
+    k = min(NOISY_K, N - 1)
+    T = np.empty_like(P)
+    lin = np.empty(N)
+    if idx.shape[1] >= min(_k.NOISY_CAND, k) and dist.shape[1] > 0:
+        short = dist[:, -1] > _k.noisy_reach(h, sig)
+    else:
+        short = np.zeros(N, dtype=bool)
+    if idx.shape[1] >= k:
+        short[:] = True  # (the method's neighbours are as many as the kernel's)
+    rows = np.flatnonzero(short)
+    if len(rows):
+        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows], dtype=np.int64), h, sig)
+    rows = np.flatnonzero(~short)
+    for s in range(0, len(rows), NOISY_BLOCK):  # blocks: the (rows, 32) neighbour ids stay small
+        r = rows[s:s + NOISY_BLOCK]
+        _, nb = knn(P, k, tree=tree, rows=r)
+        T[r], lin[r] = _k.noisy_tangents(P, r, nb, h, sig)
+    return T, lin
 
 
-def _cut_strand_links(P, h, idx, t, src, dst, dd, sig):
+def _cut_strand_links(P, h, idx, tn, src, dst, dd, sig):
     """The links without those that join two close parallel strands (noisy input).
 
     :func:`_robust_kernels._strand_cuts` finds them; a pair is cut in both directions.
@@ -334,7 +364,7 @@ def _cut_strand_links(P, h, idx, t, src, dst, dd, sig):
     if len(src) == 0:
         return src, dst, dd
     cut = _k.strand_cuts(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
-                         np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(t, dtype=np.float64),
+                         np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(tn, dtype=np.float64),
                          np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64), float(sig))
     if not cut.any():
         return src, dst, dd
@@ -630,7 +660,7 @@ def _reconstruct_robust(
                                  GAP * noise)
     if not clean:  # links between two close parallel strands are cut
         with _k.compiled_for(N, min_points=_k.NUMBA_MIN_POINTS_NOISY):  # (slow in plain Python)
-            tn, ln = _noisy_tangents(P, h, sigma, tree)
+            tn, ln = _noisy_tangents(P, h, sigma, tree, dist, idx)
             tn, _ = _vote_tangents(tn, ln, idx, m=min(VOTE_M_NOISY, idx.shape[1]))
             src, dst, dd = _cut_strand_links(P, h, idx, tn, src, dst, dd, sigma)
     indptr, indices = _k.csr_union(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64))
