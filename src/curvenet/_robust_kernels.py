@@ -1625,6 +1625,8 @@ def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u):  # pragm
     amax = NOISY_A * hp + 2.0 * sig
     best = -np.inf
     for j in range(nc):
+        if R2[j + 1] > amax * amax and j > 0:  # (a direction the nearer ones give)
+            continue
         r = np.sqrt(R2[j + 1])
         if r < 1e-300:
             r = 1e-300
@@ -1687,6 +1689,8 @@ STRAND_NMIN = 3
 STRAND_SIDE = 0.5
 STRAND_LCOS = float(np.cos(np.radians(15.0)))
 STRAND_IT = 30
+#: links per block of the strand-cut kernel (one set of scratch arrays per block)
+STRAND_ROWS = 1024
 
 
 def _shift_mode(L, cnt, x0, b, out):  # pragma: no cover - compiled
@@ -1776,109 +1780,111 @@ def _strand_cuts(P, h, idx, t, src, dst, sig):  # pragma: no cover - compiled
     k = idx.shape[1]
     ne = src.shape[0]
     cut = np.zeros(ne, dtype=np.bool_)
-    L = np.empty((k + 1, d))
-    X = np.empty((k + 1, d))
-    A = np.empty(k + 1)
-    w = np.zeros(k + 1)
-    C = np.zeros((d, d))
-    V = np.zeros((d, d))
-    ev = np.zeros(d)
-    mu = np.zeros(d)
-    u = np.zeros(d)
-    tb = np.zeros(d)
-    v = np.zeros(d)
-    lq = np.zeros(d)
-    zero = np.zeros(d)
-    ms = np.zeros(d)
-    mq = np.zeros(d)
-    mid = np.zeros(d)
-    for e in range(ne):
-        p = src[e]
-        q = dst[e]
-        dot = 0.0
-        for c in range(d):
-            dot += t[p, c] * t[q, c]
-        if abs(dot) < STRAND_COS:
-            continue
-        al = 0.0
-        r2 = 0.0
-        for c in range(d):
-            v[c] = P[q, c] - P[p, c]
-            al += v[c] * t[p, c]
-            r2 += v[c] * v[c]
-        lat2 = r2 - al * al
-        lim = STRAND_T0 * sig
-        if 0.5 * STRAND_DMIN * h[p] > lim:
-            lim = 0.5 * STRAND_DMIN * h[p]
-        if not (lat2 > lim * lim):
-            continue
-        al_pq = al
-        _mean_line_offset(P, t, p, q, tb, lq)  # q's offset
-        # the window: p and its neighbours within STRAND_A h_p along t_p
-        cnt = 0
-        for j in range(-1, k):
-            i = p if j < 0 else idx[p, j]
-            aj = 0.0
+    nblk = (ne + STRAND_ROWS - 1) // STRAND_ROWS
+    for bi in prange(nblk):  # blocks of links, each with one set of scratch arrays
+        L = np.empty((k + 1, d))
+        X = np.empty((k + 1, d))
+        A = np.empty(k + 1)
+        w = np.zeros(k + 1)
+        C = np.zeros((d, d))
+        V = np.zeros((d, d))
+        ev = np.zeros(d)
+        mu = np.zeros(d)
+        u = np.zeros(d)
+        tb = np.zeros(d)
+        v = np.zeros(d)
+        lq = np.zeros(d)
+        zero = np.zeros(d)
+        ms = np.zeros(d)
+        mq = np.zeros(d)
+        mid = np.zeros(d)
+        for e in range(bi * STRAND_ROWS, min(ne, (bi + 1) * STRAND_ROWS)):
+            p = src[e]
+            q = dst[e]
+            dot = 0.0
             for c in range(d):
-                aj += (P[i, c] - P[p, c]) * t[p, c]
-            if aj > STRAND_A * h[p] or aj < -STRAND_A * h[p]:
+                dot += t[p, c] * t[q, c]
+            if abs(dot) < STRAND_COS:
                 continue
-            _mean_line_offset(P, t, p, i, tb, L[cnt])
+            al = 0.0
+            r2 = 0.0
             for c in range(d):
-                X[cnt, c] = P[i, c]
-            A[cnt] = aj
-            cnt += 1
-        b = STRAND_B * sig
-        if STRAND_BH * h[p] > b:
-            b = STRAND_BH * h[p]
-        _shift_mode(L, cnt, zero, b, ms)
-        _shift_mode(L, cnt, lq, b, mq)
-        sep = 0.0
-        for c in range(d):
-            z = ms[c] - mq[c]
-            sep += z * z
-            mid[c] = 0.5 * (ms[c] + mq[c])
-        lim = STRAND_THR * sig
-        if STRAND_DMIN * h[p] > lim:
-            lim = STRAND_DMIN * h[p]
-        if not (sep > lim * lim):
-            continue
-        fs = _density(L, cnt, ms, b)
-        fq = _density(L, cnt, mq, b)
-        if not (_density(L, cnt, mid, b) < min(fs, fq)):
-            continue
-        ok = True
-        for which in range(2):
-            nm = 0
-            lo = np.inf
-            hi = -np.inf
-            for i in range(cnt):
-                r2 = 0.0
+                v[c] = P[q, c] - P[p, c]
+                al += v[c] * t[p, c]
+                r2 += v[c] * v[c]
+            lat2 = r2 - al * al
+            lim = STRAND_T0 * sig
+            if 0.5 * STRAND_DMIN * h[p] > lim:
+                lim = 0.5 * STRAND_DMIN * h[p]
+            if not (lat2 > lim * lim):
+                continue
+            al_pq = al
+            _mean_line_offset(P, t, p, q, tb, lq)  # q's offset
+            # the window: p and its neighbours within STRAND_A h_p along t_p
+            cnt = 0
+            for j in range(-1, k):
+                i = p if j < 0 else idx[p, j]
+                aj = 0.0
                 for c in range(d):
-                    z = L[i, c] - (ms[c] if which == 0 else mq[c])
-                    r2 += z * z
-                if r2 <= (1.5 * b) * (1.5 * b):
-                    w[i] = 1.0
-                    nm += 1
-                    am = A[i] - 0.5 * al_pq
-                    if am < lo:
-                        lo = am
-                    if am > hi:
-                        hi = am
-                else:
-                    w[i] = 0.0
-            if nm < STRAND_NMIN or not (lo < -STRAND_SIDE * h[p] and hi > STRAND_SIDE * h[p]):
-                ok = False
-                break
-            _pca01(X, cnt, w, C, V, ev, mu, u)
-            dj = 0.0
+                    aj += (P[i, c] - P[p, c]) * t[p, c]
+                if aj > STRAND_A * h[p] or aj < -STRAND_A * h[p]:
+                    continue
+                _mean_line_offset(P, t, p, i, tb, L[cnt])
+                for c in range(d):
+                    X[cnt, c] = P[i, c]
+                A[cnt] = aj
+                cnt += 1
+            b = STRAND_B * sig
+            if STRAND_BH * h[p] > b:
+                b = STRAND_BH * h[p]
+            _shift_mode(L, cnt, zero, b, ms)
+            _shift_mode(L, cnt, lq, b, mq)
+            sep = 0.0
             for c in range(d):
-                dj += u[c] * t[p, c]
-            if abs(dj) < STRAND_LCOS:
-                ok = False
-                break
-        if ok:
-            cut[e] = True
+                z = ms[c] - mq[c]
+                sep += z * z
+                mid[c] = 0.5 * (ms[c] + mq[c])
+            lim = STRAND_THR * sig
+            if STRAND_DMIN * h[p] > lim:
+                lim = STRAND_DMIN * h[p]
+            if not (sep > lim * lim):
+                continue
+            fs = _density(L, cnt, ms, b)
+            fq = _density(L, cnt, mq, b)
+            if not (_density(L, cnt, mid, b) < min(fs, fq)):
+                continue
+            ok = True
+            for which in range(2):
+                nm = 0
+                lo = np.inf
+                hi = -np.inf
+                for i in range(cnt):
+                    r2 = 0.0
+                    for c in range(d):
+                        z = L[i, c] - (ms[c] if which == 0 else mq[c])
+                        r2 += z * z
+                    if r2 <= (1.5 * b) * (1.5 * b):
+                        w[i] = 1.0
+                        nm += 1
+                        am = A[i] - 0.5 * al_pq
+                        if am < lo:
+                            lo = am
+                        if am > hi:
+                            hi = am
+                    else:
+                        w[i] = 0.0
+                if nm < STRAND_NMIN or not (lo < -STRAND_SIDE * h[p] and hi > STRAND_SIDE * h[p]):
+                    ok = False
+                    break
+                _pca01(X, cnt, w, C, V, ev, mu, u)
+                dj = 0.0
+                for c in range(d):
+                    dj += u[c] * t[p, c]
+                if abs(dj) < STRAND_LCOS:
+                    ok = False
+                    break
+            if ok:
+                cut[e] = True
     return cut
 
 
@@ -2232,7 +2238,7 @@ def _kernel(name):
 #: starting a parallel loop costs microseconds on an idle machine, but when another process
 #: keeps the other cores busy it waits for a time slice (10 to 20 ms measured on 2 cores), more
 #: than the whole work of a light kernel on a small input. Results never depend on it.
-PAR_MIN = {"tangents": 20_000, "noisy_tangents": 20_000, "shell_groups": 20_000, "linked_edges": 200_000, "vote_eig": 200_000}
+PAR_MIN = {"tangents": 20_000, "noisy_tangents": 20_000, "strand_cuts": 20_000, "shell_groups": 20_000, "linked_edges": 200_000, "vote_eig": 200_000}
 
 
 @contextmanager
@@ -2349,7 +2355,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
         # prange over independent points or blocks of points
         # (the light vote_agreement and short_links stay serial: their parallel versions cost
         # about 2 s of compile each, more than they save)
-        _PAR = ("tangents", "shell_groups", "linked_edges", "vote_eig", "noisy_tangents")
+        _PAR = ("tangents", "shell_groups", "linked_edges", "vote_eig", "noisy_tangents", "strand_cuts")
         _JIT = {name: _jit(f) for name, f in _PY.items() if name not in _PAR}
         _JIT.update({name: numba.njit(cache=True, nogil=True, parallel=True)(_PY[name]) for name in _PAR})
         HAVE_NUMBA = True
