@@ -1546,6 +1546,10 @@ NOISY_WF = 2.0
 NOISY_WH = 0.5
 NOISY_CUT = 3.0
 NOISY_RW = 2.5
+#: a candidate direction within this cosine (10 degrees) of one already scored is not scored
+#: again: the refinement, whose strip is at least a spacing wide over 5 spacings, starts from the
+#: same points
+NOISY_SAME = float(np.cos(np.radians(10.0)))
 #: rows per block of the noisy-tangent kernel (one set of scratch arrays per block)
 NOISY_ROWS = 256
 
@@ -1564,7 +1568,8 @@ def _noisy_tangents(P, rows, idx, h, sig):  # pragma: no cover - compiled
 
     Where sparse, noisy curves run 2 to 3 spacings apart, the nearest neighbours of a point lie
     as often across as along: the best line is found over a longer reach. The direction towards
-    each of the ``NOISY_CAND`` nearest neighbours is scored by the sum, over all ``k`` neighbours
+    each of the ``NOISY_CAND`` nearest neighbours (within ``amax``, below; not within 10 degrees
+    of one scored before) is scored by the sum, over all ``k`` neighbours
     within ``amax = NOISY_A * h + 2 sig`` along it and ``NOISY_CUT * w`` across, of
     ``exp(-(r / w)^2)``, ``r`` the distance from the line through the point and
     ``w = max(NOISY_WH * h, NOISY_WF * sig)``; the best (the first of equal scores) is refined
@@ -1594,14 +1599,15 @@ def _noisy_tangents(P, rows, idx, h, sig):  # pragma: no cover - compiled
         mu = np.zeros(d)
         t = np.zeros(d)
         u = np.zeros(d)
+        U = np.zeros((k, d))
         for ri in range(bi * NOISY_ROWS, min(n, (bi + 1) * NOISY_ROWS)):
-            lin[ri] = _noisy_tangent_at(P, rows[ri], idx[ri], h[rows[ri]], sig, Q, R2, w, C, V, ev, mu, t, u)
+            lin[ri] = _noisy_tangent_at(P, rows[ri], idx[ri], h[rows[ri]], sig, Q, R2, w, C, V, ev, mu, t, u, U)
             for c in range(d):
                 T[ri, c] = t[c]
     return T, lin
 
 
-def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u):  # pragma: no cover - compiled
+def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u, U):  # pragma: no cover - compiled
     """The noisy tangent of the point ``p`` (neighbour ids ``nb``, (k,); local spacing ``hp``)
     into ``t``; returns its linearity. The other arrays are scratch (see
     :func:`_noisy_tangents`)."""
@@ -1624,6 +1630,7 @@ def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u):  # pragm
     qmax = NOISY_CUT * NOISY_CUT * w2
     amax = NOISY_A * hp + 2.0 * sig
     best = -np.inf
+    ns = 0
     for j in range(nc):
         if R2[j + 1] > amax * amax and j > 0:  # (a direction the nearer ones give)
             continue
@@ -1632,6 +1639,19 @@ def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u):  # pragm
             r = 1e-300
         for c in range(d):
             u[c] = Q[j + 1, c] / r
+        dup = False
+        for i in range(ns):  # (a direction within NOISY_SAME of one scored)
+            x = 0.0
+            for c in range(d):
+                x += U[i, c] * u[c]
+            if abs(x) > NOISY_SAME:
+                dup = True
+                break
+        if dup:
+            continue
+        for c in range(d):
+            U[ns, c] = u[c]
+        ns += 1
         sc = 0.0
         for i in range(1, k + 1):
             al = 0.0
