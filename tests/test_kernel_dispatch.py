@@ -49,12 +49,17 @@ def test_small_inputs_use_compiled_kernels_once_loaded(monkeypatch):
 
 
 @pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed")
-def test_small_noisy_input_runs_the_strand_kernels_compiled(monkeypatch):
-    # the strand test costs about 9 ms a point in plain Python: over NUMBA_MIN_POINTS_NOISY
-    # points its kernels run compiled, the rest of a small input as plain Python; same result
+def test_small_noisy_input_runs_the_strand_kernels_compiled_once_cached(monkeypatch):
+    # the strand test costs 2-10 ms a point in plain Python: over NUMBA_MIN_POINTS_NOISY points
+    # its kernels run compiled when numba's cache holds them (a load, not a compile), the rest
+    # of a small input as plain Python; the same result
     truth = synth.model("crossing")
     pts, _ = synth.sample(truth, noise=0.3, density_ratio=3, rng=4)
     assert K.NUMBA_MIN_POINTS_NOISY <= len(pts) < K.NUMBA_MIN_POINTS
+    with monkeypatch.context() as m:
+        m.setattr(K, "NUMBA_MIN_POINTS", 0)
+        curvenet.reconstruct(pts)  # compiles (or loads) every kernel: numba caches them
+    assert K._in_cache(K.STRAND_KERNELS)
     monkeypatch.setattr(K, "_compiled_already", lambda: False)  # as in a fresh process
     seen: dict[str, set] = {}
     kernel = K._kernel
@@ -68,8 +73,9 @@ def test_small_noisy_input_runs_the_strand_kernels_compiled(monkeypatch):
     a = curvenet.reconstruct(pts)
     assert seen["noisy_tangents"] == {False} and seen["strand_cuts"] == {False}
     assert seen["tangents"] == {True} and seen["shell_groups"] == {True}
-    monkeypatch.setattr(K, "NUMBA_MIN_POINTS_NOISY", 10**9)
+    # not in the cache (a first run after installing): plain Python, no compile
+    monkeypatch.setattr(K, "_in_cache", lambda names: not names)
     seen.clear()
     b = curvenet.reconstruct(pts)
-    assert seen["strand_cuts"] == {True}
+    assert seen["strand_cuts"] == {True} and seen["noisy_tangents"] == {True}
     assert _sig(a) == _sig(b)

@@ -2177,10 +2177,15 @@ def _order(P):
 NUMBA_MIN_POINTS = 2000
 
 #: The same threshold for the kernels of the strand test, which run on noisy input only
-#: (:func:`_noisy_tangents`, :func:`_strand_cuts`, and the vote of the noisy tangents): in plain
-#: Python they take about 9 ms a point (a 500-point cloud: 4.5 s), loading them compiled from
-#: numba's cache about 0.4 s (compiling them on a first run about 18 s).
+#: (:func:`_noisy_tangents`, :func:`_strand_cuts`, and the vote of the noisy tangents), when
+#: numba's disk cache already holds them (see :func:`compiled_for`): in plain Python they take
+#: 2 to 10 ms a point (the 515-point tree under noise 0.3h + x3: 2.5 s in all, 0.9 s with them
+#: compiled), loading them about 0.4 s; compiling them (about 30 s) is left to a first run on
+#: :data:`NUMBA_MIN_POINTS` points or more.
 NUMBA_MIN_POINTS_NOISY = 200
+
+#: the kernels of the strand test (see NUMBA_MIN_POINTS_NOISY)
+STRAND_KERNELS = ("noisy_tangents", "strand_cuts", "vote_agreement", "vote_eig")
 
 _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
@@ -2219,12 +2224,13 @@ _JIT_HELPERS: dict = {}
 
 
 @contextmanager
-def compiled_for(n: int, min_points: int | None = None):
+def compiled_for(n: int, min_points: int | None = None, cached: tuple = ()):
     """Run the kernels of the enclosed block compiled when numba is there and ``n`` (the number
-    of points) is at least ``min_points`` (default :data:`NUMBA_MIN_POINTS`), as plain Python
+    of points) is at least ``min_points`` (default :data:`NUMBA_MIN_POINTS`) and numba's disk
+    cache holds the kernels ``cached`` (so that they load, not compile), as plain Python
     otherwise (same results). Blocks nest: the inner one decides for its kernels."""
     lim = NUMBA_MIN_POINTS if min_points is None else min_points
-    use = HAVE_NUMBA and (n >= lim or _compiled_already())
+    use = HAVE_NUMBA and ((n >= lim and _in_cache(cached)) or _compiled_already())
     token = _COMPILED.set(use)
     helpers = _JIT_HELPERS if use else _PY_HELPERS
     saved = {k: globals()[k] for k in helpers}
@@ -2234,6 +2240,15 @@ def compiled_for(n: int, min_points: int | None = None):
     finally:
         globals().update(saved)
         _COMPILED.reset(token)
+
+
+def _in_cache(names) -> bool:
+    """True when numba's disk cache holds a valid compiled version of every kernel ``names``
+    (none: True)."""
+    try:  # (numba's cache index: empty when missing or stale)
+        return all(bool(_JIT[n]._cache._cache_file._load_index()) for n in names)
+    except Exception:  # pragma: no cover - another numba's internals: assume not
+        return False
 
 
 def _compiled_already() -> bool:

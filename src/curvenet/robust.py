@@ -659,7 +659,7 @@ def _reconstruct_robust(
     src, dst, dd = _linked_edges(P, h, dist, idx, t, lin, prm["link"], prm["link_width"], NW * noise,
                                  GAP * noise)
     if not clean:  # links between two close parallel strands are cut
-        with _k.compiled_for(N, min_points=_k.NUMBA_MIN_POINTS_NOISY):  # (slow in plain Python)
+        with _k.compiled_for(N, _k.NUMBA_MIN_POINTS_NOISY, _k.STRAND_KERNELS):  # (slow in plain Python)
             tn, ln = _noisy_tangents(P, h, sigma, tree, dist, idx)
             tn, _ = _vote_tangents(tn, ln, idx, m=min(VOTE_M_NOISY, idx.shape[1]))
             src, dst, dd = _cut_strand_links(P, h, idx, tn, src, dst, dd, sigma)
