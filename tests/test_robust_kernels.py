@@ -711,3 +711,14 @@ def test_noisy_tangents_read_nothing_beyond_their_reach():
     t1, l1 = R._noisy_tangents(P, h, 0.3, tree, dist, idx)
     t2, l2 = R._noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)  # all queried (32)
     assert np.array_equal(t1, t2) and np.array_equal(l1, l2)
+    # a user's k above 32 (six strands, so that the 40th neighbour is within reach): its first
+    # 32 neighbours serve, the same bits as the 32-neighbour query
+    P = np.vstack([_strands(2.5, n=60, seed=s)[0] + [0.0, 5.0 * s, 0.0] for s in range(3)])
+    dist, idx = knn(P, 16, ordered=True)
+    h = R.local_spacing(dist, idx)
+    d40, i40 = knn(P, 40, ordered=True)
+    assert (d40[:, -1] < K.noisy_reach(h, 0.3)).any()
+    tree = R.build_tree(P)
+    t2, l2 = R._noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)
+    t3, l3 = R._noisy_tangents(P, h, 0.3, tree, d40, i40)
+    assert np.array_equal(t2, t3) and np.array_equal(l2, l3)

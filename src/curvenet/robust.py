@@ -322,8 +322,8 @@ def _noisy_tangents(P, h, sig, tree, dist, idx):
     points more than 30 degrees off; 0.1% with these). Used as the tangents of the whole method
     they cost the mug's junctions (bench samplings 0 and 1), so they serve this test only.
 
-    The method's own neighbours (``dist``, ``idx``: (N, k)) serve the points whose k-th
-    neighbour lies beyond the kernel's reach (:func:`_robust_kernels.noisy_reach`): the farther
+    The method's own neighbours (``dist``, ``idx``: (N, k), sorted by distance) serve the
+    points whose last one (or ``NOISY_K``-th) lies beyond the kernel's reach (:func:`_robust_kernels.noisy_reach`): the farther
     ones would change nothing (on a lone curve, most points). The others get their ``NOISY_K``
     nearest from ``tree``, in blocks.
 
@@ -339,15 +339,16 @@ def _noisy_tangents(P, h, sig, tree, dist, idx):
     k = min(NOISY_K, N - 1)
     T = np.empty_like(P)
     lin = np.empty(N)
-    if idx.shape[1] >= min(_k.NOISY_CAND, k) and dist.shape[1] > 0:
-        short = dist[:, -1] > _k.noisy_reach(h, sig)
+    kk = min(idx.shape[1], k)  # the method's neighbours the kernel may take
+    if kk >= k:
+        short = np.ones(N, dtype=bool)  # (as many as the kernel's)
+    elif kk >= min(_k.NOISY_CAND, k) and kk > 0:
+        short = dist[:, kk - 1] > _k.noisy_reach(h, sig)
     else:
         short = np.zeros(N, dtype=bool)
-    if idx.shape[1] >= k:
-        short[:] = True  # (the method's neighbours are as many as the kernel's)
     rows = np.flatnonzero(short)
     if len(rows):
-        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows], dtype=np.int64), h, sig)
+        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows, :kk], dtype=np.int64), h, sig)
     rows = np.flatnonzero(~short)
     for s in range(0, len(rows), NOISY_BLOCK):  # blocks: the (rows, 32) neighbour ids stay small
         r = rows[s:s + NOISY_BLOCK]
