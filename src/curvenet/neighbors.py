@@ -66,12 +66,12 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     # consecutive queries touch the same parts of the tree, which is much faster for large N)
     order = None if sel is not None or n <= 100_000 or ordered else locality_order(points)
     step = max(1, (1 << 20) // (k + 1))
+    visit = sel if sel is not None else order  # the point ids queried, None: all in turn
     for s in range(0, n_out, step):
         e = min(n_out, s + step)
-        ids = np.arange(s, e) if order is None and sel is None else (order if sel is None else sel)[s:e]
+        ids = np.arange(s, e) if visit is None else visit[s:e]
         out = ids if order is not None else slice(s, e)  # (a slice: no scatter)
-        d, i = query(tree, points[ids] if sel is not None or order is not None else points[s:e], k=k + 1,
-                     workers=workers)
+        d, i = query(tree, points[s:e] if visit is None else points[ids], k=k + 1, workers=workers)
         d = np.atleast_2d(d)
         i = np.atleast_2d(i)
         if np.array_equal(i[:, 0], ids):  # the usual case: each point first in its own list
