@@ -722,3 +722,14 @@ def test_noisy_tangents_read_nothing_beyond_their_reach():
     t2, l2 = R._noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)
     t3, l3 = R._noisy_tangents(P, h, 0.3, tree, d40, i40)
     assert np.array_equal(t2, t3) and np.array_equal(l2, l3)
+
+
+def test_knn_of_some_rows_equals_the_full_query():
+    rng = np.random.default_rng(3)
+    P = rng.random((500, 3))
+    P[7] = P[8]  # a duplicate: the point itself may not come first
+    dist, idx = knn(P, 12)
+    rows = np.array([8, 7, 400, 3, 499])
+    d, i = knn(P, 12, rows=rows)
+    assert np.array_equal(i, idx[rows]) and np.array_equal(d, dist[rows])
+    assert not (i == rows[:, None]).any()  # the point itself excluded
