@@ -223,3 +223,21 @@ def test_ctrl_c_is_deferred_to_a_safe_point():
             reached.append(True)
     assert reached == [True]
     _sigint.checkpoint()  # nothing pending any more
+
+
+def test_ctrl_c_under_held_reaches_the_current_handler():
+    """A Ctrl-C held back by held() is handed to the handler in force when the block ends (the
+    command line's: a request acted on at once, since held() ends in a checkpoint), and leaves
+    no signal pending."""
+    import signal
+    import threading
+
+    from curvenet import _sigint
+
+    with pytest.raises(KeyboardInterrupt):
+        with _sigint.deferred():
+            with _sigint.held():
+                signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+                assert signal.SIGINT in signal.sigpending()
+    assert signal.SIGINT not in signal.sigpending()
+    _sigint.checkpoint()  # nothing left over
