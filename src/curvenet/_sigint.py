@@ -52,13 +52,7 @@ def deferred():
 
 @contextmanager
 def held():
-    """Block SIGINT in the main thread for the enclosed block (a no-op elsewhere).
-
-    A Ctrl-C pressed meanwhile is taken from the pending signals when the block ends and its
-    handler is called right there: left to the interpreter, the handler would run wherever the
-    main thread next checks for signals, which can be a finalizer run by the garbage collector,
-    where a KeyboardInterrupt is printed and dropped.
-    """
+    """Block SIGINT in the main thread for the enclosed block (a no-op elsewhere)."""
     if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -66,10 +60,5 @@ def held():
     try:
         yield
     finally:
-        handler = signal.getsignal(signal.SIGINT)
-        took = (callable(handler) and signal.SIGINT not in old and hasattr(signal, "sigtimedwait")
-                and signal.sigtimedwait({signal.SIGINT}, 0) is not None)
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
-        if took:
-            handler(signal.SIGINT, None)  # (Python's default raises KeyboardInterrupt here)
     checkpoint()
