@@ -323,9 +323,9 @@ def _noisy_tangents(P, h, sig, tree, dist, idx):
     they cost the mug's junctions (bench samplings 0 and 1), so they serve this test only.
 
     The method's own neighbours (``dist``, ``idx``: (N, k), sorted by distance) serve the
-    points whose last one (or ``NOISY_K``-th) lies beyond the kernel's reach (:func:`_robust_kernels.noisy_reach`): the farther
-    ones would change nothing (on a lone curve, most points). The others get their ``NOISY_K``
-    nearest from ``tree``, in blocks.
+    points whose last one (or ``NOISY_K``-th) lies beyond the kernel's reach
+    (:func:`_robust_kernels.noisy_reach`): the farther ones would change nothing (on a lone
+    curve, most points). The others get their ``NOISY_K`` nearest from ``tree``, in blocks.
 
     Returns
     -------
