@@ -1554,11 +1554,17 @@ NOISY_SAME = float(np.cos(np.radians(10.0)))
 NOISY_ROWS = 256
 
 
+def _noisy_scales(hp, sig):  # pragma: no cover - compiled
+    """Strip width, reach along and refining width of the noisy tangent at spacing ``hp``
+    (see :func:`_noisy_tangents`; scalars, or arrays of ``hp`` in numpy)."""
+    return np.maximum(NOISY_WH * hp, NOISY_WF * sig), NOISY_A * hp + 2.0 * sig, np.maximum(hp, NOISY_RW * sig)
+
+
 def noisy_reach(h, sig):
     """How far from a point the noisy tangent reads its neighbours (see :func:`_noisy_tangents`):
     a neighbour farther away changes nothing. Works on arrays of ``h``."""
-    amax = NOISY_A * h + 2.0 * sig
-    lat = np.maximum(np.maximum(NOISY_CUT * NOISY_WH * h, NOISY_CUT * NOISY_WF * sig), np.maximum(h, NOISY_RW * sig))
+    W, amax, rw = _PY_HELPERS["_noisy_scales"](h, sig)  # (the numpy one, also when compiled)
+    lat = np.maximum(NOISY_CUT * W, rw)
     return np.sqrt(amax * amax + lat * lat)
 
 
@@ -1623,12 +1629,9 @@ def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u, U):  # pr
             Q[j + 1, c] = P[nb[j], c] - P[p, c]
             r2 += Q[j + 1, c] * Q[j + 1, c]
         R2[j + 1] = r2
-    W = NOISY_WH * hp
-    if NOISY_WF * sig > W:
-        W = NOISY_WF * sig
+    W, amax, rw = _noisy_scales(hp, sig)
     w2 = W * W
     qmax = NOISY_CUT * NOISY_CUT * w2
-    amax = NOISY_A * hp + 2.0 * sig
     best = -np.inf
     ns = 0
     for j in range(nc):
@@ -1669,9 +1672,6 @@ def _noisy_tangent_at(P, p, nb, hp, sig, Q, R2, w, C, V, ev, mu, t, u, U):  # pr
             best = sc
             for c in range(d):
                 t[c] = u[c]
-    rw = hp
-    if NOISY_RW * sig > rw:
-        rw = NOISY_RW * sig
     rw2 = rw * rw
     lp = 0.0
     for it in range(2):
@@ -2218,7 +2218,7 @@ _PY_HELPERS = {"_heap_pop": _heap_pop, "_heap_push": _heap_push,
                "_extend_into_region": _extend_into_region, "_behind_count": _behind_count,
                "_branch_buffer": _branch_buffer,
                "_shift_mode": _shift_mode, "_density": _density, "_mean_line_offset": _mean_line_offset,
-               "_noisy_tangent_at": _noisy_tangent_at}
+               "_noisy_tangent_at": _noisy_tangent_at, "_noisy_scales": _noisy_scales}
 _JIT: dict = {}
 _JIT_HELPERS: dict = {}
 
@@ -2383,6 +2383,7 @@ if os.environ.get("CURVENET_NO_NUMBA", "") not in ("1", "true", "yes"):
             "_shift_mode": _jit(_shift_mode),
             "_density": _jit(_density),
             "_noisy_tangent_at": _jit(_noisy_tangent_at),
+            "_noisy_scales": numba.njit(cache=True, nogil=True, inline="always")(_noisy_scales),
             "_mean_line_offset": numba.njit(cache=True, nogil=True, inline="always")(_mean_line_offset),
             "prange": numba.prange,
         }
