@@ -114,7 +114,7 @@ def test_missing_and_failing_methods(monkeypatch):
 
 
 def test_tune_paper_is_never_worse_than_fixed():
-    pytest.importorskip("curvenet.paper")
+    pytest.importorskip("curvenet.methods.paper")
     truth = synth.model("crossing")
     h = synth.h_of(truth)
     pts, _ = synth.sample(truth)
@@ -149,7 +149,7 @@ def test_cli_missing_out_folder(tmp_path):
 
 def test_figures(tmp_path):
     pytest.importorskip("matplotlib")
-    pytest.importorskip("curvenet.paper")
+    pytest.importorskip("curvenet.methods.paper")
     from curvenet.plots import bench_figures
 
     sweep = bench.eps_sweep("crossing", [1e-3, 1e-2])
@@ -161,7 +161,7 @@ def test_figures(tmp_path):
 
 
 def test_tune_each_condition_and_extra_conditions():
-    pytest.importorskip("curvenet.paper")
+    pytest.importorskip("curvenet.methods.paper")
     rows = bench.run_bench(["paper-tuned", "paper"], ["crossing"], ["noise 0.2h", "outliers 2%"], quick=True,
                            tune_on="each")
     by = {(r["condition"], r["method"]): r for r in rows}

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from curvenet.emst import emst_edges, reconstruct_emst
+from curvenet.methods.emst import emst_edges, reconstruct_emst
 from curvenet.errors import InputError
 from curvenet.reconstruct import reconstruct
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import curvenet
-from curvenet import _robust_kernels as K
+from curvenet.methods.robust import kernels as K
 from curvenet import synth
 
 

@@ -1,4 +1,4 @@
-"""Tests of the founding paper's method (curvenet.paper): Algorithms 1 and 2."""
+"""Tests of the founding paper's method (curvenet.methods.paper): Algorithms 1 and 2."""
 
 import itertools
 
@@ -7,7 +7,7 @@ import pytest
 
 from curvenet import reconstruct
 from curvenet.errors import InputError
-from curvenet.paper import detect_nodes, point_variation, reconstruct_paper
+from curvenet.methods.paper import detect_nodes, point_variation, reconstruct_paper
 
 
 # ------------------------------------------------------------------------------ tiny fixtures
@@ -229,7 +229,7 @@ def test_numba_and_python_kernels_agree():
 
 # ------------------------------------------------------------------------------ criterion 4
 def test_reverse_search_replaces_the_end_of_a_curve_by_the_start_of_its_twin():
-    from curvenet.paper import _merge_twins
+    from curvenet.methods.paper import _merge_twins
 
     a, b = 100, 200
     seq = lambda *v: np.array(v, dtype=np.int64)  # noqa: E731
@@ -278,13 +278,13 @@ def test_groups_and_node_rule():
     assert sum(len(g) for g in det["groups"]) == len(det["candidates"])
     # a group of <= 4 candidates keeps them all: its node is the one nearest their centroid
     few = np.array([[0.0, 0, 0], [0.1, 0, 0], [0.0, 0.3, 0]])
-    from curvenet.paper import _select_nodes
+    from curvenet.methods.paper import _select_nodes
 
     assert _select_nodes(few, [np.arange(3)])[0] == 0
 
 
 def test_large_group_selection_matches_the_plain_iteration():
-    from curvenet.paper import _select_node_large, _select_nodes
+    from curvenet.methods.paper import _select_node_large, _select_nodes
 
     def plain(gp):  # the paper's loop, centroid kept as a running sum
         alive = list(range(len(gp)))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from curvenet.errors import InputError
-from curvenet.robust import reconstruct_robust
+from curvenet.methods.robust.pipeline import reconstruct_robust
 
 H = 1.0  # sampling spacing of every generator below
 
@@ -255,7 +255,7 @@ def test_cell_numbering_of_large_clouds_changes_nothing(monkeypatch):
     # clouds over LOCAL_MIN points are numbered cell by cell inside (cache locality): lowered
     # here so that a small cloud takes that path; the network must be the one of the plain
     # sorted numbering, and still not depend on the input order
-    import curvenet.robust as R
+    import curvenet.methods.robust.pipeline as R
 
     pts, _ = _cube()
     pts = _noisy(pts, 0.1 * H, seed=3)
@@ -553,7 +553,7 @@ def test_sampled_loop_with_a_sharp_corner_is_not_a_zigzag():
 
 
 def test_untangle_loops_keeps_the_cut_point_and_shortens():
-    from curvenet.robust import _untangle_loops
+    from curvenet.methods.robust.pipeline import _untangle_loops
 
     # a triangle-like loop with a 20-degree corner, sampled every 1, its corner legs
     # interleaved (as a distance order across the corner comes out); and a plain circle
@@ -626,7 +626,7 @@ def test_retry_tangents_only_on_noise_free_input(monkeypatch):
     # the smaller candidate margin is applied after the noise estimate, to clean input only:
     # with it forced to the kernels' margin the eye (seed 29) fails as before, and under
     # noise 0.2h the retry is never called
-    from curvenet import robust as R
+    from curvenet.methods.robust import pipeline as R
 
     calls = []
     orig = R._retry_tangents
@@ -684,7 +684,7 @@ def test_curves_ending_at_one_sample_keep_the_spacing_there():
     # six curves sampled from a common end point: six coincident samples at the node (as in
     # sketch data, every stroke ends on the node) must not shrink the spacing there
     from curvenet.neighbors import knn
-    from curvenet.robust import local_spacing
+    from curvenet.methods.robust.pipeline import local_spacing
 
     ang = np.radians([0, 60, 120, 180, 240, 300])
     P = np.vstack([_seg([0, 0, 0], [25 * np.cos(a), 25 * np.sin(a), 0]) for a in ang])

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curvenet import _robust_kernels as K
-from curvenet import robust as R
+from curvenet.methods.robust import kernels as K
+from curvenet.methods.robust import pipeline as R
 from curvenet import synth
 from curvenet.neighbors import knn
 
@@ -180,8 +180,8 @@ def test_tangent_is_not_thrown_across_close_parallel_curves():
 
 _PY_RUN = """
 import sys, numpy as np
-from curvenet import _robust_kernels as K
-from curvenet import robust as R
+from curvenet.methods.robust import kernels as K
+from curvenet.methods.robust import pipeline as R
 from curvenet import synth
 from curvenet.neighbors import knn
 assert not K.HAVE_NUMBA

@@ -18,9 +18,9 @@ __all__ = ["reconstruct", "METHODS", "DEFAULT_METHOD"]
 #: Method name -> (module, function). Each function takes ``(points, **params)`` with points a
 #: checked (N, d) float array and returns a :class:`CurveNetwork`.
 METHODS: dict[str, tuple[str, str]] = {
-    "paper": ("curvenet.paper", "reconstruct_paper"),
-    "emst": ("curvenet.emst", "reconstruct_emst"),
-    "robust": ("curvenet.robust", "reconstruct_robust"),
+    "paper": ("curvenet.methods.paper", "reconstruct_paper"),
+    "emst": ("curvenet.methods.emst", "reconstruct_emst"),
+    "robust": ("curvenet.methods.robust", "reconstruct_robust"),
 }
 
 #: The method used when none is named.

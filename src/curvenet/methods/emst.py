@@ -12,10 +12,10 @@ import time
 
 import numpy as np
 
-from .errors import InputError
-from .network import Curve, CurveNetwork
-from .neighbors import knn
-from .validate import as_points
+from ..errors import InputError
+from ..network import Curve, CurveNetwork
+from ..neighbors import knn
+from ..validate import as_points
 
 __all__ = ["reconstruct_emst", "emst_edges"]
 

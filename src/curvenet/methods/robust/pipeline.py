@@ -77,12 +77,12 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from . import _robust_kernels as _k
-from . import _sigint
-from .errors import InputError
-from .network import Curve, CurveNetwork
-from .neighbors import build_tree, knn, locality_order
-from .validate import as_points
+from . import kernels as _k
+from ... import _sigint
+from ...errors import InputError
+from ...network import Curve, CurveNetwork
+from ...neighbors import build_tree, knn, locality_order
+from ...validate import as_points
 
 __all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
 

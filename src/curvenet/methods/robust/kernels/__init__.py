@@ -13,7 +13,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from ._sigint import held
+from ...._sigint import held
 
 prange = range  # numba.prange when compiled (parallel loops over independent blocks)
 
@@ -2165,7 +2165,7 @@ def _order(P):
     """A cache-friendly visiting order of the points (results never depend on it)."""
     if P.shape[0] <= 100_000:
         return np.arange(P.shape[0], dtype=np.int64)
-    from .neighbors import locality_order
+    from ....neighbors import locality_order
 
     return locality_order(P)
 

@@ -105,11 +105,11 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError
-from .network import Curve, CurveNetwork
-from ._sigint import held
-from .neighbors import build_tree, knn, query
-from .validate import as_points
+from ..errors import InputError
+from ..network import Curve, CurveNetwork
+from .._sigint import held
+from ..neighbors import build_tree, knn, query
+from ..validate import as_points
 
 __all__ = [
     "reconstruct_paper",
@@ -546,7 +546,7 @@ def _kernel(use_numba: bool | None, n: int = 0):
     k = _COMPILED["numba"]
     if k is None:
         if use_numba:
-            from .errors import require
+            from ..errors import require
 
             require("numba", "the compiled tracing kernel", "fast")
         return _trace_kernel
