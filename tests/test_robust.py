@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from curvenet.errors import InputError
-from curvenet.methods.robust.pipeline import reconstruct_robust
+from curvenet.methods.robust import reconstruct_robust
 
 H = 1.0  # sampling spacing of every generator below
 
@@ -260,7 +260,7 @@ def test_cell_numbering_of_large_clouds_changes_nothing(monkeypatch):
     pts, _ = _cube()
     pts = _noisy(pts, 0.1 * H, seed=3)
     plain = reconstruct_robust(pts).canonical()
-    monkeypatch.setattr(R, "LOCAL_MIN", 50)
+    monkeypatch.setattr(R, "LAYOUT", R.LAYOUT._replace(local_min=50))
     perm = np.random.default_rng(4).permutation(len(pts))
     for net in (reconstruct_robust(pts), reconstruct_robust(pts[perm])):
         c = net.canonical()
@@ -553,7 +553,7 @@ def test_sampled_loop_with_a_sharp_corner_is_not_a_zigzag():
 
 
 def test_untangle_loops_keeps_the_cut_point_and_shortens():
-    from curvenet.methods.robust.pipeline import _untangle_loops
+    from curvenet.methods.robust.curves import untangle_loops as _untangle_loops
 
     # a triangle-like loop with a 20-degree corner, sampled every 1, its corner legs
     # interleaved (as a distance order across the corner comes out); and a plain circle
@@ -626,16 +626,17 @@ def test_retry_tangents_only_on_noise_free_input(monkeypatch):
     # the smaller candidate margin is applied after the noise estimate, to clean input only:
     # with it forced to the kernels' margin the eye (seed 29) fails as before, and under
     # noise 0.2h the retry is never called
-    from curvenet.methods.robust import pipeline as R
+    from curvenet.methods.robust import frames as F
+    from curvenet.methods.robust import kernels as K
 
     calls = []
-    orig = R._retry_tangents
-    monkeypatch.setattr(R, "_retry_tangents", lambda *a, **k: calls.append(1) or orig(*a, **k))
+    orig = F.retry_tangents
+    monkeypatch.setattr(F, "retry_tangents", lambda *a, **k: calls.append(1) or orig(*a, **k))
     _score("eye", seed=1, noise=0.2)
     assert calls == []
     _score("eye", seed=29, ratio=3.0)
     assert calls
-    monkeypatch.setattr(R, "CAND_MARGIN_CLEAN", R._k.CAND_MARGIN)
+    monkeypatch.setattr(F, "TANGENTS", F.TANGENTS._replace(cand_margin_clean=K.CAND_MARGIN))
     assert not _score("eye", seed=29, ratio=3.0)["exact_topology"]
 
 
@@ -684,7 +685,7 @@ def test_curves_ending_at_one_sample_keep_the_spacing_there():
     # six curves sampled from a common end point: six coincident samples at the node (as in
     # sketch data, every stroke ends on the node) must not shrink the spacing there
     from curvenet.neighbors import knn
-    from curvenet.methods.robust.pipeline import local_spacing
+    from curvenet.methods.robust.frames import local_spacing
 
     ang = np.radians([0, 60, 120, 180, 240, 300])
     P = np.vstack([_seg([0, 0, 0], [25 * np.cos(a), 25 * np.sin(a), 0]) for a in ang])

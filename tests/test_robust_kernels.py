@@ -5,10 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from curvenet.methods.robust import chains as RC
+from curvenet.methods.robust import frames as RF
+from curvenet.methods.robust import graph as RG
 from curvenet.methods.robust import kernels as K
-from curvenet.methods.robust import pipeline as R
+from curvenet.methods.robust.thresholds import SPACING, TANGENTS
 from curvenet import synth
-from curvenet.neighbors import knn
+from curvenet.neighbors import build_tree, knn
 
 
 def _pca_dir(Q, w=None):
@@ -27,7 +30,7 @@ def cloud():
     P, _ = synth.sample(synth.model("cube"), noise=0.2, outliers=0.02, rng=4)
     P = P[np.lexsort(P.T[::-1])]
     dist, idx = knn(P, 16)
-    h = R.local_spacing(dist, idx)
+    h = RF.local_spacing(dist, idx)
     return P, dist, idx, h
 
 
@@ -105,7 +108,7 @@ def eye_cloud():
     P, _ = synth.sample(synth.model("eye"), density_ratio=3.0, rng=3)
     P = P[np.lexsort(P.T[::-1])]
     dist, idx = knn(P, 16)
-    return P, dist, idx, R.local_spacing(dist, idx)
+    return P, dist, idx, RF.local_spacing(dist, idx)
 
 
 @pytest.mark.parametrize("which", ["cloud", "eye_cloud"])
@@ -116,7 +119,7 @@ def test_tangents_match_the_numpy_pca(which, request):
     # a smaller margin (robust.CAND_MARGIN_CLEAN), on every other point only (the others are
     # left at zero): more directions change, never fewer
     sub = np.arange(1, len(P), 2)
-    win2 = _check_tangents(P, idx, h, R.CAND_MARGIN_CLEAN, sub)
+    win2 = _check_tangents(P, idx, h, TANGENTS.cand_margin_clean, sub)
     assert np.all(win2[sub] >= win[sub])
 
 
@@ -171,7 +174,7 @@ def test_tangent_is_not_thrown_across_close_parallel_curves():
     P = np.concatenate([np.column_stack([x + 0.5 * (j % 2), np.full_like(x, 2.5 * j), 0 * x]) for j in (-1, 0, 1)])
     P = P[np.lexsort(P.T[::-1])]
     dist, idx = knn(P, 16)
-    h = R.local_spacing(dist, idx)
+    h = RF.local_spacing(dist, idx)
     t, lin, _, _ = K.tangents(P, idx, h, 12)
     inner = (P[:, 0] > 8) & (P[:, 0] < 50)
     assert np.all(np.abs(t[inner, 0]) > 0.99)
@@ -181,14 +184,14 @@ def test_tangent_is_not_thrown_across_close_parallel_curves():
 _PY_RUN = """
 import sys, numpy as np
 from curvenet.methods.robust import kernels as K
-from curvenet.methods.robust import pipeline as R
+from curvenet.methods.robust import frames as RF
 from curvenet import synth
 from curvenet.neighbors import knn
 assert not K.HAVE_NUMBA
 P, _ = synth.sample(synth.model("cube"), noise=0.2, outliers=0.02, rng=4)
 P = P[np.lexsort(P.T[::-1])]
 dist, idx = knn(P, 16)
-h = R.local_spacing(dist, idx)
+h = RF.local_spacing(dist, idx)
 t, lin, chord, gain = K.tangents(P, idx, h, 12)
 sub = K.tangents(P, idx, h, 12, order=np.arange(0, len(P), 2), margin=1.0)
 e = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
@@ -468,7 +471,7 @@ def test_shell_groups_match_scipy_dijkstra(py, monkeypatch):
     clump = rng.normal(scale=1.0, size=(400, 3)) + [20.0, 0.0, 0.0]
     P = np.vstack([np.c_[s, z, z], np.c_[z, s, z], clump]) + rng.normal(scale=0.05, size=(562, 3))
     dist, idx = knn(P, 16)
-    h = R.local_spacing(dist, idx)
+    h = RF.local_spacing(dist, idx)
     keep = dist < 2.5 * h[:, None]
     src = np.repeat(np.arange(len(P)), 16)[keep.ravel()]
     indptr, indices = K.csr_union(len(P), src, idx[keep])
@@ -526,7 +529,7 @@ def test_chain_order_matches_scipy_dijkstra(py):
     src = np.repeat(np.arange(n), 6)[keep.ravel()]
     dst, dd = idx[keep], dist[keep]
     mask = rng.uniform(size=n) < 0.9  # "flagged" points cut the graph further
-    chn, n_chn = R._components(n, src, dst, mask)
+    chn, n_chn = RG.components(n, src, dst, mask)
     f = K._PY["chain_order"] if py else K.chain_order
     for w in (dd, np.round(dd / dd.mean(), 1), np.zeros_like(dd)):
         ids_o, par_o, bounds = f(n, src, dst, np.ascontiguousarray(w), chn, n_chn)
@@ -548,7 +551,7 @@ def test_end_counts_match_end_portion(py):
     f = K._PY["end_counts"] if py else K.end_counts
     for span in (0.0, 3.0, 4.0):
         m = f(P, h, flat, off, span)
-        assert [int(x) for x in m] == [len(R._end_portion(P, h, ids, span=span)) for ids in lists]
+        assert [int(x) for x in m] == [len(RC.end_portion(P, h, ids, span=span)) for ids in lists]
 
 
 def _components_reference(n, a, b, mask):
@@ -590,11 +593,11 @@ def test_spacing_kernel_matches_the_numpy_formula(cloud, k):
     P = np.vstack([P, P[rng.choice(len(P), len(P) // 20)]])  # coincident samples
     P = P[np.lexsort(P.T[::-1])]
     dist, idx = knn(P, k)
-    got = R._spacing_floor(K.spacing(dist, idx, R.DUP, R.DUP_K))  # compiled when numba is there
-    py = R._spacing_floor(K._PY["spacing"](dist, idx, R.DUP, R.DUP_K))
+    got = RF._spacing_floor(K.spacing(dist, idx, SPACING.dup, SPACING.dup_k))  # compiled when numba is there
+    py = RF._spacing_floor(K._PY["spacing"](dist, idx, SPACING.dup, SPACING.dup_k))
     token = K._COMPILED.set(False)
     try:
-        ref = R.local_spacing(dist, idx)  # the numpy formula
+        ref = RF.local_spacing(dist, idx)  # the numpy formula
     finally:
         K._COMPILED.reset(token)
     assert np.array_equal(got, ref) and np.array_equal(py, ref)
@@ -668,8 +671,8 @@ def test_strand_cuts_cut_only_links_across_strands(compiled):
     for gap in (None, 2.5):
         P, lab = _strands(gap)
         dist, idx = knn(P, 16, ordered=True)
-        h = R.local_spacing(dist, idx)
-        t, lin = R._noisy_tangents(P, h, 0.3, R.build_tree(P), dist, idx)
+        h = RF.local_spacing(dist, idx)
+        t, lin = RF.noisy_tangents(P, h, 0.3, build_tree(P), dist, idx)
         src = np.repeat(np.arange(len(P)), 16)
         dst = idx.ravel()
         with K.compiled_for(10**6 if compiled else 0):
@@ -687,7 +690,7 @@ def test_noisy_tangents_compiled_and_python_agree():
         pytest.skip("numba not installed")
     P, _ = _strands(2.5, n=30)
     dist, idx = knn(P, 32, ordered=True)
-    h = R.local_spacing(dist[:, :16], idx[:, :16])
+    h = RF.local_spacing(dist[:, :16], idx[:, :16])
     out = []
     for n in (0, 10**6):
         with K.compiled_for(n):
@@ -704,23 +707,23 @@ def test_noisy_tangents_read_nothing_beyond_their_reach():
     P, _ = _strands(2.5, n=60)
     P = np.vstack([P, _strands(None, n=120)[0] + [0.0, 40.0, 0.0]])  # plus a lone strand
     dist, idx = knn(P, 16, ordered=True)
-    h = R.local_spacing(dist, idx)
+    h = RF.local_spacing(dist, idx)
     short = dist[:, -1] > K.noisy_reach(h, 0.3)
     assert 0.2 < short.mean() < 0.9  # both paths taken
-    tree = R.build_tree(P)
-    t1, l1 = R._noisy_tangents(P, h, 0.3, tree, dist, idx)
-    t2, l2 = R._noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)  # all queried (32)
+    tree = build_tree(P)
+    t1, l1 = RF.noisy_tangents(P, h, 0.3, tree, dist, idx)
+    t2, l2 = RF.noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)  # all queried (32)
     assert np.array_equal(t1, t2) and np.array_equal(l1, l2)
     # a user's k above 32 (six strands, so that the 40th neighbour is within reach): its first
     # 32 neighbours serve, the same bits as the 32-neighbour query
     P = np.vstack([_strands(2.5, n=60, seed=s)[0] + [0.0, 5.0 * s, 0.0] for s in range(3)])
     dist, idx = knn(P, 16, ordered=True)
-    h = R.local_spacing(dist, idx)
+    h = RF.local_spacing(dist, idx)
     d40, i40 = knn(P, 40, ordered=True)
     assert (d40[:, -1] < K.noisy_reach(h, 0.3)).any()
-    tree = R.build_tree(P)
-    t2, l2 = R._noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)
-    t3, l3 = R._noisy_tangents(P, h, 0.3, tree, d40, i40)
+    tree = build_tree(P)
+    t2, l2 = RF.noisy_tangents(P, h, 0.3, tree, np.zeros_like(dist), idx)
+    t3, l3 = RF.noisy_tangents(P, h, 0.3, tree, d40, i40)
     assert np.array_equal(t2, t3) and np.array_equal(l2, l3)
 
 

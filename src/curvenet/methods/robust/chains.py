@@ -1,0 +1,329 @@
+"""Stage 5: chains, the runs of points between junction regions, ordered along their curve.
+
+The points outside every region fall apart (linked graph) into chains, one per curve segment.
+Each is ordered by geodesic distance from one end and given the regions its two ends touch
+(:func:`order_chains`); a chain touching no region is a closed loop cut open at its
+straightest point or an open piece. The geometric helpers of chains (end portions, lengths,
+line fits) live here too.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from . import kernels as _k
+from .graph import Graph, components
+from .thresholds import CHAINS, NUMERIC
+
+__all__ = ["Chain", "trace_chains", "order_chains", "fit_line", "step_lengths", "polylen", "chain_lengths",
+           "extent", "order_between", "end_portion", "end_counts"]
+
+
+class Chain:
+    """A run of points along one curve segment.
+
+    Attributes
+    ----------
+    ids : (n,) ndarray of int64
+        Ordered point ids (internal numbering).
+    ends : list of two int
+        The regions at its start and end (-1: none). Changed only by :class:`~.topology.Topology`.
+    closed : bool
+        A closed loop (its ends are then -1 or one region twice).
+    """
+
+    __slots__ = ("ids", "ends", "closed")
+
+    def __init__(self, ids, ends, closed=False):
+        self.ids = ids
+        self.ends = ends
+        self.closed = closed
+
+
+def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarray, n_reg: int,
+                 lin: np.ndarray) -> tuple[list[Chain], list[np.ndarray]]:
+    """Stage 5: the chains (points outside every region, split by them) and the regions' points.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+    graph : Graph
+    flagged : (N,) ndarray of bool
+        Region points.
+    reg : (N,) ndarray of int64
+        Region of each flagged point (-1 elsewhere).
+    n_reg : int
+    lin : (N,) ndarray
+        Linearity (a loop is cut open at its straightest point).
+
+    Returns
+    -------
+    chains : list of Chain
+        Ordered, with the regions their ends touch.
+    regions : list of (m,) ndarray of int64
+        The points of each region, ascending.
+    """
+    chn, n_chn = components(len(P), graph.src, graph.dst, ~flagged)
+    chains = order_chains(P, h, graph.src, graph.dst, graph.dd, chn, n_chn, reg, lin)
+    # the points of each region, ascending (one stable sort, not one pass over N per region)
+    o = np.argsort(reg, kind="stable")
+    cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
+    regions = [o[cut[r]:cut[r + 1]] for r in range(n_reg)]
+    return chains, regions
+
+
+def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
+    """Order every chain by geodesic distance from one end; find the regions its ends touch."""
+    N = len(P)
+    if n_chn == 0:
+        return []
+    # compiled: each chain ordered by its distance along the linked graph (edges inside the
+    # chain) from its far end, the point farthest from its lowest id (a double sweep)
+    ids_o, par_o, bounds = _k.chain_order(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64),
+                                          np.ascontiguousarray(dd, dtype=np.float64), chn, int(n_chn))
+
+    # contacts: linked edges between a chain point and a region point
+    in_chn, in_reg = chn >= 0, reg >= 0  # (gathers of bytes below, not of int64)
+    cmask = in_chn[src] & in_reg[dst]
+    c_pt = src[cmask]
+    c_reg = reg[dst[cmask]]
+    cmask2 = in_chn[dst] & in_reg[src]
+    c_pt = np.r_[c_pt, dst[cmask2]]
+    c_reg = np.r_[c_reg, reg[src[cmask2]]]
+    c_chain = chn[c_pt]
+    pos_in_chain = np.empty(N)
+    pos_in_chain[ids_o] = par_o
+    c_par = pos_in_chain[c_pt]
+    corder = np.lexsort((c_reg, c_chain))
+    c_chain, c_reg, c_par, c_pt = c_chain[corder], c_reg[corder], c_par[corder], c_pt[corder]
+    cb = np.searchsorted(c_chain, np.arange(n_chn + 1))
+
+    # compiled: for each chain with contacts, the most frequent region among the contacts
+    # within reach = min(L / 2, 4 h) of each end (h: the chain's median spacing; a chain
+    # shorter than 2 reach is split at L / 2); ties: the lowest region id
+    ends, touch = _k.chain_ends(np.ascontiguousarray(h, dtype=np.float64), ids_o, par_o, bounds,
+                                c_reg, c_par, cb)
+    # polyline length of every ordered chain (steps inside a chain; a zigzag test below)
+    step = step_lengths(P, ids_o)
+    step[bounds[1:] - 1] = 0.0  # the step from a chain's last point to the next chain's first
+    plen = np.add.reduceat(step, bounds[:-1]) if n_chn else np.zeros(0)
+    length = par_o[bounds[1:] - 1]  # the distance of each chain's far end
+    # a short chain given the same region at both ends may take another one at one side
+    for ci in np.flatnonzero(touch & (ends[:, 0] >= 0) & (ends[:, 0] == ends[:, 1])).tolist():
+        _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
+                   float(length[ci]), float(np.median(h[ids_o[bounds[ci]:bounds[ci + 1]]])))
+    # no region at either end (a contact in the middle only: a clump beside a loop)
+    free = ~touch | ((ends[:, 0] < 0) & (ends[:, 1] < 0))
+    # may zigzag (checked below)
+    zig = ~free & (np.diff(bounds) >= CHAINS.zigzag_min_points) & (plen > CHAINS.zigzag * length * (1 - NUMERIC.rel_loose))
+    special = np.flatnonzero(free | zig)
+    b = bounds.tolist()
+    e0, e1 = ends[:, 0].tolist(), ends[:, 1].tolist()
+    chains = [Chain(ids_o[b[ci]:b[ci + 1]], [e0[ci], e1[ci]]) for ci in range(n_chn)]
+    if not len(special):
+        return chains
+    # the linked graph inside the chains below (their loops are cut open on it)
+    inside = (chn[src] >= 0) & (chn[src] == chn[dst])
+    inside[inside] = np.isin(chn[src[inside]], special)
+    g = coo_matrix((np.maximum(dd[inside], NUMERIC.min_edge), (src[inside], dst[inside])), shape=(N, N)).tocsr()
+    for ci in special.tolist():
+        seg = ids_o[b[ci]:b[ci + 1]]
+        if free[ci]:
+            chains[ci] = _loop_or_piece(P, h, g, seg, lin)
+            continue
+        if polylen(P[seg]) > CHAINS.zigzag * float(length[ci]):
+            # the points ordered by distance from one end zigzag: the chain is still a cycle
+            # in the linked graph (a loop whose links bypass the few points flagged on it):
+            # it is cut open at its contact with the region it touches most, both ends there
+            regs_c, pts_c = c_reg[cb[ci]:cb[ci + 1]], c_pt[cb[ci]:cb[ci + 1]]
+            ru, rc = np.unique(regs_c, return_counts=True)
+            r = int(ru[np.argmax(rc)])
+            lp = _loop_or_piece(P, h, g, seg, lin, start=int(pts_c[regs_c == r].min()))
+            if lp.closed:
+                chains[ci] = Chain(lp.ids, [r, r])
+    return chains
+
+
+def _other_end(ci, ends, regs, par, length, hl):
+    """A short chain given the same region at both ends that also touches another region.
+
+    Under ``2 * CHAINS.short_reach`` spacings long, both halves of a chain may be linked mostly to
+    the larger region at one end (a sparse free branch, whose long links reach the chain's far
+    end): the other region touched (most contacts; ties: lowest id) takes the side its
+    contacts lie on (mean position along the chain against that of the first region's).
+    """
+    if length > 2 * CHAINS.short_reach * hl:
+        return
+    r = ends[ci, 0]
+    other = regs != r
+    if not other.any():
+        return
+    ru, rc = np.unique(regs[other], return_counts=True)
+    r2 = int(ru[np.argmax(rc)])
+    side = 1 if par[regs == r2].mean() > par[regs == r].mean() else 0
+    ends[ci, side] = r2
+
+
+def _loop_or_piece(P, h, g, seg, lin, start=None):
+    """A chain that touches no region: a closed loop (cut open and ordered), or an open piece.
+
+    The loop is cut at ``start`` when given, else at its straightest point (largest
+    linearity; ties: lowest id), never at a sharp corner where the tangent is undefined.
+    """
+    if len(seg) < CHAINS.loop_min_points:
+        return Chain(seg, [-1, -1])
+    seg = np.sort(seg)
+    s0 = int(np.argmax(lin[seg])) if start is None else int(np.searchsorted(seg, start))
+    seg = np.r_[seg[s0:], seg[:s0]]
+    sub = g[seg][:, seg].tocoo()
+    X = P[seg]
+    hl = float(np.median(h[seg]))
+    # tangent at the start point; every link crossing the cut has both ends this near
+    rnear = max(CHAINS.loop_cut * hl, CHAINS.loop_cut_link * float(sub.data.max()) if sub.nnz else 0.0)
+    near = np.linalg.norm(X - X[0], axis=1) <= rnear
+    _, u = fit_line(X[np.linalg.norm(X - X[0], axis=1) <= CHAINS.loop_cut * hl])
+    if u is None:
+        return Chain(seg, [-1, -1])
+    side = (X - X[0]) @ u
+    a, b = sub.row, sub.col
+    cut = near[a] & near[b] & ((side[a] < 0) != (side[b] < 0)) & (a != 0) & (b != 0)
+    # keep the start's links to the positive side only
+    cut |= ((a == 0) & (side[b] < 0)) | ((b == 0) & (side[a] < 0))
+    keep = ~cut
+    n = len(seg)
+    gg = coo_matrix((sub.data[keep], (a[keep], b[keep])), shape=(n, n)).tocsr()
+    dd = dijkstra(gg, directed=False, indices=0)
+    finite = np.isfinite(dd)
+    o = np.lexsort((np.arange(n), dd))
+    o = o[finite[o]]
+    rest = np.flatnonzero(~finite)
+    ordered = seg[o]
+    last = X[o[-1]]
+    closed = np.linalg.norm(last - X[0]) <= rnear and polylen(X[o]) > CHAINS.loop_min * hl
+    if not closed:
+        # an open piece: ordered from one end to the other (double sweep on the uncut graph)
+        g0 = coo_matrix((sub.data, (a, b)), shape=(n, n)).tocsr()
+        d0 = dijkstra(g0, directed=False, indices=0)
+        f0 = np.isfinite(d0)
+        e1 = int(np.lexsort((np.arange(n), -np.where(f0, d0, -1.0)))[0])
+        d1 = dijkstra(g0, directed=False, indices=e1)
+        f1 = np.isfinite(d1)
+        o = np.lexsort((np.arange(n), d1))
+        o = o[f1[o]]
+        return Chain(np.r_[seg[o], seg[np.flatnonzero(~f1)]], [-1, -1], closed=False)
+    if len(rest):
+        # unreachable points: append by their position along the tangent (rare)
+        ordered = np.r_[ordered, seg[rest[np.argsort(side[rest], kind="stable")]]]
+    return Chain(ordered, [-1, -1], closed=bool(closed))
+
+
+def fit_line(X):
+    c = X.mean(axis=0)
+    if len(X) < 2:
+        return c, None
+    _, _, vt = np.linalg.svd(X - c, full_matrices=False)
+    return c, vt[0]
+
+
+def step_lengths(P, ids):
+    """Distance from every point ``P[ids[i]]`` to the next one ``P[ids[i + 1]]``, 0 after the last.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    ids : (n,) ndarray of int
+
+    Returns
+    -------
+    (n,) ndarray of float
+        The same values as ``np.linalg.norm(np.diff(P[ids], axis=0), axis=1)`` (one gather).
+    """
+    out = np.zeros(len(ids))
+    if len(ids) > 1:
+        X = P[ids]
+        D = X[1:] - X[:-1]
+        D *= D
+        out[:-1] = np.sqrt(D.sum(axis=1))
+    return out
+
+
+def polylen(X):
+    if len(X) < 2:
+        return 0.0
+    return float(np.linalg.norm(np.diff(X, axis=0), axis=1).sum())
+
+
+def chain_lengths(P, h, chains):
+    """Polyline length (summed per chain, within rounding of :func:`polylen`) and largest
+    spacing of every chain; a chain without points gets length 0 and spacing inf."""
+    lens = np.array([len(c.ids) for c in chains], dtype=np.int64)
+    length = np.zeros(len(chains))
+    hmax = np.full(len(chains), np.inf)
+    nz = np.flatnonzero(lens > 0)
+    if len(nz):
+        flat = np.concatenate([chains[i].ids for i in nz.tolist()]).astype(np.int64, copy=False)
+        off = np.r_[0, np.cumsum(lens[nz])]
+        step = step_lengths(P, flat)
+        step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
+        length[nz] = np.add.reduceat(step, off[:-1])
+        hmax[nz] = np.maximum.reduceat(h[flat], off[:-1])
+    return length, hmax
+
+
+def extent(P, ids):
+    if len(ids) < 2:
+        return 0.0
+    X = P[ids]
+    return float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+
+
+def order_between(P, ids, pa, pb):
+    """Region points ordered from ``pa`` towards ``pb``."""
+    if len(ids) == 0:
+        return ids
+    u = pb - pa
+    nu = np.linalg.norm(u)
+    if nu == 0:
+        return ids
+    proj = (P[ids] - pa) @ (u / nu)
+    return ids[np.lexsort((ids, proj))]
+
+
+def end_portion(P, h, ids, span, m=None):
+    """The last points of an ordered id list ``ids`` (running towards the end), over ``span`` h.
+
+    ``m``: their number when already known (:func:`end_counts`).
+    """
+    n = len(ids)
+    if n < 2:
+        return P[ids[::-1]]
+    if m is None:
+        hl = float(h[ids[-1]])
+        # arc length summed backwards from the end, only as far as needed (compiled kernel)
+        m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(CHAINS.end_min_points, n))
+    return P[ids[: -m - 1: -1]]
+
+
+def end_counts(P, h, lists, span):
+    """The number of points of :func:`end_portion` of every id list, in one compiled call.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+    lists : list of (n_i,) ndarray of int
+        Id lists, each running towards its end.
+    span : float
+
+    Returns
+    -------
+    (len(lists),) ndarray of int64
+    """
+    if not lists:
+        return np.zeros(0, dtype=np.int64)
+    flat = np.concatenate(lists).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
+    return _k.end_counts(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, float(span))

@@ -1,0 +1,243 @@
+"""Stage 8: the curves, each ending exactly at its nodes; optional smoothing.
+
+Chain points lying behind their junction node (an overshoot into another branch) are trimmed
+(:func:`build_curves`); every open curve runs from its node through the free-end extension,
+the chain and the other extension to its other node (:func:`open_curves`); a curve or loop
+that turns back on itself is reordered into a shorter path (:func:`untangle_loops`); curves
+are sorted canonically (:func:`sort_curves`) and may be smoothed (:func:`smooth_curve`).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ...network import Curve
+from . import kernels as _k
+from .nodes import Placement
+from .thresholds import CURVES, NODES, NOISE
+
+__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "smooth_curve"]
+
+
+def build_curves(P: np.ndarray, h: np.ndarray, pl: Placement) -> list[Curve]:
+    """Stage 8: the curves of the live chains, their nodes' extensions and the extra branches.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+    pl : Placement
+
+    Returns
+    -------
+    list of Curve
+        Sorted (:func:`sort_curves`); ``indices`` are internal point ids (-1 at computed nodes).
+    """
+    live, v, nodes, new_id, node_of, end_ext = pl.live, pl.v, pl.nodes, pl.new_id, pl.node_of, pl.end_ext
+    # at a junction, chain points lying behind the node (the chain overshot it into another
+    # branch) are dropped (all open chains in one compiled call)
+    opn = [ci for ci, c in enumerate(live) if not c.closed]
+    trim = {}
+    if opn:
+        vl = v.tolist()
+        node_arr = np.full(len(v), -1, dtype=np.int64)
+        node_arr[list(node_of)] = list(node_of.values())
+        ends = np.fromiter(itertools.chain.from_iterable(live[ci].ends for ci in opn), dtype=np.int64,
+                           count=2 * len(opn))
+        ends = new_id[node_arr[ends]].reshape(-1, 2)
+        do0 = np.array([(ci, 0) not in end_ext and vl[live[ci].ends[0]] >= 2 for ci in opn])
+        do1 = np.array([(ci, 1) not in end_ext and vl[live[ci].ends[1]] >= 2 for ci in opn])
+        flat = np.concatenate([live[ci].ids for ci in opn]).astype(np.int64, copy=False)
+        off = np.r_[0, np.cumsum([len(live[ci].ids) for ci in opn])].astype(np.int64)
+        lo, hi = _k.trim_ends(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, do0, do1,
+                              nodes[ends[:, 0]], nodes[ends[:, 1]], 2.0 * NODES.span)
+        trim = {ci: flat[lo[i]:hi[i]] for i, ci in enumerate(opn)}
+    curves: list = [None] * len(live)
+    loops = [ci for ci, c in enumerate(live) if c.closed]
+    for ci, ids in zip(loops, untangle_loops(P, [live[ci].ids for ci in loops])):
+        curves[ci] = Curve(P[ids], None, None, True, ids)
+    if opn:
+        # the open curves all at once: each runs from node a through its free-end extension
+        # (reversed), trimmed chain points and the other extension to node b
+        pieces, n0, n1, last0, last1 = [], np.zeros(len(opn), np.int64), np.zeros(len(opn), np.int64), [], []
+        for i, ci in enumerate(opn):
+            ext0, ext1 = end_ext.get((ci, 0)), end_ext.get((ci, 1))
+            if ext0 is not None and len(ext0):
+                pieces.append(ext0[::-1])
+                n0[i] = len(ext0)
+                last0.append((i, ext0[-1]))
+            pieces.append(trim[ci])
+            if ext1 is not None and len(ext1):
+                pieces.append(ext1)
+                n1[i] = len(ext1)
+                last1.append((i, ext1[-1]))
+        curves_open = open_curves(P, nodes, np.concatenate(pieces).astype(np.int64, copy=False),
+                                  n0 + (hi - lo) + n1, ends[:, 0], ends[:, 1], last0, last1)
+        for ci, cv in zip(opn, curves_open):
+            curves[ci] = cv
+    for j, t, br in pl.extra:
+        a, b = int(new_id[j]), int(new_id[t])
+        cv = Curve(np.vstack([nodes[a], P[br]]), a, b, False, np.r_[-1, br].astype(np.int64))
+        if a > b:
+            cv = cv.reversed()
+        curves.append(cv)
+    return sort_curves(curves)
+
+
+def open_curves(P, nodes, ids, nids, a, b, last0, last1):
+    """Open curves from their point ids, each ending exactly at its two nodes.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        Points.
+    nodes : (n_nodes, d) ndarray
+        Node positions.
+    ids : (M,) ndarray of int64
+        The point ids of all curves, concatenated, each curve's running from node ``a`` to ``b``.
+    nids : (n_curves,) ndarray of int64
+        The number of ids of each curve.
+    a, b : (n_curves,) ndarray of int64
+        The nodes at the start and the end of each curve's ids.
+    last0, last1 : list of (int, int)
+        ``(curve, point id)``: a curve whose first (resp. last) id is the extreme point of a free
+        end; where that point lies exactly at the node, the node is not added again.
+
+    Returns
+    -------
+    list of Curve
+        Node position, points, node position (``indices`` -1 at the nodes), stored from the
+        lower node id to the higher (reversed where ``a > b``). The curves' arrays are views of
+        two shared arrays.
+    """
+    nc = len(nids)
+    head = np.ones(nc, dtype=np.int64)
+    tail = np.ones(nc, dtype=np.int64)
+    for flag, last, node in ((head, last0, a), (tail, last1, b)):
+        if last:
+            c, q = np.asarray(last, dtype=np.int64).T
+            flag[c] = ~(P[q] == nodes[node[c]]).all(axis=1)
+    n = nids + head + tail
+    off = np.r_[0, np.cumsum(n)]
+    cid = np.repeat(np.arange(nc), n)
+    local = np.arange(off[-1]) - off[cid]
+    rev = a > b
+    # the position of each output entry in the curve as built from a to b
+    src = np.where(rev[cid], n[cid] - 1 - local, local)
+    k = src - head[cid]
+    inner = (k >= 0) & (k < nids[cid])
+    ind = np.full(off[-1], -1, dtype=np.int64)
+    ind[inner] = ids[(np.r_[0, np.cumsum(nids)][cid] + k)[inner]]
+    pts = P[np.maximum(ind, 0)]
+    at_a = ~inner & (k < 0)
+    at_b = ~inner & (k >= 0)
+    pts[at_a] = nodes[a[cid[at_a]]]
+    pts[at_b] = nodes[b[cid[at_b]]]
+    # a curve whose points turn back (two steps in a row more than 120 degrees apart) zigzags
+    # (a sharp spike whose legs were linked across, a region's points ordered along a chord
+    # that crosses the spike): its inner points are reordered into a shorter path
+    order, _ = _untangled(pts, off)
+    if order is not None:
+        pts = pts[order]
+        ind = ind[order]
+    o = off.tolist()
+    lo_, hi_ = np.where(rev, b, a).tolist(), np.where(rev, a, b).tolist()
+    return [Curve(pts[o[i]:o[i + 1]], lo_[i], hi_[i], False, ind[o[i]:o[i + 1]]) for i in range(nc)]
+
+
+def untangle_loops(P, loops):
+    """The closed loops' point ids (each a list from its cut point around), those that turn
+    back reordered into a shorter cycle from the same cut point (see :func:`_turning_back`)."""
+    if not loops:
+        return []
+    # each loop as a path from its first point around and back to it (both ends kept)
+    ids = np.concatenate([np.r_[c, c[:1]] for c in loops]).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum([len(c) + 1 for c in loops])].astype(np.int64)
+    order, which = _untangled(P[ids], off)
+    out = [np.array(c, dtype=np.int64, copy=True) for c in loops]
+    if order is not None:
+        ids = ids[order]
+        for i in which.tolist():
+            out[i] = ids[off[i]:off[i + 1] - 1].copy()
+    return out
+
+
+def _untangled(X, off):
+    """The curves ``X[off[i]:off[i + 1]]`` (concatenated) that turn back, and the order of the
+    rows of ``X`` that reorders their inner points into shorter paths (their ends kept; the
+    other curves as they are), or ``None`` when none turns back
+    (:func:`curvenet.methods.robust.kernels.untangle`)."""
+    which = _turning_back(X, off)
+    if not len(which):
+        return None, which
+    order = _k.untangle(X, np.asarray(off, dtype=np.int64), which.astype(np.int64), CURVES.untangle_w, CURVES.turn_back_cos)
+    return order, which
+
+
+def _turning_back(X, off):
+    """The curves (points ``X[off[i]:off[i + 1]]``, concatenated) with two successive steps
+    whose directions are more than 120 degrees apart (``CURVES.turn_back_cos``)."""
+    d = np.diff(X, axis=0)
+    L = np.linalg.norm(d, axis=1)
+    # steps inside a curve of nonzero length, and pairs of them inside one curve
+    cid = np.repeat(np.arange(len(off) - 1), np.diff(off))
+    inside = (cid[1:] == cid[:-1]) & (L > 0)
+    u = d / np.where(L > 0, L, 1.0)[:, None]
+    idx = np.flatnonzero(inside)
+    # consecutive nonzero steps of the same curve (zero steps skipped)
+    pair = (cid[idx[1:]] == cid[idx[:-1]])
+    cosang = np.einsum("nd,nd->n", u[idx[1:]], u[idx[:-1]])
+    return np.unique(cid[idx[1:]][pair & (cosang < CURVES.turn_back_cos)])
+
+
+def sort_curves(curves):
+    """The curves by start node, end node (-1 for none), then second point rounded to 9
+    decimals (the first for a curve of one point); ties keep their order."""
+    if not curves:
+        return curves
+    n = len(curves)
+    st = np.fromiter((-1 if c.start is None else c.start for c in curves), dtype=np.int64, count=n)
+    en = np.fromiter((-1 if c.end is None else c.end for c in curves), dtype=np.int64, count=n)
+    X = np.round(np.stack([c.points[min(1, len(c.points) - 1)] for c in curves]), CURVES.round_decimals)
+    o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (en, st))
+    return [curves[i] for i in o.tolist()]
+
+
+def smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
+    """A smoothing spline of one curve, pinned at its end nodes, evaluated densely.
+
+    An open curve is fitted with heavy weights on its two end points (the nodes) and its
+    first and last samples are set exactly to them. A closed loop is padded on both sides by
+    a quarter of itself, fitted as an open curve, and the middle turn is kept.
+    """
+    from scipy.interpolate import splev, splprep
+
+    X = c.points
+    keep = np.r_[True, np.linalg.norm(np.diff(X, axis=0), axis=1) > 0]
+    X = X[keep]
+    m = len(X)
+    if m < NOISE.smooth_min_points:
+        return c
+    q = 0
+    if c.closed:
+        q = max(m // NOISE.smooth_pad_div, NOISE.smooth_degree)
+        X = np.vstack([X[-q:], X, X[:q + 1]])
+    w = np.ones(len(X))
+    if not c.closed:
+        w[0] = w[-1] = NOISE.smooth_pin  # pin the ends at the nodes
+    try:
+        tck, u = splprep(list(X.T), w=w, s=s_per_point * len(X), k=NOISE.smooth_degree, quiet=2)
+    except Exception:  # pragma: no cover - degenerate input
+        return c
+    n_out = max(int(NOISE.smooth_dense * m), NOISE.smooth_min_out)
+    if c.closed:
+        uu = np.linspace(u[q], u[q + m], n_out + 1)[:-1]
+    else:
+        uu = np.linspace(u[0], u[-1], n_out)
+    Y = np.asarray(splev(uu, tck)).T
+    if not c.closed:
+        Y[0] = c.points[0]
+        Y[-1] = c.points[-1]
+    return Curve(Y, c.start, c.end, c.closed, np.full(len(Y), -1, dtype=np.int64))

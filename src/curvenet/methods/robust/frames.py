@@ -1,0 +1,344 @@
+"""Stages 1-2: neighbours, the local spacing h, duplicate samples, tangents and the noise level.
+
+Every point gets its k nearest neighbours, a local spacing ``h`` (:func:`local_spacing`), a unit
+tangent and a linearity (:func:`tangents`, voted by its neighbours: :func:`vote_tangents`),
+and the cloud a noise estimate (the median distance of a point from the chord of its nearest
+strip neighbours). Noise-free samples repeated within ``SPACING.dedup`` median spacings are
+dropped (:func:`coincident`). :func:`noisy_tangents` are the longer-reach frames of the strand
+test (:mod:`.graph`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ...neighbors import build_tree, knn
+from . import kernels as _k
+from .params import RobustParams
+from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
+
+__all__ = ["Neighbours", "Frames", "neighbours", "frames", "duplicates", "local_spacing", "tangents",
+           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "lex_order"]
+
+
+class Neighbours(NamedTuple):
+    """The k nearest neighbours of every point and its local spacing.
+
+    Attributes
+    ----------
+    tree : scipy.spatial.cKDTree
+    dist, idx : (N, k) ndarray
+        Distances (ascending) and ids of the k nearest neighbours, self excluded.
+    h : (N,) ndarray of float
+        Local spacing (or the user's spacing everywhere).
+    """
+
+    tree: object
+    dist: np.ndarray
+    idx: np.ndarray
+    h: np.ndarray
+
+
+class Frames(NamedTuple):
+    """Tangents and the noise level.
+
+    Attributes
+    ----------
+    t : (N, d) ndarray
+        Unit tangents.
+    lin : (N,) ndarray
+        Linearity ``1 - l2 / l1`` (low where the tangent is not reliable).
+    sigma : float
+        Estimated noise standard deviation per coordinate.
+    hmed : float
+        Median spacing.
+    clean : bool
+        ``sigma`` under ``SPACING.dedup_noise`` median spacings.
+    """
+
+    t: np.ndarray
+    lin: np.ndarray
+    sigma: float
+    hmed: float
+    clean: bool
+
+
+def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
+    """Stage 1: the k-d tree, the k nearest neighbours and the local spacing of the points ``P``."""
+    tree = build_tree(P)  # kept for the repairs (repairs.attach_dangling)
+    dist, idx = knn(P, prm.k, ordered=True, tree=tree)
+    h = local_spacing(dist, idx) if prm.spacing is None else np.full(len(P), float(prm.spacing))
+    return Neighbours(tree, dist, idx, h)
+
+
+def frames(P: np.ndarray, nb: Neighbours) -> Frames:
+    """Stage 2: tangents, linearity and the noise level (see :func:`tangents`).
+
+    Noise-free input (estimated noise under ``SPACING.dedup_noise`` median spacings) retries the
+    tangents near close curves with the smaller margin (:func:`retry_tangents`); under noise
+    the vote takes in more neighbours (a tangent thrown across close curves by noise has more
+    of its neighbours' to outvote it).
+    """
+    idx, h = nb.idx, nb.h
+    t, lin, rms, gain = tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
+    sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+    hmed = float(np.median(h))
+    clean = sig < SPACING.dedup_noise * hmed
+    if clean:
+        t, lin = retry_tangents(P, idx, h, t, lin, gain)
+    t, lin = vote_tangents(t, lin, idx, m=min(TANGENTS.vote_m if clean else TANGENTS.vote_m_noisy, idx.shape[1]))
+    return Frames(t, lin, sig, hmed, bool(clean))
+
+
+def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:
+    """The points to keep when noise-free samples repeat one place, else None.
+
+    Noise-free samples closer than ``SPACING.dedup`` median spacings are one place sampled twice
+    (overlapping strokes, a curve given twice): the later ones (internal order) go, unless
+    fewer than ``DEFAULTS.min_points`` would remain. Under noise, close samples are noise: kept.
+
+    Returns
+    -------
+    (M,) ndarray of int64 or None
+        Ids of the points kept, ascending.
+    """
+    if not fr.clean:
+        return None
+    dup = coincident(nb.dist, nb.idx, SPACING.dedup * fr.hmed)
+    if not dup.any() or len(dup) - dup.sum() < DEFAULTS.min_points:
+        return None
+    return np.flatnonzero(~dup)
+
+
+def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Local sampling spacing of every point.
+
+    Parameters
+    ----------
+    dist, idx : (N, k) ndarray
+        Distances and indices of the k nearest neighbours (self excluded), k >= 4.
+
+    Returns
+    -------
+    (N,) ndarray of float
+        Mean distance to the 4 nearest neighbours divided by 1.5, median-smoothed over the point
+        and its 8 nearest neighbours. Neighbours closer than ``SPACING.dup`` times that first mean are
+        the same place sampled twice (overlapping strokes, a curve given twice): they are
+        skipped and the mean is taken over the next ones, so that coincident samples do not
+        shrink the spacing (and every radius) below the gaps along the curve. So are those
+        closer than ``SPACING.dup_k`` times the k-th neighbour's distance over k / 2 (about one
+        spacing on a curve): several curves ending on one sample make the first mean tiny.
+    """
+    if _k.compiled_active() and dist.shape[1] <= SPACING.kernel_k_max:
+        # compiled, one pass over the rows, the same numbers as the numpy formula below
+        h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                       float(SPACING.dup), float(SPACING.dup_k))
+        return _spacing_floor(h)
+    m = min(SPACING.mean_of, dist.shape[1])
+    div = SPACING.mean_div if m >= SPACING.mean_of else 1.0
+    raw = np.empty(len(dist))
+    step = SPACING.block  # rows at a time: the (rows, k) temporaries stay small at any N
+    for a in range(0, len(dist), step):
+        D = dist[a:a + step]
+        raw0 = D[:, :m].mean(axis=1) / div
+        # several samples at one place (curves ending at one node) make raw0 tiny: the k-th
+        # neighbour, about k / 2 spacings away on a curve, sets a floor to the duplicate test
+        thr = np.maximum(SPACING.dup * raw0, SPACING.dup_k * D[:, -1] / (0.5 * D.shape[1]))
+        keep = D >= thr[:, None]
+        sel = keep & (np.cumsum(keep, axis=1) <= m)
+        cnt = sel.sum(axis=1)
+        raw[a:a + step] = np.where(cnt >= m, np.where(sel, D, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
+    j = min(SPACING.smooth_of, idx.shape[1])
+    h = np.empty(len(dist))
+    for a in range(0, len(dist), step):
+        R = np.concatenate([raw[a:a + step, None], raw[idx[a:a + step, :j]]], axis=1)
+        if R.shape[1] % 2:  # an odd count: the median is the middle value (partition is faster)
+            h[a:a + step] = np.partition(R, R.shape[1] // 2, axis=1)[:, R.shape[1] // 2]
+        else:
+            h[a:a + step] = np.median(R, axis=1)
+    return _spacing_floor(h)
+
+
+def _spacing_floor(h):
+    """``h`` raised to a thousandth of its smallest positive value (coincident clouds)."""
+    pos = h[h > 0]
+    floor = (pos.min() if len(pos) else 1.0) * SPACING.floor
+    return np.maximum(h, floor)
+
+
+def tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = TANGENTS.strip_m, order=None, margin=None):
+    """Local tangent and linearity of each point.
+
+    A first direction from the 4 nearest neighbours (or towards one of them, when its narrow
+    strip holds clearly more points: a close parallel curve can pull the PCA across) is refined
+    by a PCA of the ``m`` nearest that lie within one spacing of its line (a strip that leaves
+    out a close parallel curve). The linearity ``1 - l2 / l1`` is that of the last strip PCA.
+    ``order``: the points to do (all, in this order; or a subset, the others get zeros);
+    ``margin``: the score a neighbour's direction needs above the 4-neighbour direction's
+    (default: the kernels' ``CAND_MARGIN``).
+
+    Returns
+    -------
+    t : (N, d) ndarray
+        Unit tangents.
+    lin : (N,) ndarray
+        Linearity.
+    rms : (N,) ndarray
+        Noise estimate of each point (NaN where there is none).
+    gain : (N,) ndarray
+        How much more a neighbour's direction scores than the 4-neighbour direction (``-inf``
+        where none was tried); see :func:`retry_tangents`.
+    """
+    m = min(m, idx.shape[1])
+    # compiled, one point at a time: the 4-neighbour PCA, then twice the PCA of the point and
+    # its m nearest within h of the current line (weights 0/1: a weighted PCA, whose numpy
+    # formula on stacked arrays is the reference of tests/test_robust_kernels.py);
+    # and the noise: distance of each point from the chord between its nearest strip neighbours
+    # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
+    # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
+    t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+                                   np.ascontiguousarray(h, dtype=np.float64), m, order, margin=margin)
+    dim = P.shape[1]
+    # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
+    rms = TANGENTS.rms_bias * cr / np.sqrt(TANGENTS.rms_dim * max(dim - 1, 1))
+    return t, lin, rms, gain
+
+
+def retry_tangents(P, idx, h, t, lin, gain, m: int = TANGENTS.strip_m):
+    """Tangents of noise-free input: the points whose best neighbour direction scores between
+    :data:`TANGENTS.cand_margin_clean` and the kernels' margin more than the 4-neighbour direction are
+    done again with the smaller margin (few points: near close curves, junctions, corners)."""
+    redo = np.flatnonzero((gain > TANGENTS.cand_margin_clean) & (gain <= _k.CAND_MARGIN))
+    if len(redo) == 0:
+        return t, lin
+    t2, lin2, _, _ = tangents(P, idx, h, m, order=redo, margin=TANGENTS.cand_margin_clean)
+    t = t.copy()
+    lin = lin.copy()
+    t[redo] = t2[redo]
+    lin[redo] = lin2[redo]
+    return t, lin
+
+
+def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
+    """Tangents by a vote of the point and its ``m`` nearest neighbours (tensor sum of t t^T).
+
+    A tangent thrown across close parallel curves by noise is outvoted by its neighbours'.
+    The linearity becomes the smaller of the point's own and the vote's coherence
+    ``1 - l2 / l1`` (low at junctions, where neighbours vote for different branches).
+    """
+    m = min(m, idx.shape[1])
+    # only a tangent clearly at odds with a coherent vote is replaced. With C = sum T_k T_k^T,
+    # eigenvalues l1 >= l2 and l1 <= m + 1: a swap needs |u.t| < c (u the top eigenvector) and
+    # l2 <= (1 - TANGENTS.vote_coh) l1, hence t^T C t <= (m + 1) (c^2 + (1 - TANGENTS.vote_coh) (1 - c^2)); the
+    # eigen-decomposition is computed only for the points below that bound (few on clean data);
+    # t^T C t = sum_k (T_k . t)^2 is computed in a compiled loop (no (N, m + 1, d) array)
+    agree = _k.vote_agreement(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m)
+    bound = (m + 1) * (TANGENTS.vote_cos**2 + (1.0 - TANGENTS.vote_coh) * (1.0 - TANGENTS.vote_cos**2))
+    cand = np.flatnonzero(agree <= bound * (1 + NUMERIC.rel))
+    if len(cand) == 0:
+        return t, lin
+    # the top eigenpair of C for the candidates (compiled, closed form: _robust_kernels._eig_top)
+    u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m,
+                         cand.astype(np.int64))
+    swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < TANGENTS.vote_cos) & (coh >= TANGENTS.vote_coh)
+    sw = cand[swap]
+    t = t.copy()
+    lin = lin.copy()
+    t[sw] = u[swap]
+    lin[sw] = np.minimum(lin[sw], coh[swap])
+    return t, lin
+
+
+def noisy_tangents(P, h, sig, tree, dist, idx):
+    """Tangents and linearity of a noisy cloud found over a longer reach
+    (:func:`_robust_kernels._noisy_tangents`, over the ``TANGENTS.noisy_k`` nearest neighbours): the
+    frames of the strand test (:func:`cut_strand_links`).
+
+    Where sparse, noisy curves run a few spacings apart, a point's nearest neighbours lie as
+    often on the next curve as on its own, and the 4-neighbour start of :func:`tangents` often
+    points across (on the "eye" under noise 0.3h and density x3, after the vote: 8.6% of the
+    points more than 30 degrees off; 0.1% with these). Used as the tangents of the whole method
+    they cost the mug's junctions (bench samplings 0 and 1), so they serve this test only.
+
+    The method's own neighbours (``dist``, ``idx``: (N, k), sorted by distance) serve the
+    points whose last one (or ``TANGENTS.noisy_k``-th) lies beyond the kernel's reach
+    (:func:`_robust_kernels.noisy_reach`): the farther ones would change nothing (on a lone
+    curve, most points). The others get their ``TANGENTS.noisy_k`` nearest from ``tree``, in blocks.
+
+    Returns
+    -------
+    T : (N, d) ndarray
+    lin : (N,) ndarray
+    """
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    h = np.ascontiguousarray(h, dtype=np.float64)
+    sig = float(sig)
+    N = len(P)
+    k = min(TANGENTS.noisy_k, N - 1)
+    T = np.empty_like(P)
+    lin = np.empty(N)
+    kk = min(idx.shape[1], k)  # the method's neighbours the kernel may take
+    if kk >= k:
+        short = np.ones(N, dtype=bool)  # (as many as the kernel's)
+    elif kk >= min(_k.NOISY_CAND, k) and kk > 0:
+        short = dist[:, kk - 1] > _k.noisy_reach(h, sig)
+    else:
+        short = np.zeros(N, dtype=bool)
+    rows = np.flatnonzero(short)
+    if len(rows):
+        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows, :kk], dtype=np.int64), h, sig)
+    rows = np.flatnonzero(~short)
+    for s in range(0, len(rows), TANGENTS.noisy_block):  # blocks: the (rows, 32) neighbour ids stay small
+        r = rows[s:s + TANGENTS.noisy_block]
+        _, nb = knn(P, k, tree=tree, rows=r)
+        T[r], lin[r] = _k.noisy_tangents(P, r, nb, h, sig)
+    return T, lin
+
+
+def coincident(dist, idx, r):
+    """Points with a neighbour earlier in the (internal) order closer than ``r``.
+
+    Parameters
+    ----------
+    dist, idx : (N, k) ndarray
+        Distances and indices of the k nearest neighbours, ascending.
+    r : float
+
+    Returns
+    -------
+    (N,) bool ndarray
+    """
+    dup = np.zeros(len(dist), dtype=bool)
+    rows = np.flatnonzero(dist[:, 0] < r)
+    if len(rows):
+        dup[rows] = ((dist[rows] < r) & (idx[rows] < rows[:, None])).any(axis=1)
+    return dup
+
+
+def lex_order(P):
+    """``np.lexsort(P.T[::-1])``: the rows sorted by the first coordinate, then the next, ...,
+    ties by index (the same permutation, faster: one sort on the first coordinate, then the few
+    rows tied there sorted by the others).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray of float
+        Finite coordinates.
+
+    Returns
+    -------
+    (N,) ndarray of int64
+    """
+    o = np.argsort(P[:, 0])  # not stable: the tied rows are put in index order below
+    x = P[o, 0]
+    tie = x[1:] == x[:-1]
+    if not tie.any():
+        return o
+    pos = np.flatnonzero(np.r_[False, tie] | np.r_[tie, False])  # rows in a run of equal x
+    run = np.cumsum(np.r_[True, ~tie])[pos]
+    sub = o[pos]
+    keys = (sub,) + tuple(P[sub, c] for c in range(P.shape[1] - 1, 0, -1)) + (run,)
+    o[pos] = sub[np.lexsort(keys)]
+    return o

@@ -1,0 +1,389 @@
+"""Stage 4: which points are junction points (the shell test), and junction regions.
+
+Around each point the points reached through the linked graph within a geodesic radius
+``shell_outer * (h + SHELL.widen * noise)`` form, beyond ``shell_inner``, a shell; its connected
+groups are counted (:func:`shell_group_counts`): 1 at a free end, 2 on a curve, 3 or more near
+a junction. Points not in 2 groups, joined by short links, form regions (:func:`junction_regions`);
+a region too large for one junction is re-tested on a smaller shell and split
+(:func:`split_large_regions`). After the chains are known, a junction region may still hide a
+whole short branch (:func:`swallowed_branches`) and a free end's region a fork
+(:func:`fork_possible`, :func:`hidden_fork`): the other places that decide junctions.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from scipy.sparse.csgraph import dijkstra
+
+from . import kernels as _k
+from .chains import end_portion, fit_line, polylen
+from .frames import Frames, Neighbours
+from .graph import Graph, components
+from .params import RobustParams, Scales
+from .thresholds import LINKS, NODES, NOISE, NUMERIC, SHELL, SPLIT
+
+__all__ = ["Regions", "junction_regions", "shell_group_counts", "split_large_regions", "fork_possible",
+           "hidden_fork", "swallowed_branches", "region_paths"]
+
+
+class Regions(NamedTuple):
+    """The junction test's result.
+
+    Attributes
+    ----------
+    groups : (N,) ndarray of int32
+        Shell group count of every point.
+    flagged : (N,) ndarray of bool
+        Points in a region (not in 2 groups, after splitting large regions).
+    reg : (N,) ndarray of int64
+        Region of each flagged point (-1 elsewhere), ids following the lowest point id.
+    n_reg : int
+    """
+
+    groups: np.ndarray
+    flagged: np.ndarray
+    reg: np.ndarray
+    n_reg: int
+
+
+def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, prm: RobustParams) -> Regions:
+    """Stage 4: the shell test on every point, and the regions of the points not on one curve.
+
+    Noise blurs a junction over a few sigma: the shell grows with the noise scale. Regions are
+    the flagged points joined by plain short links (kNN pairs within ``link * h``, any
+    direction); two junctions closer than about two shell radii flag one region, so large
+    ones are re-tested (:func:`split_large_regions`).
+    """
+    N = len(P)
+    hs = nb.h + SHELL.widen * (NOISE.scale * fr.sigma)
+    groups = shell_group_counts(P, hs, graph.indptr, graph.indices, prm.shell_inner, prm.shell_outer,
+                                order=np.arange(N, dtype=np.int64))
+    flagged = groups != 2
+    ka, kb = _k.short_links(nb.h, nb.dist, nb.idx, float(prm.link))
+    flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
+                                              noisy=not fr.clean)
+    return Regions(groups, flagged, reg, n_reg)
+
+
+def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None):
+    """Number of connected groups of linked points in the shell around each point.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        Points.
+    h : (N,) ndarray
+        Local spacing.
+    indptr, indices : ndarray
+        CSR adjacency of the linked graph.
+    shell_inner, shell_outer : float
+        Shell radii in units of ``h``.
+    order : (N,) ndarray of int, optional
+        Visiting order of the points (cache locality only), when already computed.
+
+    Returns
+    -------
+    (N,) ndarray of int32
+    """
+    return _k.shell_groups(
+        np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
+        indptr, indices, float(shell_inner), float(shell_outer), order=order,
+    )
+
+
+def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustParams, noisy: bool):
+    """The junction flags, with regions too large for one junction split in two or more.
+
+    A region of radius over ``SPLIT.radius`` outer shell radii is re-tested on a shell ``SPLIT.fine``
+    times the size. The split is kept when it gives two or more sub-regions (``SPLIT.min_points``
+    points or more, one of them in 3 or more groups), each pair joined by at most one chain of
+    the freed points (linked graph), no freed chain touching three, at least one joining two,
+    and the joined sub-regions over ``SPLIT.sep`` fine outer radii apart: two junctions and the
+    short segment between them. Two chains between the same two (a crossing seen in two halves
+    by the smaller shell) keep the region whole. Under noise (``noisy``) a sub-region
+    with a free-end point (1 group) counts too when another has a junction point: a junction
+    and the tip of a branch shorter than the widened shell, joined by the branch.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    hs : (N,) ndarray
+        Spacing of the shell test (widened for noise).
+    indptr, indices : ndarray
+        CSR adjacency of the linked graph.
+    flagged : (N,) bool ndarray
+        Points not in 2 shell groups.
+    ka, kb : (E,) int ndarray
+        Short kNN links (the region graph).
+    prm : RobustParams
+        ``shell_inner``, ``shell_outer``.
+    noisy : bool
+        The input is noisy.
+
+    Returns
+    -------
+    flagged : (N,) bool ndarray
+        The flags with the split regions' freed points cleared.
+    reg : (N,) int ndarray
+        Region of each flagged point (-1 elsewhere), see :func:`components`.
+    n_reg : int
+    """
+    N, dim = P.shape
+    reg, n_reg = components(N, ka, kb, flagged)
+    if n_reg == 0:
+        return flagged, reg, n_reg
+    ids = np.flatnonzero(flagged)
+    r = reg[ids]
+    cnt = np.bincount(r, minlength=n_reg).astype(float)
+    cen = np.stack([np.bincount(r, weights=P[ids, c], minlength=n_reg) for c in range(dim)], axis=1) / cnt[:, None]
+    rad = np.zeros(n_reg)
+    np.maximum.at(rad, r, np.linalg.norm(P[ids] - cen[r], axis=1))
+    hmean = np.bincount(r, weights=hs[ids], minlength=n_reg) / cnt
+    big = rad > SPLIT.radius * prm.shell_outer * hmean
+    if not big.any():
+        return flagged, reg, n_reg
+    sub = ids[big[r]]
+    fine = _k.shell_groups(P, hs, indptr, indices, SPLIT.fine * prm.shell_inner, SPLIT.fine * prm.shell_outer,
+                           subset=sub)
+    nf = flagged.copy()
+    nf[sub] = fine[sub] != 2
+    reg2, _ = components(N, ka, kb, nf)
+    freed = np.zeros(N, dtype=bool)
+    freed[sub] = ~nf[sub]
+    # the freed points' chains (linked graph) and the sub-regions each touches (short links)
+    fs = np.flatnonzero(freed)
+    lens = indptr[fs + 1] - indptr[fs]
+    ea = np.repeat(fs, lens)
+    eb = indices[np.repeat(indptr[fs] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
+    lab, _ = components(N, ea, eb, freed)
+    t = freed[ka] & nf[kb]
+    touch = np.unique(np.stack([lab[ka[t]], reg2[kb[t]]], axis=1), axis=0)  # sorted by chain
+    tcut = np.searchsorted(touch[:, 0], np.arange(lab.max() + 2))
+    is_j = np.zeros(N, dtype=bool)  # points of the fine test in 3 or more groups
+    is_j[sub] = fine[sub] >= 3
+    is_e = np.zeros(N, dtype=bool)  # and in 1 group (a free end)
+    is_e[sub] = fine[sub] == 1
+    # the points of each big region, grouped (one sort, not one pass per region)
+    bsel = big[r]
+    bi, br = ids[bsel], r[bsel]
+    o = np.argsort(br, kind="stable")
+    bi, br = bi[o], br[o]
+    bcut = np.flatnonzero(np.r_[True, br[1:] != br[:-1], True])
+    out = flagged.copy()
+    for g0, g1 in zip(bcut[:-1], bcut[1:]):
+        b = br[g0]
+        pts = bi[g0:g1]
+        kept = pts[nf[pts]]
+        labs, c2 = np.unique(reg2[kept], return_counts=True)
+        # sub-regions of 2 or more points with a junction point (3 or more groups)
+        jun = np.isin(labs, reg2[kept[is_j[kept]]])
+        if noisy:
+            # under noise also with a free end point, when another is a junction: the shell,
+            # widened for noise, can be longer than a short branch, whose points then all
+            # look like its free end and join the junction's region (the finer shell sees
+            # the branch)
+            tip = np.isin(labs, reg2[kept[is_e[kept]]]) & ~jun
+            good = labs[(c2 >= SPLIT.min_points) & (jun | tip)]
+            ok = len(good) >= 2 and bool(np.isin(good, labs[jun]).any())
+        else:
+            good = labs[(c2 >= SPLIT.min_points) & jun]
+            ok = len(good) >= 2
+        if ok:
+            links = []
+            for c in np.unique(lab[pts[freed[pts]]]):
+                tb = touch[tcut[c]:tcut[c + 1], 1]
+                tb = tb[np.isin(tb, good)]
+                if len(tb) > 2:
+                    ok = False
+                elif len(tb) == 2:
+                    links.append(tuple(tb))
+            # one chain between two sub-regions and no chain among three: two junctions and
+            # the segment between them (two chains between the same two: a crossing split)
+            ok = ok and bool(links) and len(set(links)) == len(links)
+            if ok:  # and the two junctions clearly apart
+                far = SPLIT.sep * SPLIT.fine * prm.shell_outer * hmean[b]
+                for a_, b_ in links:
+                    ca = P[kept[reg2[kept] == a_]].mean(axis=0)
+                    cb = P[kept[reg2[kept] == b_]].mean(axis=0)
+                    ok = ok and np.linalg.norm(ca - cb) > far
+        if ok:
+            out[pts] = False
+            out[kept[np.isin(reg2[kept], good)]] = True
+    if np.array_equal(out, flagged):
+        return flagged, reg, n_reg
+    return (out, *components(N, ka, kb, out))
+
+
+def fork_possible(P, sc: Scales, prm: RobustParams, ids, rid):
+    """False when :func:`hidden_fork` surely finds no fork (no paths needed): a region of
+    under 6 points, or all within ``NODES.fork`` shell radii of the entry point (the second tip lies
+    that far from the first path, which starts at the entry)."""
+    h = sc.h
+    if len(rid) < NODES.fork_min_points:
+        return False
+    hs = float(np.median(h[rid])) + SHELL.widen * sc.noise
+    far = np.sqrt(((P[rid] - P[int(ids[-1])]) ** 2).sum(axis=1).max())
+    return bool(far > NODES.fork * prm.shell_outer * hs * (1 - NUMERIC.rel))
+
+
+def hidden_fork(P, sc: Scales, prm: RobustParams, ids, rid, paths):
+    """A fork (junction and two free branches) hidden in a free end's region, or None.
+
+    The region is searched from the chain's last point ``ids[-1]``: the geodesically farthest
+    point is one tip; a second tip lies over ``NODES.fork`` shell radii away from that path, both
+    branches from the point where the paths part are over ``min_spur`` spacings long. Returns
+    the chain's extension (ids, outward, up to the fork), the node (least-squares intersection
+    of the three branches' lines) and the two branches (ids ordered from the node out).
+    ``paths``: the region's :func:`region_paths` from ``ids[-1]``; the caller runs it only for
+    the regions that pass :func:`fork_possible`.
+    """
+    h = sc.h
+    hl = float(np.median(h[rid]))
+    noise = sc.noise
+    hs = hl + SHELL.widen * noise
+    S, g, pred = paths
+    fin = np.isfinite(g)
+    if fin.sum() < NODES.fork_min_points:
+        return None
+    gg = np.where(fin, g, -1.0)
+    t1 = int(np.argmax(gg))
+    p1 = _path_to(pred, t1)
+    X = P[S]
+    d1 = np.min(np.linalg.norm(X[:, None, :] - X[p1][None, :, :], axis=2), axis=1)
+    d1[~fin] = -1.0
+    t2 = int(np.argmax(d1))
+    if d1[t2] <= NODES.fork * prm.shell_outer * hs:
+        return None
+    p2 = _path_to(pred, t2)
+    m = min(len(p1), len(p2))
+    k = int(np.flatnonzero(np.r_[p1[:m] != p2[:m], True])[0])  # first index where they differ
+    if k == 0:
+        return None
+    f = k - 1  # the fork point: last common one
+    l1, l2 = S[p1[f:]], S[p2[f:]]
+    if min(polylen(P[l1]), polylen(P[l2])) < prm.min_spur * hl:
+        return None
+    stem = np.r_[np.asarray(ids), S[p1[1:f + 1]]]
+    dim = P.shape[1]
+    A = np.zeros((dim, dim))
+    bb = np.zeros(dim)
+    span = NODES.fit_span + NODES.fit_noise * noise / hl
+    for br in (stem, l1[::-1], l2[::-1]):
+        cc, u = fit_line(end_portion(P, h, br, span=span))
+        if u is None:
+            continue
+        M = np.eye(dim) - np.outer(u, u)
+        A += M
+        bb += M @ cc
+    anchor = P[S[p1[f]]]
+    A += NODES.fork_pull * np.eye(dim)
+    bb += NODES.fork_pull * anchor
+    x = np.linalg.solve(A, bb)
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm.shell_outer * hs:
+        x = anchor
+    return S[p1[1:f]], x, [l1[1:], l2[1:]]
+
+
+def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):
+    """Free branches wholly inside a junction region, as id lists ordered from node ``x`` out.
+
+    A region point far from the node (over ``NODES.swallow`` shell radii) in a direction no incident
+    branch takes is the tip of a branch shorter than the shell radius (a free end in a sparse
+    place): the region points along the segment from the node to it, without a gap, form it.
+    """
+    h = sc.h
+    if len(rid) < NODES.swallow_min_points:
+        return []
+    hl = float(np.median(h[rid]))
+    noise = sc.noise
+    hs = hl + SHELL.widen * noise
+    dirs = []
+    for ci, s in inc:
+        c = live[ci]
+        ids = c.ids if s == 1 else c.ids[::-1]
+        E = end_portion(P, h, np.asarray(ids), span=NODES.fit_span)
+        u = E.mean(axis=0) - x
+        nu = np.linalg.norm(u)
+        if nu > 0:
+            dirs.append(u / nu)
+    if not dirs:
+        return []
+    X = P[rid] - x
+    d = np.linalg.norm(X, axis=1)
+    cosb = (X @ np.asarray(dirs).T).max(axis=1) / np.maximum(d, NUMERIC.tiny)
+    cand = np.flatnonzero((d > NODES.swallow * prm.shell_outer * hs) & (cosb < NODES.swallow_cos))
+    if not len(cand):
+        return []
+    tip = cand[np.lexsort((np.arange(len(cand)), -d[cand]))[0]]
+    u = X[tip] / d[tip]
+    proj = X @ u
+    perp = np.sqrt(np.maximum(d * d - proj * proj, 0.0))
+    lim = max(sc.width * hl, LINKS.strip_noise * noise) * NODES.walk_dev
+    on = np.flatnonzero((proj > 0) & (proj <= d[tip] * (1 + NUMERIC.rel)) & (perp <= lim))
+    on = on[np.argsort(proj[on], kind="stable")]
+    steps = np.diff(np.r_[0.0, proj[on]])
+    if not len(on) or steps.max() > prm.link * hl + LINKS.gap_noise * noise:
+        return []
+    return [rid[on]]
+
+
+def region_paths(P, sc: Scales, items):
+    """Dijkstra on the linked graph restricted to each region and its entry point.
+
+    ``items``: ``(rid, entry)`` pairs. All regions run in one multi-source call on the union
+    of their (disjoint) subgraphs. Returns, per item, the point ids ``S`` (``S[0] = entry``,
+    then the other region points ascending), the geodesic distances from the entry and the
+    predecessor of each (local positions in ``S``; -9999 for none).
+    """
+    from scipy.sparse import csr_matrix
+    indptr, indices = (sc.indptr, sc.indices)
+    if not items:
+        return []
+    # per item: the entry, then the other region points sorted and unique (as
+    # np.setdiff1d(rid, [entry])), all items in one sort
+    G = len(items)
+    ent = np.array([entry for _, entry in items], dtype=np.int64)
+    rl = np.array([len(rid) for rid, _ in items], dtype=np.int64)
+    flat = np.concatenate([np.asarray(rid, dtype=np.int64) for rid, _ in items])
+    fg = np.repeat(np.arange(G, dtype=np.int64), rl)
+    o = np.lexsort((flat, fg))
+    flat, fg = flat[o], fg[o]
+    keep = np.ones(len(flat), dtype=bool)
+    keep[1:] = (flat[1:] != flat[:-1]) | (fg[1:] != fg[:-1])
+    keep &= flat != ent[fg]
+    flat, fg = flat[keep], fg[keep]
+    sizes = 1 + np.bincount(fg, minlength=G).astype(np.int64)
+    start = np.r_[0, np.cumsum(sizes)[:-1]]
+    grp = np.repeat(np.arange(G, dtype=np.int64), sizes)
+    U = np.empty(int(sizes.sum()), dtype=np.int64)
+    U[start] = ent
+    rest = np.ones(len(U), dtype=bool)
+    rest[start] = False
+    U[rest] = flat
+    Ss = [U[a:a + n] for a, n in zip(start.tolist(), sizes.tolist())]
+    # position in U of (point, group): key point * G + group (a point may be in two groups)
+    key = U * G + grp
+    srt = np.argsort(key, kind="stable")
+    ks = key[srt]
+    cnt = indptr[U + 1] - indptr[U]
+    rows = np.repeat(np.arange(len(U)), cnt)
+    starts = np.repeat(indptr[U] - np.r_[0, np.cumsum(cnt)[:-1]], cnt)
+    nb = indices[np.arange(len(rows)) + starts]
+    want = nb * G + grp[rows]
+    pos = np.minimum(np.searchsorted(ks, want), len(ks) - 1)
+    ok = ks[pos] == want
+    ea, eb = rows[ok], srt[pos[ok]]
+    w = np.sqrt(((P[U[ea]] - P[U[eb]]) ** 2).sum(axis=1)) + NUMERIC.tiny
+    M = csr_matrix((w, (ea, eb)), shape=(len(U), len(U)))
+    g, pred, _ = dijkstra(M, directed=False, indices=start, min_only=True, return_predecessors=True)
+    pred = np.where(pred >= 0, pred - start[grp], pred)
+    return [(S, g[o:o + n], pred[o:o + n]) for S, o, n in zip(Ss, start, sizes)]
+
+
+def _path_to(pred, j):
+    out = [j]
+    while pred[out[-1]] >= 0:
+        out.append(int(pred[out[-1]]))
+    return np.asarray(out[::-1], dtype=np.int64)

@@ -1,0 +1,126 @@
+"""The user's keywords (:class:`RobustParams`) and the scales estimated once per input (:class:`Scales`)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ...errors import InputError
+from .thresholds import DEFAULTS
+
+__all__ = ["RobustParams", "Scales"]
+
+_POSITIVE = ("k", "shell_inner", "shell_outer", "link", "link_width", "min_spur")
+
+
+@dataclass(frozen=True)
+class RobustParams:
+    """The robust method's keywords, validated once (every radius in local spacings h).
+
+    Parameters
+    ----------
+    spacing : float or None
+        Sampling spacing h used everywhere; None: estimated per point.
+    k : int
+        Neighbours per point for the linked graph.
+    shell_inner, shell_outer : float
+        Radii of the junction-test shell.
+    link : float
+        Longest link between two points.
+    link_width : float
+        A link's far end lies within this many spacings of the tangent line through one end.
+    min_spur : float
+        Spurs and isolated pieces shorter than this are dropped.
+    smooth : bool
+        Replace each curve by a smoothing spline through its end nodes.
+    smoothing : float or None
+        Smoothing factor per point in squared spacings (None: from the noise estimate).
+    """
+
+    spacing: float | None = None
+    k: int = DEFAULTS.k
+    shell_inner: float = DEFAULTS.shell_inner
+    shell_outer: float = DEFAULTS.shell_outer
+    link: float = DEFAULTS.link
+    link_width: float = DEFAULTS.link_width
+    min_spur: float = DEFAULTS.min_spur
+    smooth: bool = False
+    smoothing: float | None = None
+
+    @classmethod
+    def from_keywords(cls, **given: Any) -> "RobustParams":
+        """Validate the keywords of :func:`~.pipeline.reconstruct_robust` (None: the default).
+
+        Raises
+        ------
+        InputError
+            A radius or count that is not a positive finite number, ``k`` under 4, the outer
+            shell not larger than the inner one, a bad spacing or smoothing factor.
+        """
+        vals: dict[str, Any] = {}
+        for name in _POSITIVE:
+            val = given.get(name)
+            if val is None:
+                continue
+            if not np.isfinite(val) or val <= 0:
+                raise InputError(f"{name} must be a positive number, got {val!r}")
+            vals[name] = val
+        vals["k"] = int(vals.get("k", DEFAULTS.k))
+        if vals["k"] < DEFAULTS.k_min:
+            raise InputError(f"k must be at least {DEFAULTS.k_min}, got {vals['k']}")
+        inner = vals.get("shell_inner", DEFAULTS.shell_inner)
+        outer = vals.get("shell_outer", DEFAULTS.shell_outer)
+        if outer <= inner:
+            raise InputError(f"shell_outer ({outer}) must be larger than shell_inner ({inner})")
+        spacing, smoothing = given.get("spacing"), given.get("smoothing")
+        if spacing is not None and (not np.isfinite(spacing) or spacing <= 0):
+            raise InputError(f"spacing must be a positive number, got {spacing!r}")
+        if smoothing is not None and (not np.isfinite(smoothing) or smoothing < 0):
+            raise InputError(f"smoothing must be a non-negative number, got {smoothing!r}")
+        return cls(spacing=spacing, smoothing=smoothing, smooth=bool(given.get("smooth", False)), **vals)
+
+    def report(self) -> dict[str, Any]:
+        """The keywords as reported in the network's ``parameters`` (before the estimates)."""
+        out = {name: getattr(self, name) for name in _POSITIVE}
+        out["smooth"] = self.smooth
+        return out
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Scales:
+    """What the method estimates once per input and every later stage reads.
+
+    Attributes
+    ----------
+    h : (N,) ndarray of float
+        Local sampling spacing of every point.
+    hmed : float
+        The median spacing.
+    sigma : float
+        Estimated noise standard deviation per coordinate (0 on clean input).
+    noise : float
+        The noise scale of the radii (``NOISE.scale * sigma``).
+    clean : bool
+        The input is noise-free (``sigma`` under ``SPACING.dedup_noise`` median spacings).
+    width : float
+        The link width in spacings (``max(link_width, 0)``).
+    indptr, indices : ndarray of int64
+        CSR adjacency of the linked graph.
+    tree : scipy.spatial.cKDTree
+        The k-d tree over the points (of the k-nearest-neighbour query).
+    """
+
+    h: np.ndarray
+    hmed: float
+    sigma: float
+    noise: float
+    clean: bool
+    width: float
+    indptr: np.ndarray = field(repr=False)
+    indices: np.ndarray = field(repr=False)
+    tree: Any = field(repr=False)

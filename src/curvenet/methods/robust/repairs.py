@@ -1,0 +1,515 @@
+"""Stage 6: the repairs, in order: what noise and sparse sampling break, fixed on the topology.
+
+Each repair is ``repair(topo, sc, prm) -> None``: it reads the :class:`~.topology.Topology`,
+the :class:`~.params.Scales` and the user's :class:`~.params.RobustParams`, and changes the
+topology only through its methods. :data:`ORDER` lists them in the order
+:func:`run_repairs` applies them (the order matters: each docstring says what it expects).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ... import _sigint
+from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, polylen, step_lengths
+from .junctions import swallowed_branches
+from .nodes import free_end, junction, junction_positions
+from .params import RobustParams, Scales
+from .thresholds import LINKS, NODES, NUMERIC, REPAIRS
+from .topology import Topology
+
+__all__ = ["ORDER", "run_repairs", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
+           "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "join_through_pass_regions",
+           "merge_close_junctions", "close_tip_pairs"]
+
+
+def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """A region passed through by one curve (valence 2) right next to a junction region joins it.
+
+    The failure: noise cuts a crossing's region in two, one half seen as a plain pass-through.
+    Each valence-2 region merges into the nearest region of valence 2 or more within
+    ``link * REPAIRS.tip_gap`` spacings (plus ``LINKS.gap_noise`` times the noise).
+    """
+    from scipy.spatial import cKDTree
+
+    P, h, regions, v = topo.P, sc.h, topo.regions, topo.v
+    cand = [r for r in range(len(regions)) if v[r] >= 2 and len(regions[r])]
+    two = [r for r in cand if v[r] == 2]
+    if not two or len(cand) < 2:
+        return
+    noise = sc.noise
+    lab = np.repeat(np.asarray(cand, dtype=np.int64), [len(regions[r]) for r in cand])
+    ids = np.concatenate([regions[r] for r in cand])
+    tree = cKDTree(P[ids])
+    for r in two:
+        pts = regions[r]
+        if len(pts) == 0 or v[r] != 2:
+            continue
+        gap = prm.link * REPAIRS.tip_gap * float(np.median(h[pts])) + LINKS.gap_noise * noise
+        best = None
+        for k_list, p_ in zip(tree.query_ball_point(P[pts], gap), pts):
+            for k in k_list:
+                t = int(lab[k])
+                if t == r or len(regions[t]) == 0:
+                    continue
+                d = float(np.linalg.norm(P[ids[k]] - P[p_]))
+                if best is None or (d, t) < best:
+                    best = (d, t)
+        if best is None:
+            continue
+        t = best[1]
+        lab[lab == r] = t
+        topo.absorb(r, t)
+
+
+def absorb_short_loops(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """A short chain leaving a region and coming back to it lies inside the junction: absorbed.
+
+    The failure: a few points of a junction region escape the flagging and form a chain from
+    the region back to itself. Such a chain staying within ``shell_outer`` spacings of the
+    region's centre joins the region.
+    """
+    P, h = topo.P, sc.h
+    for i, c in enumerate(topo.chains):
+        r = c.ends[0]
+        if topo.alive[i] and not c.closed and r == c.ends[1] and len(topo.regions[r]):
+            hl = float(np.median(h[c.ids]))
+            cen = P[topo.regions[r]].mean(axis=0)
+            if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm.shell_outer * hl:
+                topo.absorb_chain(i, r)
+
+
+def absorb_orphans(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """A flagged clump touching no chain, just beyond a free end, joins that free end's region.
+
+    The failure: noise cuts the link between a free end and the last points of its curve,
+    which are left as a region of their own. Such a region (no chain end ever listed there)
+    joins the nearest free end within ``link * REPAIRS.tip_gap`` spacings (plus the noise gap).
+    """
+    from scipy.spatial import cKDTree
+
+    P, h, regions, v = topo.P, sc.h, topo.regions, topo.v
+    tips = [r for r in range(len(regions)) if v[r] == 1]
+    orphans = [r for r in range(len(regions)) if v[r] == 0 and len(regions[r]) and not topo.listed(r)]
+    if not tips or not orphans:
+        return
+    tip_pts, tip_of = [], []
+    for r in tips:
+        ids = list(regions[r])
+        for i, s in topo.incident(r):
+            ids.append(int(topo.chains[i].ids[-1] if s == 1 else topo.chains[i].ids[0]))
+        tip_pts += ids
+        tip_of += [r] * len(ids)
+    tip_pts = np.asarray(tip_pts, dtype=np.int64)
+    tip_of = np.asarray(tip_of, dtype=np.int64)
+    tree = cKDTree(P[tip_pts])
+    noise = sc.noise
+    for r in orphans:
+        ids = regions[r]
+        gap = prm.link * REPAIRS.tip_gap * float(np.median(h[ids])) + LINKS.gap_noise * noise
+        d, k = tree.query(P[ids], distance_upper_bound=gap)
+        ok = np.isfinite(d)
+        if not ok.any():
+            continue
+        o = np.lexsort((tip_pts[k[ok]], d[ok]))[0]
+        topo.absorb(r, int(tip_of[k[ok][o]]))
+
+
+def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """A free end right next to a junction region belongs to it (its link was lost to noise).
+
+    Where the free end's node would be (:func:`~.nodes.free_end`), the nearest point of a region
+    of valence 2 or more within ``link * REPAIRS.tip_gap`` spacings (plus the noise gap) takes
+    the free end's region, unless the chain's other end is that very junction (a short spur:
+    left to :func:`prune_spurs`).
+    """
+    from scipy.spatial import cKDTree
+
+    P, h, regions, v = topo.P, sc.h, topo.regions, topo.v
+    big = [r for r in range(len(regions)) if v[r] >= 2 and len(regions[r])]
+    tips = [r for r in range(len(regions)) if v[r] == 1]
+    if not big or not tips:
+        return
+    lab = np.repeat(np.asarray(big, dtype=np.int64), [len(regions[r]) for r in big])
+    ids = np.concatenate([regions[r] for r in big])
+    tree = cKDTree(P[ids])
+    noise = sc.noise
+    # a tip's chain end and region do not change below before its turn (a merge only moves
+    # the ends at the tip merged): the end portions of all in one call
+    one = []
+    for r in tips:
+        inc = topo.incident(r)
+        if len(inc) == 1:
+            i, s = inc[0]
+            one.append((r, i, s, topo.end_ids(i, s)))  # towards the tip
+    ms = end_counts(P, h, [x[3] for x in one], REPAIRS.tip_span).tolist()
+    if not one:
+        return
+    # where each free end's node would be, then the nearest junction point of each (one query:
+    # the tree does not change below)
+    tip = np.array([free_end(P, h, cids, regions[r], m=m)[1] for (r, _, _, cids), m in zip(one, ms)])
+    gap = prm.link * REPAIRS.tip_gap * h[[int(x[3][-1]) for x in one]] + LINKS.gap_noise * noise
+    dk, kk = tree.query(tip, distance_upper_bound=float(gap.max()))
+    # the bound is per tip: beyond it, none (as a query bounded by it; at the bound itself,
+    # within rounding, that query is run)
+    dk[dk > gap * (1 + NUMERIC.rel)] = np.inf
+    for j in np.flatnonzero(np.isfinite(dk) & (dk >= gap * (1 - NUMERIC.rel))).tolist():
+        dk[j], kk[j] = tree.query(tip[j], distance_upper_bound=float(gap[j]))
+    for (r, i, s, cids), d, k in zip(one, dk.tolist(), kk.tolist()):
+        if not np.isfinite(d):
+            continue
+        t = int(lab[k])
+        if topo.chains[i].ends[1 - s] == t:
+            continue  # a short spur of that very junction: left to the pruning
+        topo.absorb(r, t)
+
+
+def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Two free ends facing each other across a small gap are one curve broken by noise: joined.
+
+    Two free-end regions (with their chains' last points) within ``link * REPAIRS.tip_gap``
+    median spacings of each other merge (the later into the earlier, pairs in order).
+    """
+    P, regions, v = topo.P, topo.regions, topo.v
+    tips = []
+    for i, c in enumerate(topo.chains):
+        if topo.alive[i] and not c.closed:
+            for s in (0, 1):
+                r = c.ends[s]
+                if v[r] == 1:
+                    end_pt = c.ids[-1] if s == 1 else c.ids[0]
+                    tips.append((r, np.r_[regions[r], end_pt].astype(np.int64)))
+    if len(tips) < 2:
+        return
+    gap_max = prm.link * REPAIRS.tip_gap * sc.hmed
+    # only pairs of tips closer than the threshold can merge: found with a k-d tree, then
+    # visited in the same (a, b) order as a double loop over all pairs
+    for a, b in close_tip_pairs(P, [ia for _, ia in tips], gap_max):
+        ra, ia = tips[a]
+        rb, ib = tips[b]
+        if ra == rb:
+            continue
+        gap = np.min(np.linalg.norm(P[ia][:, None, :] - P[ib][None, :, :], axis=2))
+        if gap <= gap_max:
+            topo.absorb(rb, ra)
+            tips[b] = (ra, ib)
+
+
+def close_tip_pairs(P, tips, r):
+    """Pairs ``(a, b)``, ``a < b``, of point sets ``tips[a]``, ``tips[b]`` that may come within
+    ``r`` of each other (a superset: the caller checks the exact distance), sorted."""
+    from scipy.spatial import cKDTree
+
+    own = np.repeat(np.arange(len(tips)), [len(t) for t in tips])
+    pts = P[np.concatenate(tips)] if len(own) else np.zeros((0, P.shape[1]))
+    pairs = cKDTree(pts).query_pairs(r * (1 + NUMERIC.rel_loose) + NUMERIC.tiny, output_type="ndarray")
+    a, b = own[pairs[:, 0]], own[pairs[:, 1]]
+    a, b = np.minimum(a, b), np.maximum(a, b)
+    ab = np.unique(np.stack([a[a != b], b[a != b]], axis=1), axis=0)
+    return [(int(x), int(y)) for x, y in ab]
+
+
+def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """A free end stopping short of another curve is a junction whose link was lost: attached.
+
+    The failure: a T whose stem does not reach the bar (noise or sparse sampling). A free end
+    with a point of another chain within ``REPAIRS.attach * link`` spacings (plus the noise gap)
+    ahead of it (within 45 degrees of its direction) attaches there: the other chain is split
+    at its nearest point, which becomes a new junction region holding the free end's region
+    too; near an end of the other chain, the free end joins the region there instead. Tips
+    are handled in chain order; each moves at most once.
+    """
+    P, h, chains, regions, v = topo.P, sc.h, topo.chains, topo.regions, topo.v
+    N = len(P)
+    owner = np.full(N, -1, dtype=np.int64)
+    for i, c in enumerate(chains):
+        if topo.alive[i]:
+            owner[c.ids] = i
+    if not (owner >= 0).any():
+        return
+    # the tree over all points (built for the k-NN query): the points of no chain it returns
+    # as well are left out below (owner -1), as are those of split-off cores
+    tree = sc.tree
+    noise = sc.noise
+    tips = [(i, s) for i, c in enumerate(chains) if topo.alive[i] and not c.closed
+            for s in (0, 1) if v[c.ends[s]] == 1]
+    if not tips:
+        return
+    # what each tip needs, for all at once: a tip still to be handled has the chain end and
+    # region it had here (a move or a split changes only the valence-1 ends it involves), and
+    # its chain's points unless that chain was split meanwhile (then its end is redone below)
+    tchain = [chains[i] for i, _ in tips]
+    tids = [c.ids if s == 1 else c.ids[::-1] for c, (_, s) in zip(tchain, tips)]  # towards the tip
+    tms = end_counts(P, h, tids, REPAIRS.attach_span).tolist()
+    tpts = [np.r_[regions[c.ends[s]], ids[-1]].astype(np.int64) for c, (_, s), ids in zip(tchain, tips, tids)]
+    reach_of = REPAIRS.attach * prm.link * h[[int(ids[-1]) for ids in tids]] + LINKS.gap_noise * noise
+    # chain points within reach of each tip point (one threaded query)
+    allp = np.concatenate(tpts)
+    with _sigint.held():
+        near = tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
+    cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
+    qall = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))
+    qoff = np.r_[0, np.cumsum(cnt)]
+    toff = np.r_[0, np.cumsum([len(x) for x in tpts])].tolist()
+    # most tips have no point of another chain ahead within reach: found for all at once (a
+    # test a little looser than the one below, with the owners as they are now: a tip whose
+    # chain is unchanged when its turn comes has no more candidates then)
+    tip_of = np.repeat(np.repeat(np.arange(len(tips)), np.diff(toff)), cnt)  # the tip of each pair
+    e_t = np.array([int(ids[-1]) for ids in tids], dtype=np.int64)
+    # (the tip direction as below: from the first point of end_portion's end piece, ids[-m], to
+    # the tip; a prefilter only: the exact test below still runs on every tip kept)
+    b_t = np.array([int(ids[-m]) if m <= len(ids) else int(ids[0]) for ids, m in zip(tids, tms)], dtype=np.int64)
+    u_t = P[e_t] - P[b_t]
+    u_t /= np.maximum(np.sqrt((u_t * u_t).sum(axis=1)), NUMERIC.tiny)[:, None]
+    jq = owner[qall]
+    vq_all = P[qall] - P[e_t[tip_of]]
+    cand = ((jq >= 0) & (jq != np.array([i for i, _ in tips], dtype=np.int64)[tip_of])
+            & ((vq_all * u_t[tip_of]).sum(axis=1)
+               >= (REPAIRS.attach_cos - NUMERIC.rel_loose) * np.sqrt((vq_all * vq_all).sum(axis=1))))
+    has_cand = np.bincount(tip_of[cand], minlength=len(tips)) > 0
+    for t_, (i, s) in enumerate(tips):
+        c = chains[i]
+        if not topo.alive[i] or c.closed or topo.v[c.ends[s]] != 1:
+            continue
+        if not has_cand[t_] and c is tchain[t_]:
+            continue
+        r = c.ends[s]
+        ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
+        e = int(ids[-1])
+        same = c is tchain[t_]
+        E = end_portion(P, h, ids, span=REPAIRS.attach_span, m=tms[t_] if same else None)
+        u = E[0] - E[-1]
+        nu = np.linalg.norm(u)
+        if nu == 0:
+            continue
+        u = u / nu
+        # chain points of other chains within reach of the tip, ahead of it (within 45 degrees
+        # of its direction): the nearest (then lowest id) is where it attaches
+        if same:
+            tip_pts = tpts[t_]
+            a0, a1 = toff[t_], toff[t_ + 1]
+            if qoff[a1] == qoff[a0]:
+                continue
+            q = qall[qoff[a0]:qoff[a1]]
+            tp = np.repeat(tip_pts, cnt[a0:a1])
+        else:  # its chain was split meanwhile: queried again
+            tip_pts = np.r_[regions[r], e].astype(np.int64)
+            near_t = tree.query_ball_point(P[tip_pts], REPAIRS.attach * prm.link * float(h[e]) + LINKS.gap_noise * noise)
+            cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
+            if not cnt_t.sum():
+                continue
+            q = np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])
+            tp = np.repeat(tip_pts, cnt_t)
+        j = owner[q]
+        vq = P[q] - P[e]
+        ok = (j >= 0) & (j != i) & ((vq @ u) >= REPAIRS.attach_cos * np.sqrt((vq * vq).sum(axis=1)))
+        ok[ok] = [topo.alive[x] for x in j[ok].tolist()]
+        if not ok.any():
+            continue
+        q, j, tp = q[ok], j[ok], tp[ok]
+        d = np.sqrt(((P[q] - P[tp]) ** 2).sum(axis=1))
+        b = np.lexsort((q, d))[0]
+        q, j = int(q[b]), int(j[b])
+        cj = chains[j]
+        k = int(np.flatnonzero(cj.ids == q)[0])
+        m = len(cj.ids)
+        near_end = REPAIRS.attach_end_points
+        if not cj.closed and (k < near_end or k > m - 1 - near_end):
+            # near an end of the other chain: join its region there
+            rr = cj.ends[0 if k < near_end else 1]
+            if rr == r:
+                continue
+            topo.absorb(r, rr)
+            continue
+        # split chain j at q: q and its two chain neighbours form the new junction region
+        core = topo.split_chain(j, max(k - 1, 0), min(k + 2, m), i, s)
+        owner[core] = -1
+        if not cj.closed:  # the part after the split is a new chain
+            jn = len(chains) - 1
+            owner[chains[jn].ids] = jn
+
+
+def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Short spurs (junction to free end) and small isolated pieces are dropped.
+
+    A chain from a junction to a free end, or between two free ends, whose polyline plus the
+    extent of its free-end regions is under ``min_spur`` spacings goes; so does a closed loop
+    under twice that. Up to ``REPAIRS.prune_passes`` passes (a dropped spur can leave another).
+    """
+    P, h, chains, regions = topo.P, sc.h, topo.chains, topo.regions
+    # a chain is short only if its polyline is under min_spur (a loop: twice) times its largest
+    # spacing: the exact tests below run only for those (the sums here are within rounding)
+    length, hmax = chain_lengths(P, h, chains)
+    short_loop = (length <= 2 * prm.min_spur * hmax * (1 + NUMERIC.rel)).tolist()
+    short = (length <= prm.min_spur * hmax * (1 + NUMERIC.rel)).tolist()
+    for _ in range(REPAIRS.prune_passes):
+        v = topo.v
+        changed = False
+        for i, c in enumerate(chains):
+            if not topo.alive[i] or not short_loop[i]:
+                continue
+            if c.closed:
+                hl = float(np.median(h[c.ids])) if len(c.ids) else sc.hmed
+                if polylen(P[c.ids]) < 2 * prm.min_spur * hl:
+                    topo.drop(i)
+                    changed = True
+                continue
+            a, b = c.ends
+            free_a, free_b = v[a] == 1, v[b] == 1
+            if not (free_a or free_b) or not short[i]:
+                continue
+            hl = float(np.median(h[c.ids])) if len(c.ids) else sc.hmed
+            length = polylen(P[c.ids])
+            ext = sum(extent(P, regions[r]) for r in (a, b) if v[r] == 1)
+            if length + ext < prm.min_spur * hl:
+                if free_a and free_b or v[a] >= NODES.junction_valence or v[b] >= NODES.junction_valence:
+                    topo.drop(i)
+                    changed = True
+        if not changed:
+            break
+
+
+def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Chains are joined through every region of valence 2 (no node there), in region order.
+
+    A region passed through by one curve is no node: its two chain ends become one curve (a
+    chain joined to itself, a closed loop). Except where a short free branch hides in the
+    region (a fork passed through by one curve in a sparse place,
+    :func:`~.junctions.swallowed_branches`): the region stays a junction.
+    """
+    P = topo.P
+    for r in np.flatnonzero(topo.v == 2).tolist():
+        inc = sorted(set(topo.incident(r)))
+        (i, _), (j, _) = inc
+        if i != j and len(topo.regions[r]) >= NODES.swallow_min_points:
+            X, maybe = junction_positions(P, sc, prm, [(topo.chains, inc, topo.regions[r])])
+            if maybe[0] and swallowed_branches(P, sc, prm, topo.chains, inc, topo.regions[r], X[0]):
+                continue
+        topo.join_through(r, inc)
+
+
+def merge_close_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Junction b merges into junction a when a chain a-b is short and b's other branches aim at a.
+
+    The failure: two branches of one junction ran together for a while (strokes drawn into a
+    hub), so the junction was seen twice. "Short": at most ``REPAIRS.merge_len`` spacings
+    (median spacings for a chain sampled ``REPAIRS.dense`` times as densely: two strokes run
+    together). "Aim at a": a's node (least-squares intersection) lies within
+    ``max(width * h, LINKS.strip_noise * noise)`` of the line fitted on each of b's other
+    branches, or within ``REPAIRS.merge_tan`` times its distance from the branch end (10
+    degrees: a fan of curved strokes converging on one node parts a few degrees apart;
+    ``REPAIRS.merge_tan_hub``, 20 degrees, for a doubled chain into a junction of
+    ``REPAIRS.hub_valence`` curves or more). The chain between them joins the merged region.
+    """
+    P, h, chains, regions = topo.P, sc.h, topo.chains, topo.regions
+    v = topo.v
+    noise = sc.noise
+    # lengths of all chains at once (the ids do not change below); a chain longer than
+    # merge_len times its largest spacing is longer than merge_len times its median one
+    lens = [len(c.ids) for c in chains]
+    flat = np.concatenate([c.ids for c in chains]).astype(np.int64) if chains else np.zeros(0, np.int64)
+    step = step_lengths(P, flat)[:-1]
+    cum = np.r_[0.0, np.cumsum(step)]
+    off = np.r_[0, np.cumsum(lens)].astype(np.int64)
+    hmax = np.zeros(len(chains))
+    nz = np.flatnonzero(np.asarray(lens) > 0)
+    if len(nz):
+        hmax[nz] = np.maximum.reduceat(h[flat], off[nz])
+    # (two strokes running together are sampled twice as densely: "short" is measured in the
+    # median spacing where the chain is sampled REPAIRS.dense times as densely or more, else
+    # in its own; such a doubled chain into a hub gets the wider aim REPAIRS.merge_tan_hub)
+    hglob = sc.hmed
+    jv = NODES.junction_valence
+    # the short chains between two junctions (a merge only maps one junction onto another and
+    # raises its valence, so no other chain can become one below)
+    cand = []
+    doubled = {}
+    for ci in range(len(chains)):
+        c = chains[ci]
+        if not topo.alive[ci] or c.closed:
+            continue
+        a, b = c.ends
+        if a == b or v[a] < jv or v[b] < jv:
+            continue
+        # polyline length: the steps inside the chain (not the one joining it to the next)
+        length = cum[off[ci + 1] - 1] - cum[off[ci]] if lens[ci] > 1 else 0.0
+        if length > REPAIRS.merge_len * max(hmax[ci], hglob) * (1 + NUMERIC.rel):
+            continue
+        hl = float(np.median(h[c.ids])) if len(c.ids) else hglob
+        dbl = hl * REPAIRS.dense < hglob
+        if polylen(P[c.ids]) > REPAIRS.merge_len * (hglob if dbl else hl):
+            continue
+        cand.append(ci)
+        doubled[ci] = dbl
+
+    # the nodes of their junctions in one batch; a merge changes only its two junctions
+    need = sorted({r for ci in cand for r in chains[ci].ends})
+    pos = {}
+    if need:
+        X, _ = junction_positions(P, sc, prm, [(chains, topo.incident(r), regions[r]) for r in need])
+        pos = dict(zip(need, X))
+    for ci in cand:
+        c = chains[ci]
+        a, b = c.ends
+        if not topo.alive[ci] or a == b or v[a] < jv or v[b] < jv:
+            continue
+        for x_r, y_r in ((a, b), (b, a)):
+            inc_x = topo.incident(x_r)
+            inc_y = [(i, s) for i, s in topo.incident(y_r) if i != ci]
+            if len(inc_y) < 2:
+                continue
+            if x_r not in pos:
+                pos[x_r] = junction(P, sc, prm, chains, inc_x, regions[x_r])
+            xpos = pos[x_r]
+            if not _aims_at(P, h, sc, chains, inc_y, xpos, v[x_r] >= REPAIRS.hub_valence and doubled[ci], noise):
+                continue
+            # merge y into x, the short chain included
+            pos.pop(x_r, None)
+            pos.pop(y_r, None)
+            topo.drop(ci)
+            topo.absorb(y_r, x_r)
+            topo.regions[x_r] = np.r_[topo.regions[x_r], c.ids].astype(np.int64)
+            break
+
+
+def _aims_at(P, h, sc, chains, inc, xpos, hub, noise) -> bool:
+    """True when every branch ``inc`` (chain, side) aims at ``xpos`` (see merge_close_junctions)."""
+    for i, s in inc:
+        ids = chains[i].ids if s == 1 else chains[i].ids[::-1]
+        E = end_portion(P, h, np.asarray(ids), span=NODES.fit_span + NODES.fit_noise * noise / float(h[ids[-1]]))
+        cc, u = fit_line(E)
+        if u is None:
+            return False
+        r = xpos - cc
+        d = np.sqrt(max(float(r @ r) - float(r @ u) ** 2, 0.0))
+        # within the strip, or within the aim angle as seen from the branch end (a fan of
+        # curves converging on one node parts a few degrees apart)
+        tan = REPAIRS.merge_tan_hub if hub else REPAIRS.merge_tan
+        lim = max(sc.width * float(h[ids[-1]]), LINKS.strip_noise * noise, tan * float(np.linalg.norm(xpos - E[0])))
+        if d > lim or float((E[0] - cc) @ u) * float((xpos - cc) @ u) < 0:
+            return False
+    return True
+
+
+#: The repairs in the order :func:`run_repairs` applies them.
+ORDER = (
+    merge_near_pass_through,
+    absorb_short_loops,
+    absorb_orphans,
+    tips_to_junctions,
+    join_facing_tips,
+    attach_dangling,
+    prune_spurs,
+    join_through_pass_regions,
+    merge_close_junctions,
+    absorb_short_loops,  # a short chain between two merged junctions is now a short loop
+)
+
+
+def run_repairs(topo: Topology, sc: Scales, prm: RobustParams) -> Topology:
+    """Apply every repair of :data:`ORDER` to ``topo`` (changed in place) and return it."""
+    for repair in ORDER:
+        repair(topo, sc, prm)
+    return topo

@@ -1,0 +1,295 @@
+"""Every fixed constant of the robust method, one documented field each, grouped by stage.
+
+Nothing here is tuned per input: these are the method's design constants. The user's keywords
+(shell radii, link length, ...) are :class:`~curvenet.methods.robust.params.RobustParams`.
+Units: ``h`` is the local sampling spacing of a point, ``noise`` the noise scale
+(:data:`NOISE` ``.scale`` times the estimated noise standard deviation, 0 on clean input).
+Each group is a :class:`typing.NamedTuple` with one module-level instance (``SPACING``,
+``TANGENTS``, ...); a test may swap one with ``GROUP._replace(field=value)``.
+
+Where a value came from is said per field; "benchmark" means chosen on the project's
+synthetic models and CASSIE sketches (docs/benchmarks.md), never per input.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Noise", "NOISE", "Links", "LINKS",
+    "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Repairs", "REPAIRS", "Nodes", "NODES",
+    "Curves", "CURVES", "Numeric", "NUMERIC", "Defaults", "DEFAULTS",
+]
+
+
+# ---------------------------------------------------------------------------------- stages
+class Defaults(NamedTuple):
+    """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
+
+    #: neighbours per point for the linked graph
+    k: int = 16
+    #: inner radius of the junction-test shell, in h (a junction's branches are apart there)
+    shell_inner: float = 2.5
+    #: outer radius of the shell, in h
+    shell_outer: float = 5.5
+    #: longest link between two points, in h
+    link: float = 2.5
+    #: a link's far end lies within this many h of the tangent line through one of its ends
+    link_width: float = 1.0
+    #: spurs and isolated pieces shorter than this many h are dropped
+    min_spur: float = 3.0
+    #: the fewest neighbours that give a spacing and a tangent
+    k_min: int = 4
+    #: under this many points there is no network to find (empty result)
+    min_points: int = 5
+
+
+class Layout(NamedTuple):
+    """The internal numbering of the points (cache locality only; results never depend on it)."""
+
+    #: clouds of more points are numbered cell by cell (6% faster at 34,000 points, 15% at 1e6)
+    local_min: int = 20_000
+
+
+class Spacing(NamedTuple):
+    """Stage 1: the local sampling spacing ``h`` and duplicate samples (:mod:`.frames`)."""
+
+    #: neighbours whose mean distance gives the first spacing estimate
+    mean_of: int = 4
+    #: ... divided by this (on a uniformly sampled curve the 4 nearest lie at h, h, 2h, 2h)
+    mean_div: float = 1.5
+    #: the estimate is median-smoothed over the point and this many nearest neighbours
+    smooth_of: int = 8
+    #: a neighbour closer than ``dup`` times the first estimate is the same place sampled twice
+    dup: float = 0.1
+    #: ... or closer than ``dup_k`` times the k-th neighbour's distance over k / 2 (several
+    #: curves ending on one sample make the first estimate tiny)
+    dup_k: float = 0.3
+    #: the compiled spacing kernel takes rows of at most this many neighbours
+    kernel_k_max: int = 128
+    #: rows at a time of the numpy spacing (the (rows, k) temporaries stay small)
+    block: int = 1 << 16
+    #: spacings are raised to this fraction of the smallest positive one (coincident clouds)
+    floor: float = 1e-3
+    #: noise-free samples (estimated noise under ``dedup_noise`` median spacings) closer than
+    #: ``dedup`` median spacings to an earlier one are dropped: overlapping strokes (benchmark)
+    dedup: float = 0.3
+    #: the noise level, in median spacings, under which the input counts as noise-free
+    dedup_noise: float = 0.05
+    #: the spacing range reported: these percentiles of h
+    report_lo: float = 5.0
+    report_hi: float = 95.0
+
+
+class Tangents(NamedTuple):
+    """Stage 2: tangents, their vote and the noise estimate (:mod:`.frames`)."""
+
+    #: neighbours of the strip PCA that refines a tangent
+    strip_m: int = 12
+    #: on noise-free input a neighbour's direction replaces the 4-neighbour direction when it
+    #: scores this much more (under noise the kernels' larger margin): a sparse curve between
+    #: two close parallel curves has its 4 nearest neighbours half across (benchmark)
+    cand_margin_clean: float = 1.5
+    #: a tangent more than 10 degrees (cosine) off a coherent vote of its neighbours is replaced
+    vote_cos: float = float(np.cos(np.radians(10.0)))
+    #: neighbours in the vote on noise-free input
+    vote_m: int = 8
+    #: ... and under noise (a tangent thrown across close curves has more neighbours to outvote it)
+    vote_m_noisy: int = 16
+    #: the vote's coherence ``1 - l2 / l1`` needed to replace a tangent
+    vote_coh: float = 0.6
+    #: picking the nearest strip neighbour on each side favours points pulled towards the
+    #: point: the chord distance is scaled by this (measured on Gaussian noise)
+    rms_bias: float = 1.28
+    #: the chord distance of Gaussian noise of std s per coordinate is s * sqrt(rms_dim (d - 1))
+    rms_dim: float = 1.5
+    #: neighbours of the noisy tangents of the strand test
+    noisy_k: int = 32
+    #: points per block of the noisy tangents' own neighbour query
+    noisy_block: int = 1 << 16
+
+
+class Noise(NamedTuple):
+    """The noise scale of every radius below."""
+
+    #: the noise scale is this many times the estimated noise std
+    scale: float = 1.2
+    #: smoothing (``smooth=True``): the default factor is at least this many squared spacings
+    smooth_min: float = 1e-4
+    #: the smoothing spline's weight on the two end points (pins them at the nodes)
+    smooth_pin: float = 1e3
+    #: a smoothed curve is evaluated at this many times its samples (at least ``smooth_min_out``)
+    smooth_dense: int = 3
+    smooth_min_out: int = 8
+    #: curves of fewer distinct samples are not smoothed
+    smooth_min_points: int = 6
+    #: a closed loop is padded on both sides by this fraction of itself (at least 3 samples)
+    smooth_pad_div: int = 4
+    #: degree of the smoothing spline
+    smooth_degree: int = 3
+
+
+class Links(NamedTuple):
+    """Stage 3: the linked graph (:mod:`.graph`)."""
+
+    #: links may stray from a tangent line by this many times the noise
+    strip_noise: float = 4.5
+    #: links may be longer than ``link * h`` by this many times the noise
+    gap_noise: float = 3.0
+    #: directional links (nearest along the tangent) reach this many times the link length
+    directional: float = 2.0
+    #: below this linearity a point has no reliable tangent and its links are kept
+    lin_min: float = 0.3
+
+
+class Shell(NamedTuple):
+    """Stage 4: the shell test (:mod:`.junctions`)."""
+
+    #: the shell radii grow by this many times the noise (in units of ``shell_*``)
+    widen: float = 1.5
+    #: a point in this many shell groups or more is a junction point (1: a free end, 2: a curve)
+    junction_groups: int = 3
+
+
+class Split(NamedTuple):
+    """Stage 4: regions too large for one junction (:func:`.junctions.split_large_regions`)."""
+
+    #: a region whose radius exceeds this many outer shell radii may hold two junctions (one
+    #: junction's region measures 0.35 to 0.45 on the benchmark)
+    radius: float = 0.65
+    #: it is re-tested on a shell this many times the size
+    fine: float = 0.7
+    #: and split into sub-regions of at least this many points
+    min_points: int = 2
+    #: more than this many fine outer radii apart
+    sep: float = 1.2
+
+
+class Chains(NamedTuple):
+    """Stage 5: chains between regions (:mod:`.chains`)."""
+
+    #: a chain whose points, ordered by distance from one end, form a polyline this many times
+    #: longer than that distance is a cycle of the linked graph (it would zigzag)
+    zigzag: float = 4.0
+    #: ... tested on chains of at least this many points
+    zigzag_min_points: int = 6
+    #: a chain end is the region most in contact with the chain within this many h of it
+    short_reach: float = 4.0
+    #: a loop is cut where its links to both sides lie within this many h of the cut point
+    loop_cut: float = 3.0
+    #: ... or within this factor of its longest link there
+    loop_cut_link: float = 1.01
+    #: a loop is closed when it is longer than this many h
+    loop_min: float = 6.0
+    #: a loop of fewer points is an open piece
+    loop_min_points: int = 3
+    #: an end portion (the last points of a chain over a span) has at least this many points
+    end_min_points: int = 3
+
+
+class Repairs(NamedTuple):
+    """Stage 6: the repairs of :mod:`.repairs` (what noise and sparse sampling break)."""
+
+    #: two tips (or a tip and a region) within this many link lengths are joined
+    tip_gap: float = 1.2
+    #: a free end attaches to a chain at most this many link lengths (plus gap_noise times the
+    #: noise) ahead of it: a link lost to noise; a longer gap on clean samples is in the data
+    attach: float = 1.0
+    #: ... within 45 degrees of its end's direction (cosine)
+    attach_cos: float = float(np.cos(np.radians(45.0)))
+    #: the end portion (in h) that gives a free end's direction for the attach test
+    attach_span: float = 3.0
+    #: a chain point within this many points of the other chain's end joins that end's region
+    attach_end_points: int = 2
+    #: the end portion (in h) that gives a tip's node for the tip-to-junction test
+    tip_span: float = 4.0
+    #: junctions joined by a chain at most this many h long may be one junction
+    merge_len: float = 8.0
+    #: ... when the other branches of one aim at the other within 10 degrees (tangent)
+    merge_tan: float = float(np.tan(np.radians(10.0)))
+    #: a chain sampled this many times as densely as the median is two strokes run together:
+    #: its length is measured in median spacings
+    dense: float = 1.5
+    #: a doubled chain into a hub of this many curves or more may aim within ``merge_tan_hub``
+    hub_valence: int = 5
+    #: 20 degrees (tangent): strokes drawn into a pole part from each other bent
+    merge_tan_hub: float = float(np.tan(np.radians(20.0)))
+    #: passes of the spur pruning (a pruned spur can make another)
+    prune_passes: int = 3
+
+
+class Nodes(NamedTuple):
+    """Stage 7: node placement (:mod:`.nodes`)."""
+
+    #: a region where this many curve ends meet or more is a junction (1: a free end, 2: no node)
+    junction_valence: int = 3
+    #: length (h) of the chain end that gives a chain's direction where it is trimmed at a node
+    #: (the trim reaches twice this)
+    span: float = 6.0
+    #: length (h) of the walked branch end fitted for the junction node
+    fit_span: float = 4.0
+    #: ... plus this many times the noise (a longer fit averages the noise out)
+    fit_noise: float = 6.0
+    #: a walk into a junction stops where it strays this many link widths from its line
+    walk_dev: float = 1.25
+    #: a walk reaches at most this many default outer shell radii (3 x 5.5 h)
+    walk_far: float = 16.5
+    #: the end portion (h) that gives a free end's node
+    free_span: float = 4.0
+    #: a region point beyond this fraction of the shell radius from its junction node, in a
+    #: direction no incident branch takes, is a swallowed branch's tip
+    swallow: float = 0.8
+    #: ... no branch within 25 degrees (cosine)
+    swallow_cos: float = float(np.cos(np.radians(25.0)))
+    #: a free end's region holds a fork when a point lies this many shell radii from the path
+    #: to its farthest point
+    fork: float = 0.6
+    #: ... in a region of at least this many points
+    fork_min_points: int = 6
+    #: the fork node's least-squares solve is pulled towards the fork point with this weight
+    fork_pull: float = 1e-2
+    #: a region of fewer points swallows no branch
+    swallow_min_points: int = 3
+
+
+class Curves(NamedTuple):
+    """Stage 8: curves (:mod:`.curves`)."""
+
+    #: two successive steps of a curve more than 120 degrees apart (cosine below) turn back
+    turn_back_cos: float = -0.5
+    #: the reach (in points along the curve) of one reordering move of the untangle kernel
+    untangle_w: int = 64
+    #: node and curve order: coordinates rounded to this many decimals
+    round_decimals: int = 9
+
+
+class Numeric(NamedTuple):
+    """Rounding tolerances (not thresholds of the method: they make equal values compare equal)."""
+
+    #: relative tolerance of a comparison against a computed bound
+    rel: float = 1e-9
+    #: a looser one, for bounds of prefilters (the exact test follows)
+    rel_loose: float = 1e-6
+    #: a projection above minus this is ahead
+    ahead: float = 1e-12
+    #: the smallest positive length (divisions and zero-length edges)
+    tiny: float = 1e-300
+    #: the smallest weight of a link in a sparse graph (a zero would drop the link)
+    min_edge: float = 1e-12
+
+
+DEFAULTS = Defaults()
+LAYOUT = Layout()
+SPACING = Spacing()
+TANGENTS = Tangents()
+NOISE = Noise()
+LINKS = Links()
+SHELL = Shell()
+SPLIT = Split()
+CHAINS = Chains()
+REPAIRS = Repairs()
+NODES = Nodes()
+CURVES = Curves()
+NUMERIC = Numeric()

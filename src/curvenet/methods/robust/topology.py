@@ -1,0 +1,233 @@
+"""The topology of a network in the making: regions, chains and which chain end sits at which region.
+
+:class:`Topology` is the one owner of that bookkeeping. The repairs (:mod:`.repairs`) and the
+node placement (:mod:`.nodes`) read it and change it only through its methods, which keep
+three things consistent: every live open chain's end is listed at its region
+(:meth:`Topology.incident`), the valence of every region (:attr:`Topology.v`, the number of
+live open chain ends there), and the points of each region. :meth:`Topology.check` verifies
+them; it runs after every change when ``CURVENET_CHECK_TOPOLOGY=1`` (the test suite sets it).
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+
+import numpy as np
+
+from .chains import Chain, order_between
+
+__all__ = ["Topology", "TopologyError"]
+
+_EMPTY = np.zeros(0, dtype=np.int64)
+
+
+class TopologyError(AssertionError):
+    """An invariant of :class:`Topology` does not hold (a bug in a repair, never bad input)."""
+
+
+def _checking() -> bool:
+    return os.environ.get("CURVENET_CHECK_TOPOLOGY", "") in ("1", "true", "yes")
+
+
+class Topology:
+    """Regions (point sets around junctions and free ends) joined by chains.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        The points (a region's points are ordered along a curve when it is joined through).
+    chains : list of Chain
+        Ordered chains with the regions of their ends (-1: none). The topology takes them
+        over: their ``ends`` change only through it.
+    regions : list of (m,) ndarray of int64
+        The points of each region.
+
+    Notes
+    -----
+    An open chain end without a region gets an empty region of its own (a free end). A chain
+    end is listed at its region in the order the ends arrived there (that order reaches the
+    node placement, so the methods below keep it exactly). Entries of dead chains may stay in
+    those lists; :meth:`incident` filters them.
+    """
+
+    def __init__(self, P: np.ndarray, chains: list[Chain], regions: list[np.ndarray]):
+        self.P = P
+        self.chains: list[Chain] = list(chains)
+        self.regions: list[np.ndarray] = list(regions)
+        for c in self.chains:  # dangling open ends -> empty free-end regions
+            if c.closed:
+                continue
+            for s in (0, 1):
+                if c.ends[s] < 0:
+                    self.regions.append(np.zeros(0, dtype=np.int64))
+                    c.ends[s] = len(self.regions) - 1
+        self.alive: list[bool] = [True] * len(self.chains)
+        self._ends_at: list[list[tuple[int, int]]] = [[] for _ in self.regions]
+        for i, c in enumerate(self.chains):
+            if not c.closed:
+                for s in (0, 1):
+                    self._ends_at[c.ends[s]].append((i, s))
+        self.v: np.ndarray = self.valence()
+        self._changed()
+
+    # ------------------------------------------------------------------------------ reading
+    def valence(self) -> np.ndarray:
+        """The number of live open chain ends at every region, counted afresh.
+
+        Returns
+        -------
+        (n_regions,) ndarray of int64
+        """
+        e = [c.ends for c, a in zip(self.chains, self.alive) if a and not c.closed]
+        e = np.fromiter(itertools.chain.from_iterable(e), dtype=np.int64, count=2 * len(e))
+        return np.bincount(e, minlength=len(self.regions)).astype(np.int64)
+
+    def incident(self, r: int) -> list[tuple[int, int]]:
+        """The live chain ends ``(chain, side)`` at region ``r``, in the order they arrived."""
+        return [(i, s) for i, s in self._ends_at[r] if self.alive[i] and self.chains[i].ends[s] == r]
+
+    def listed(self, r: int) -> bool:
+        """True when any chain end, live or dead, was ever left listed at region ``r``."""
+        return bool(self._ends_at[r])
+
+    def end_ids(self, i: int, s: int) -> np.ndarray:
+        """The ids of chain ``i`` running towards its end ``s``."""
+        c = self.chains[i]
+        return c.ids if s == 1 else c.ids[::-1]
+
+    def live(self) -> list[Chain]:
+        """The live chains, in order."""
+        return [c for i, c in enumerate(self.chains) if self.alive[i]]
+
+    # ------------------------------------------------------------------------------ changes
+    def absorb(self, r: int, t: int) -> None:
+        """Merge region ``r`` into region ``t``: its points, the live chain ends at it, its valence."""
+        self.regions[t] = np.r_[self.regions[t], self.regions[r]]
+        self.regions[r] = np.zeros(0, dtype=np.int64)
+        for i, s in self._ends_at[r]:
+            if self.alive[i] and self.chains[i].ends[s] == r:
+                self.chains[i].ends[s] = t
+                self._ends_at[t].append((i, s))
+        self._ends_at[r] = []
+        self.v[t] += self.v[r]
+        self.v[r] = 0
+        self._changed()
+
+    def absorb_chain(self, i: int, r: int) -> None:
+        """Chain ``i`` dies and its points join region ``r`` (it lay inside that junction)."""
+        self.drop(i)
+        self.regions[r] = np.r_[self.regions[r], self.chains[i].ids].astype(np.int64)
+        self._changed()
+
+    def drop(self, i: int) -> None:
+        """Chain ``i`` dies (its ends leave the valence of their regions)."""
+        c = self.chains[i]
+        self.alive[i] = False
+        if not c.closed:
+            self.v[c.ends[0]] -= 1
+            self.v[c.ends[1]] -= 1
+        self._changed()
+
+    def join_through(self, r: int, inc: list[tuple[int, int]]) -> None:
+        """The two chain ends ``inc`` at region ``r`` (valence 2) become one curve through it.
+
+        Two chains become one (the second dies); one chain whose two ends meet there becomes
+        a closed loop. The region's points, ordered from one end to the other, join the curve
+        and the region is emptied.
+        """
+        (i, si), (j, sj) = inc
+        ci = self.chains[i]
+        a_ids = ci.ids if si == 1 else ci.ids[::-1]
+        a_other = ci.ends[1 - si]
+        P = self.P
+        if i == j:
+            mid = order_between(P, self.regions[r], P[a_ids[-1]], P[a_ids[0]])
+            self.chains[i] = Chain(np.r_[a_ids, mid], [-1, -1], closed=True)
+            self.regions[r] = np.zeros(0, dtype=np.int64)
+            self.v[r] -= 2
+            self._changed()
+            return
+        cj = self.chains[j]
+        b_ids = cj.ids if sj == 0 else cj.ids[::-1]
+        b_other = cj.ends[1 - sj]
+        mid = order_between(P, self.regions[r], P[a_ids[-1]], P[b_ids[0]])
+        self.chains[i] = Chain(np.r_[a_ids, mid, b_ids], [a_other, b_other])
+        self.alive[j] = False
+        self.regions[r] = np.zeros(0, dtype=np.int64)
+        ea = self._ends_at
+        ea[r] = []
+        ea[a_other] = [e for e in ea[a_other] if e != (i, 1 - si)] + [(i, 0)]
+        ea[b_other] = [e for e in ea[b_other] if e != (j, 1 - sj)] + [(i, 1)]
+        self.v[r] -= 2
+        self._changed()
+
+    def split_chain(self, j: int, lo: int, hi: int, i: int, s: int) -> np.ndarray:
+        """A free end joins chain ``j`` in its middle: a new junction region there.
+
+        The points ``lo:hi`` of chain ``j`` and the free end's region (that of end ``s`` of
+        chain ``i``) form the new region; chain ``j`` is split into the part before and the
+        part after (a closed chain is opened there instead).
+
+        Returns
+        -------
+        (hi - lo,) ndarray of int64
+            The chain points that became region points.
+        """
+        r = self.chains[i].ends[s]
+        cj = self.chains[j]
+        core = cj.ids[lo:hi]
+        self.regions.append(np.r_[core, self.regions[r]].astype(np.int64))
+        nr = len(self.regions) - 1
+        ea = self._ends_at
+        ea.append([(i, s)])
+        self.regions[r] = np.zeros(0, dtype=np.int64)
+        ea[r] = []
+        self.chains[i].ends[s] = nr
+        self.v[r] = 0
+        self.v = np.r_[self.v, 1]
+        if cj.closed:
+            self.chains[j] = Chain(np.r_[cj.ids[hi:], cj.ids[:lo]], [nr, nr])
+            ea[nr] += [(j, 0), (j, 1)]
+        else:
+            a, b = cj.ends
+            self.chains[j] = Chain(cj.ids[:lo], [a, nr])
+            self.chains.append(Chain(cj.ids[hi:], [nr, b]))
+            self.alive.append(True)
+            jn = len(self.chains) - 1
+            ea[nr] += [(j, 1), (jn, 0)]
+            ea[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ea[b]]
+        self.v[nr] += 2
+        self._changed()
+        return core
+
+    # ------------------------------------------------------------------------------ checks
+    def check(self) -> None:
+        """Raise :class:`TopologyError` unless the invariants hold.
+
+        Every live open chain has two ends at existing regions and is listed at both; the
+        valence is that of the live open chains; no point lies on two live chains.
+        """
+        n = len(self.regions)
+        if not (len(self.alive) == len(self.chains) and len(self._ends_at) == n == len(self.v)):
+            raise TopologyError("regions, chains and their lists differ in length")
+        for i, c in enumerate(self.chains):
+            if not self.alive[i] or c.closed:
+                continue
+            for s in (0, 1):
+                r = c.ends[s]
+                if not 0 <= r < n:
+                    raise TopologyError(f"chain {i} end {s} at region {r} of {n}")
+                if (i, s) not in self._ends_at[r]:
+                    raise TopologyError(f"chain {i} end {s} is not listed at its region {r}")
+        if not np.array_equal(self.v, self.valence()):
+            raise TopologyError("the valence kept differs from the valence counted")
+        ids = [c.ids for i, c in enumerate(self.chains) if self.alive[i]]
+        if ids:
+            flat = np.concatenate(ids)
+            if len(np.unique(flat)) != len(flat):
+                raise TopologyError("a point lies on two live chains")
+
+    def _changed(self) -> None:
+        if _checking():
+            self.check()
