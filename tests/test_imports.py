@@ -328,6 +328,29 @@ def test_graph_sees_imports_inside_functions_and_dynamic_ones(graph):
     assert "curvenet.network" in edges["curvenet.methods.robust.pipeline"]
 
 
+def _defined_names(path: Path) -> set[str]:
+    """Names a module defines at its top level (functions, classes, assignments)."""
+    out = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            for t in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                out |= {n.id for n in ast.walk(t) if isinstance(n, ast.Name)}
+    return out
+
+
+def test_colours_and_node_kinds_are_defined_once(graph):
+    """The shared look lives in curvenet.style and node kinds on CurveNetwork: no copies."""
+    import curvenet.style
+
+    _, _, files = graph
+    names = set(curvenet.style.__all__) | {"node_kinds", "KEY_DECIMALS"}
+    copies = {m: sorted(_defined_names(f) & names) for m, f in files.items() if m != "curvenet.style"}
+    copies = {m: c for m, c in copies.items() if c}
+    assert not copies, f"defined outside curvenet.style: {copies}"
+
+
 # --------------------------------------------------------------------------------------------
 # the checker itself, on tiny packages
 
