@@ -155,9 +155,50 @@ def test_figures(tmp_path):
     sweep = bench.eps_sweep("crossing", [1e-3, 1e-2])
     assert sweep["true_N_n"] == 7 and len(sweep["N_c"]) == 2
     p = bench_figures.figure7(sweep, tmp_path / "f7.png")
-    q = bench_figures.figure8("fig8", "emst", tmp_path / "f8.png")
+    q = bench_figures.figure8(bench.method_vs_emst("fig8", "emst"), tmp_path / "f8.png")
     for f in (p, q):
         assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_method_vs_emst_data():
+    data = bench.method_vs_emst("fig8", "emst", condition="noise 0.2h")
+    truth = synth.model("fig8")
+    pts, _ = synth.sample(truth, rng=bench._seed("fig8", "noise 0.2h"), noise=0.2)
+    np.testing.assert_array_equal(data["points"], pts)
+    assert (data["true_N_n"], data["true_N_c"]) == (truth.n_nodes, truth.n_curves)
+    assert [d["method"] for d in data["panels"]] == ["emst", "emst"]
+    for d in data["panels"]:
+        s = compare(d["network"], truth, h=synth.h_of(truth))
+        assert (d["curve_f1"], d["exact_topology"]) == (s["curve_f1"], s["exact_topology"])
+
+
+def test_figures_only_draw_what_they_are_given(tmp_path, monkeypatch):
+    """The figure functions compute nothing: they draw the data handed to them."""
+    pytest.importorskip("matplotlib")
+    from curvenet import Curve, CurveNetwork
+    from curvenet.plots import bench_figures
+
+    def no_reconstruction(*args, **kwargs):
+        raise AssertionError("a figure function ran a reconstruction")
+
+    monkeypatch.setattr(rec, "reconstruct", no_reconstruction)
+    monkeypatch.setattr(bench, "reconstruct", no_reconstruction)
+    line = CurveNetwork(np.array([[0.0, 0.0], [1.0, 0.0]]), [Curve(np.array([[0.0, 0.0], [0.5, 0.1], [1.0, 0.0]]), 0, 1)])
+    data = {"model": "hand-made", "condition": "clean", "points": np.array([[0.0, 0.0], [0.5, 0.1], [1.0, 0.0]]),
+            "true_N_n": 2, "true_N_c": 1,
+            "panels": [{"method": m, "network": line, "curve_f1": 1.0, "exact_topology": True} for m in ("a", "b")]}
+    assert bench_figures.figure8(data, tmp_path / "f8.png").read_bytes()[:4] == b"\x89PNG"
+    sweep = {"model": "hand-made", "epsilon": [1e-3, 1e-2], "contracted_N_n": [2, 2], "contracted_N_c": [1, 1],
+             "true_N_n": 2, "true_N_c": 1, "node_f1": [1.0, 1.0], "curve_f1": [1.0, 0.5], "exact_topology": [1, 0]}
+    assert bench_figures.figure7(sweep, tmp_path / "f7.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_python_m_bench_points_to_the_cli():
+    r = subprocess.run([sys.executable, "-m", "curvenet.bench"], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.strip() == (
+        "curvenet: error: run the benchmark with `curvenet bench` (or `python -m curvenet.cli bench`)"
+    )
 
 
 def test_tune_each_condition_and_extra_conditions():

@@ -7,6 +7,7 @@ import pytest
 
 from curvenet import Curve, CurveNetwork
 from curvenet.errors import InputError, OutputError
+from curvenet.style import JUNCTION_COLOR, curve_colors
 from sample_networks import theta_network
 
 pytest.importorskip("matplotlib")
@@ -36,9 +37,9 @@ def test_every_curve_colour_and_the_junctions_are_drawn(d):
     net = theta_network(d)
     img = decode(npng.render_png(net, points=points_of(net), dpi=100))
     assert img.shape[1] == 800 or d == 3  # 8 in at 100 dpi; 3D is cropped to its content
-    for c in set(npng.curve_colors(net)):
+    for c in set(curve_colors(net)):
         assert has_color(img, c), c
-    assert has_color(img, npng.JUNCTION_COLOR)
+    assert has_color(img, JUNCTION_COLOR)
     # the background is white and most of the picture is background
     assert (img == 255).all(axis=-1).mean() > 0.5
 
@@ -59,7 +60,7 @@ def test_points_are_drawn_faint():
 
 
 def test_junctions_and_free_ends_differ():
-    kinds = npng.node_kinds(theta_network(3))
+    kinds = theta_network(3).node_kinds
     assert list(kinds) == ["junction", "junction", "end"]
     net = theta_network(2)
     net_nodes = decode(npng.render_png(net, dpi=80))
@@ -69,7 +70,7 @@ def test_junctions_and_free_ends_differ():
     ax = npng.plot_network(net)
     # points (none), curves, one scatter per node kind present (end, junction)
     assert len(ax.collections) == 3
-    assert has_color(net_nodes, npng.JUNCTION_COLOR)
+    assert has_color(net_nodes, JUNCTION_COLOR)
 
 
 def test_deterministic_and_independent_of_point_order():
@@ -84,7 +85,7 @@ def test_independent_of_curve_order_and_direction():
     net = theta_network(3)
     perm = [3, 0, 4, 2, 1]
     shuffled = CurveNetwork(net.nodes, [net.curves[i].reversed() if i % 2 else net.curves[i] for i in perm])
-    cols, cols2 = npng.curve_colors(net), npng.curve_colors(shuffled)
+    cols, cols2 = curve_colors(net), curve_colors(shuffled)
     assert [cols[i] for i in perm] == cols2
     assert npng.render_png(net, dpi=40) == npng.render_png(shuffled, dpi=40)
 
@@ -116,10 +117,10 @@ def test_curve_colors_differ_at_a_node():
         [Curve(np.array([[0.0, 0.0], [np.cos(a), np.sin(a)]]), 0, i + 1)
          for i, a in enumerate(np.linspace(0, 2 * np.pi, 12, endpoint=False))],
     )
-    cols = npng.curve_colors(star)
+    cols = curve_colors(star)
     assert len(set(cols)) == 12
     net = theta_network(3)
-    cols = npng.curve_colors(net)
+    cols = curve_colors(net)
     for i, ci in enumerate(net.curves):
         for j, cj in enumerate(net.curves[:i]):
             if ci.start is not None and cj.start is not None and {ci.start, ci.end} & {cj.start, cj.end}:

@@ -15,7 +15,7 @@ from sample_networks import theta_network
 pytest.importorskip("plotly")
 
 from curvenet import viewer  # noqa: E402
-from curvenet.plots.network_png import JUNCTION_COLOR, curve_colors  # noqa: E402
+from curvenet.style import JUNCTION_COLOR, curve_colors  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else shutil.which("chromium")
 GD = "document.getElementById('curvenet-viewer')"

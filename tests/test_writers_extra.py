@@ -169,6 +169,33 @@ def test_svg_bad_options():
         network_to_svg(sample_network(2), width=0)
 
 
+def test_svg_and_dxf_colours_are_the_shared_style(tmp_path):
+    """The writers colour curves and nodes as the pictures and the viewer do (curvenet.style)."""
+    from curvenet.io.svg import network_to_svg
+    from curvenet.style import NODE_COLORS, curve_colors
+
+    n = sample_network(3)
+    want = curve_colors(n)
+    assert len(set(want)) > 1
+    _, curves, nodes = _svg(network_to_svg(n))
+    assert [el.get("stroke") for el in curves] == want
+    kinds = list(n.node_kinds)
+    assert sorted(set(kinds)) == ["end", "junction"]
+    assert [(el.get("class"), el.get("fill")) for el in nodes] == [(k, NODE_COLORS[k]) for k in kinds]
+    ezdxf = pytest.importorskip("ezdxf")
+    polys = ezdxf.readfile(write_network(n, tmp_path / "n.dxf")).modelspace().query("POLYLINE")
+    assert ["#%02x%02x%02x" % p.rgb for p in polys] == want
+
+
+def test_node_kinds_follow_the_valence():
+    n = sample_network(2)  # node 0: three arcs and a loop (5 ends), node 1: three arcs and a branch
+    assert list(n.valence) == [5, 4, 1]
+    assert list(n.node_kinds) == ["junction", "junction", "end"]
+    two = CurveNetwork(np.array([[0.0, 0], [1, 0], [2, 0], [5, 5]]),
+                       [Curve(np.array([[0.0, 0], [1, 0]]), 0, 1), Curve(np.array([[1.0, 0], [2, 0]]), 1, 2)])
+    assert list(two.node_kinds) == ["end", "other", "end", "other"]  # valence 1, 2, 1, 0
+
+
 # ----------------------------------------------------------------------------- VTP
 def _read_vtp_vtk(path):
     vtk = pytest.importorskip("vtk")

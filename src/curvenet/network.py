@@ -13,7 +13,12 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Curve", "CurveNetwork"]
+__all__ = ["Curve", "CurveNetwork", "NODE_KINDS"]
+
+#: The kinds of node, by valence (see :attr:`CurveNetwork.node_kinds`): ``"junction"`` (3 or
+#: more curve ends), ``"end"`` (a free end, 1) and ``"other"`` (2, or 0 for a node no curve
+#: reaches).
+NODE_KINDS = ("junction", "end", "other")
 
 
 @dataclass
@@ -129,6 +134,16 @@ class CurveNetwork:
         e = e[e[:, 0] >= 0]
         np.add.at(v, e.ravel(), 1)
         return v
+
+    @property
+    def node_kinds(self) -> np.ndarray:
+        """(n,) object array of str, the kind of each node (:data:`NODE_KINDS`): ``"end"``
+        (valence 1), ``"junction"`` (valence 3 or more) or ``"other"``."""
+        v = self.valence
+        kinds = np.full(len(v), "other", dtype=object)
+        kinds[v == 1] = "end"
+        kinds[v >= 3] = "junction"
+        return kinds
 
     @cached_property
     def betti(self) -> tuple[int, int]:

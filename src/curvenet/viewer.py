@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import InputError, require
 from .network import CurveNetwork
+from .style import END_COLOR, JUNCTION_COLOR, OTHER_NODE_COLOR, POINT_COLOR, curve_colors
 
 __all__ = ["network_figure", "network_to_html", "save_html", "subsample_points"]
 
@@ -73,15 +74,7 @@ def network_figure(net: CurveNetwork, *, points=None, title: str | None = None,
     require("plotly", "the HTML viewer", "viz")
     import plotly.graph_objects as go
 
-    from .plots.network_png import (
-        END_COLOR,
-        JUNCTION_COLOR,
-        OTHER_NODE_COLOR,
-        POINT_COLOR,
-        _check_points,
-        curve_colors,
-        node_kinds,
-    )
+    from .plots.network_png import _check_points
 
     d = net.dimension
     if d not in (2, 3):
@@ -145,7 +138,7 @@ def network_figure(net: CurveNetwork, *, points=None, title: str | None = None,
         traces[groups.index("curves")].name = f"curves ({net.n_curves})"
 
     if net.n_nodes:
-        kinds = node_kinds(net)
+        kinds = net.node_kinds
         val = net.valence
         style = {
             "junction": ("junctions", "circle", JUNCTION_COLOR, 6 if is3d else 10),
@@ -229,7 +222,7 @@ def save_html(net: CurveNetwork, path, *, inputs=(), **options):
     -------
     Path
     """
-    from .io import atomic_write, check_output_path
+    from .io.atomic import atomic_write, check_output_path
 
     check_output_path(path, inputs=inputs)
     return atomic_write(path, network_to_html(net, **options), inputs=inputs)

@@ -1,6 +1,7 @@
 """The ``curvenet`` command-line tool: a thin front over the library.
 
-Each command lives in ``cmd_<name>.py`` with ``register(subparsers)`` and ``run(args) -> int``.
+Each command lives in ``cmd_<name>.py`` with ``register(subparsers)`` and ``run(args) -> int``;
+the options they share are in ``options.py``.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import os
 import sys
 
 from .._version import __version__
+from .options import add_common  # noqa: F401  (kept importable from here)
 
 __all__ = ["main", "COMMANDS"]
 
@@ -36,13 +38,6 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMANDS:
         importlib.import_module(f"{__name__}.cmd_{name}").register(sub)
     return parser
-
-
-def add_common(p: argparse.ArgumentParser) -> None:
-    """The options every command has: ``--quiet`` and ``--verbose``."""
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
-    g.add_argument("-v", "--verbose", action="store_true", help="print more, and tracebacks on errors")
 
 
 def main(argv=None) -> int:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from . import add_common
+from .options import add_common
 
 
 def register(sub) -> None:

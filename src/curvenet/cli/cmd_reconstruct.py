@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from . import add_common
+from .options import add_common
 from .cmd_render import add_picture_options
 
 #: CLI option -> method parameter name; only options the user gave are passed on.

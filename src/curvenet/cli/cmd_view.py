@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import add_common
+from .options import add_common
 
 
 def register(sub) -> None:

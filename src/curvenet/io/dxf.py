@@ -6,6 +6,7 @@ import io
 
 from ..errors import require
 from ..network import CurveNetwork
+from ..style import curve_colors
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER"]
 
@@ -35,7 +36,6 @@ def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
         distinct points stays a polyline when ``smooth`` is on.
     """
     ezdxf = require("ezdxf", "writing DXF files", "io")
-    from ..plots.network_png import curve_colors
 
     if smooth is None:
         smooth = bool(net.parameters.get("smooth", False))

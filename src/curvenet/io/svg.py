@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
+from ..style import NODE_COLORS, curve_colors
 
 __all__ = ["network_to_svg", "PROJECTIONS", "project"]
 
@@ -72,8 +73,6 @@ def network_to_svg(
     -------
     str
     """
-    from ..plots.network_png import END_COLOR, JUNCTION_COLOR, OTHER_NODE_COLOR, curve_colors, node_kinds
-
     if not isinstance(width, (int, np.integer)) or width <= 0:
         raise InputError(f"SVG width must be a positive integer, got {width!r}")
     d = net.dimension
@@ -116,14 +115,13 @@ def network_to_svg(
         )
     out.append("</g>")
     if nodes and len(nodes_uv):
-        kinds = node_kinds(net)
-        fill = {"junction": JUNCTION_COLOR, "end": END_COLOR, "other": OTHER_NODE_COLOR}
+        kinds = net.node_kinds
         val = net.valence
         out.append(f'<g id="nodes" stroke="black" stroke-width="{num(sw / 2)}">')
         for j, (u, v) in enumerate(nodes_uv):
             out.append(
                 f'<circle id="node-{j}" class={quoteattr(kinds[j])} cx="{num(u)}" cy="{num(0.0 - v)}" r="{num(r)}" '
-                f'fill="{fill[kinds[j]]}"><title>node {j}, valence {int(val[j])}</title></circle>'
+                f'fill="{NODE_COLORS[kinds[j]]}"><title>node {j}, valence {int(val[j])}</title></circle>'
             )
         out.append("</g>")
     out.append("</svg>")

@@ -1,6 +1,8 @@
 """Figures of the benchmark (extra ``viz``): analogues of the paper's Figures 7 and 8.
 
-matplotlib is imported inside the functions, with the Agg backend (no display needed).
+The functions here only draw: :mod:`curvenet.bench` computes the data (:func:`~curvenet.bench.eps_sweep`,
+:func:`~curvenet.bench.method_vs_emst`) and hands it over. matplotlib is imported inside the
+functions, with the Agg backend (no display needed).
 """
 
 from __future__ import annotations
@@ -79,46 +81,36 @@ def _draw(ax, net, title):
     ax.set_yticks([])
 
 
-def figure8(model: str, method: str, path, *, condition: str = "clean") -> Path:
-    """A 2D model: the points, ``method``'s network and the EMST's (the paper's Figure 8).
+def figure8(data: dict, path) -> Path:
+    """The points of a 2D model, a method's network and the EMST's (the paper's Figure 8).
 
     Parameters
     ----------
-    model : str
-        A 2D synthetic model (e.g. ``"fig8"``).
-    method : str
-        The method shown against the EMST.
+    data : dict
+        The result of :func:`curvenet.bench.method_vs_emst`: ``points`` ((N, 2) ndarray),
+        ``model``, ``condition``, ``true_N_n``, ``true_N_c`` and two ``panels`` (``method``,
+        ``network``, ``curve_f1``, ``exact_topology``).
     path : str or Path
         PNG file to write.
-    condition : str
-        A sampling condition of :data:`curvenet.bench.CONDITIONS`.
 
     Returns
     -------
     Path
         ``path``.
     """
-    from .. import synth
-    from ..bench import CONDITIONS, _seed
-    from ..metrics import compare
-    from ..reconstruct import reconstruct
-
     plt = _plt()
-    truth = synth.model(model)
-    h = synth.h_of(truth)
-    pts, _ = synth.sample(truth, rng=_seed(model, condition), **CONDITIONS[condition])
+    pts = np.asarray(data["points"])
     fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
     axes[0].plot(pts[:, 0], pts[:, 1], ".", ms=2.5, color="0.3")
-    axes[0].set_title(f"(a) {len(pts)} points ({model}, {condition})", fontsize=10)
+    axes[0].set_title(f"(a) {len(pts)} points ({data['model']}, {data['condition']})", fontsize=10)
     axes[0].set_aspect("equal")
     axes[0].set_xticks([])
     axes[0].set_yticks([])
-    for ax, m, tag in ((axes[1], method, "(b)"), (axes[2], "emst", "(c)")):
-        net = reconstruct(pts, method=m)
-        s = compare(net, truth, h=h)
-        _draw(ax, net, f"{tag} {m}: {net.n_nodes} nodes, {net.n_curves} curves\n"
-                       f"curve F1 {s['curve_f1']:.2f}, exact topology {'yes' if s['exact_topology'] else 'no'}")
-    fig.suptitle(f"true network: {truth.n_nodes} nodes, {truth.n_curves} curves", fontsize=10)
+    for ax, panel, tag in zip(axes[1:], data["panels"], ("(b)", "(c)")):
+        net = panel["network"]
+        _draw(ax, net, f"{tag} {panel['method']}: {net.n_nodes} nodes, {net.n_curves} curves\n"
+                       f"curve F1 {panel['curve_f1']:.2f}, exact topology {'yes' if panel['exact_topology'] else 'no'}")
+    fig.suptitle(f"true network: {data['true_N_n']} nodes, {data['true_N_c']} curves", fontsize=10)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)

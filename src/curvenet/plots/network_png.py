@@ -1,7 +1,8 @@
 """PNG pictures of a curve network, in the style of the paper's Figure 6 (extra ``viz``).
 
 Input points are drawn faint, every curve in its own colour (curves that share a node get
-different colours), junctions and free ends with different markers, with equal axis scales.
+different colours), junctions and free ends with different markers, with equal axis scales. The
+colours are those of :mod:`curvenet.style`, shared with the viewer and the SVG and DXF writers.
 3D networks are drawn from a fixed view (``elev``, ``azim`` in degrees, as in matplotlib).
 
 matplotlib is imported inside the functions and used without pyplot (no global state, no
@@ -11,92 +12,31 @@ display needed).
 from __future__ import annotations
 
 from io import BytesIO
-from typing import Sequence
-
 import numpy as np
 
 from ..errors import InputError, require
 from ..network import CurveNetwork
+from ..style import (
+    END_COLOR,
+    JUNCTION_COLOR,
+    OTHER_NODE_COLOR,
+    PALETTE,
+    POINT_COLOR,
+    curve_colors,
+    curve_sort_key,
+)
 
 __all__ = [
-    "PALETTE",
     "DEFAULT_ELEV",
     "DEFAULT_AZIM",
-    "curve_colors",
-    "node_kinds",
     "plot_network",
     "render_png",
     "save_png",
 ]
 
-#: Curve colours (colour-blind-friendly tab10 without its grey, then darker companions).
-PALETTE: tuple[str, ...] = (
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
-    "#17becf", "#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd", "#e6550d",
-    "#31a354", "#756bb1",
-)  # fmt: skip
-
 #: Default 3D view (degrees), looking slightly from above and from the front left.
 DEFAULT_ELEV = 25.0
 DEFAULT_AZIM = -60.0
-
-POINT_COLOR = "#9a9a9a"
-JUNCTION_COLOR = "#e41a1c"
-END_COLOR = "#ffffff"
-OTHER_NODE_COLOR = "#ffd92f"
-
-
-def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list[str]:
-    """One colour per curve; curves that share a node get different colours when possible.
-
-    A greedy colouring: curves are visited in an order fixed by their geometry (not by their
-    position in ``net.curves``), and each takes the least-used palette colour that no already
-    coloured curve at its end nodes has (ties broken by palette order). So the same network
-    gets the same colours whatever the order of its curves.
-
-    Parameters
-    ----------
-    net : CurveNetwork
-    palette : sequence of str
-        Matplotlib/CSS colours.
-
-    Returns
-    -------
-    list of str, one per curve
-    """
-    k = len(palette)
-    node_key = [tuple(np.round(p, 9).tolist()) for p in net.nodes]
-    at_node: dict[int, list[int]] = {}
-    counts = np.zeros(k, dtype=np.int64)
-    out = [0] * net.n_curves
-    for i in sorted(range(net.n_curves), key=lambda i: _geometry_key(net.curves[i])):
-        c = net.curves[i]
-        ends = [] if c.start is None else sorted({int(c.start), int(c.end)}, key=lambda n: node_key[n])
-        taken = {j for n in ends for j in at_node.get(n, ())}
-        j = min(range(k), key=lambda i: (i in taken, counts[i], i))
-        out[i] = j
-        counts[j] += 1
-        for n in ends:
-            at_node.setdefault(n, []).append(j)
-    return [palette[j] for j in out]
-
-
-def _geometry_key(c) -> tuple:
-    """A key of a curve that does not depend on its direction or on its place in the network."""
-    p = np.round(np.asarray(c.points, dtype=float), 9)
-    if not len(p):
-        return ((), (), 0)
-    rows = p[np.lexsort(p.T[::-1])] + 0.0  # sorted points (+ 0.0 turns -0.0 into 0.0)
-    return (tuple(rows[0].tolist()), tuple(rows[-1].tolist()), len(p), rows.ravel().tolist())
-
-
-def node_kinds(net: CurveNetwork) -> np.ndarray:
-    """(n,) array of str: ``"end"`` (valence 1), ``"junction"`` (valence >= 3) or ``"other"``."""
-    v = net.valence
-    kinds = np.full(len(v), "other", dtype=object)
-    kinds[v == 1] = "end"
-    kinds[v >= 3] = "junction"
-    return kinds
 
 
 def _check_points(net: CurveNetwork, points) -> np.ndarray | None:
@@ -182,7 +122,7 @@ def plot_network(
     lines = _polylines(net)
     colors = curve_colors(net)
     # drawn in an order fixed by geometry, so the picture does not depend on the curve order
-    keep = sorted((i for i, p in enumerate(lines) if len(p) >= 2), key=lambda i: _geometry_key(net.curves[i]))
+    keep = sorted((i for i, p in enumerate(lines) if len(p) >= 2), key=lambda i: curve_sort_key(net.curves[i]))
     if keep:
         segs = [lines[i] for i in keep]
         cols = [colors[i] for i in keep]
@@ -198,7 +138,7 @@ def plot_network(
         handles.append(Line2D([], [], color=PALETTE[0], lw=2, label=f"curves ({net.n_curves}), one colour each"))
 
     if show_nodes and net.n_nodes:
-        kinds = node_kinds(net)
+        kinds = net.node_kinds
         style = {
             "junction": dict(marker="o", s=38, c=JUNCTION_COLOR, label="junctions"),
             "end": dict(marker="s", s=30, c=END_COLOR, label="free ends"),
@@ -334,7 +274,7 @@ def save_png(net: CurveNetwork, path, *, inputs=(), **options):
     -------
     Path
     """
-    from ..io import atomic_write, check_output_path
+    from ..io.atomic import atomic_write, check_output_path
 
     check_output_path(path, inputs=inputs)
     return atomic_write(path, render_png(net, **options), inputs=inputs)
