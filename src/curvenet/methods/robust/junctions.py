@@ -162,7 +162,7 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
     touch = np.unique(np.stack([lab[ka[t]], reg2[kb[t]]], axis=1), axis=0)  # sorted by chain
     tcut = np.searchsorted(touch[:, 0], np.arange(lab.max() + 2))
     is_j = np.zeros(N, dtype=bool)  # points of the fine test in 3 or more groups
-    is_j[sub] = fine[sub] >= 3
+    is_j[sub] = fine[sub] >= SHELL.junction_groups
     is_e = np.zeros(N, dtype=bool)  # and in 1 group (a free end)
     is_e[sub] = fine[sub] == 1
     # the points of each big region, grouped (one sort, not one pass per region)

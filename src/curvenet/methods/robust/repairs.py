@@ -144,13 +144,13 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         if len(inc) == 1:
             i, s = inc[0]
             one.append((r, i, s, topo.end_ids(i, s)))  # towards the tip
-    ms = end_counts(P, h, [x[3] for x in one], REPAIRS.tip_span).tolist()
+    ms = end_counts(P, h, [cids for _, _, _, cids in one], REPAIRS.tip_span).tolist()
     if not one:
         return
     # where each free end's node would be, then the nearest junction point of each (one query:
     # the tree does not change below)
     tip = np.array([free_end(P, h, cids, regions[r], m=m)[1] for (r, _, _, cids), m in zip(one, ms)])
-    gap = prm.link * REPAIRS.tip_gap * h[[int(x[3][-1]) for x in one]] + LINKS.gap_noise * noise
+    gap = prm.link * REPAIRS.tip_gap * h[[int(cids[-1]) for _, _, _, cids in one]] + LINKS.gap_noise * noise
     dk, kk = tree.query(tip, distance_upper_bound=float(gap.max()))
     # the bound is per tip: beyond it, none (as a query bounded by it; at the bound itself,
     # within rounding, that query is run)
