@@ -130,21 +130,62 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
         Region of each flagged point (-1 elsewhere), see :func:`components`.
     n_reg : int
     """
-    N, dim = P.shape
+    N = len(P)
     reg, n_reg = components(N, ka, kb, flagged)
     if n_reg == 0:
         return flagged, reg, n_reg
     ids = np.flatnonzero(flagged)
     r = reg[ids]
+    rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
+    big = rad > SPLIT.radius * prm.shell_outer * hmean
+    if not big.any():
+        return flagged, reg, n_reg
+    ft = _fine_test(P, hs, indptr, indices, flagged, ka, kb, ids[big[r]], prm)
+    # the points of each big region, grouped (one sort, not one pass per region)
+    bsel = big[r]
+    bi, br = ids[bsel], r[bsel]
+    o = np.argsort(br, kind="stable")
+    bi, br = bi[o], br[o]
+    bcut = np.flatnonzero(np.r_[True, br[1:] != br[:-1], True])
+    out = flagged.copy()
+    for g0, g1 in zip(bcut[:-1], bcut[1:]):
+        pts = bi[g0:g1]
+        kept = pts[ft.nf[pts]]
+        good = _split_of(P, ft, pts, kept, SPLIT.sep * SPLIT.fine * prm.shell_outer * hmean[br[g0]], noisy)
+        if good is not None:
+            out[pts] = False
+            out[kept[np.isin(ft.reg2[kept], good)]] = True
+    if np.array_equal(out, flagged):
+        return flagged, reg, n_reg
+    return (out, *components(N, ka, kb, out))
+
+
+class _Fine(NamedTuple):
+    """The fine shell test on the points of the big regions (:func:`split_large_regions`)."""
+
+    nf: np.ndarray  # (N,) bool: flagged after it
+    reg2: np.ndarray  # (N,) int: sub-region of each such point
+    freed: np.ndarray  # (N,) bool: flagged before, not after
+    lab: np.ndarray  # (N,) int: chain of the freed points (linked graph)
+    touch: np.ndarray  # (T, 2) int: (chain, sub-region) pairs in contact, sorted by chain
+    tcut: np.ndarray  # the rows of each chain in touch
+    is_j: np.ndarray  # (N,) bool: in 3 or more fine groups
+    is_e: np.ndarray  # (N,) bool: in 1 fine group (a free end)
+
+
+def _region_sizes(P, hs, ids, r, n_reg):
+    """Radius (largest distance from the centroid) and mean shell spacing of every region."""
+    dim = P.shape[1]
     cnt = np.bincount(r, minlength=n_reg).astype(float)
     cen = np.stack([np.bincount(r, weights=P[ids, c], minlength=n_reg) for c in range(dim)], axis=1) / cnt[:, None]
     rad = np.zeros(n_reg)
     np.maximum.at(rad, r, np.linalg.norm(P[ids] - cen[r], axis=1))
-    hmean = np.bincount(r, weights=hs[ids], minlength=n_reg) / cnt
-    big = rad > SPLIT.radius * prm.shell_outer * hmean
-    if not big.any():
-        return flagged, reg, n_reg
-    sub = ids[big[r]]
+    return rad, np.bincount(r, weights=hs[ids], minlength=n_reg) / cnt
+
+
+def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm) -> _Fine:
+    """The shell test again on the points ``sub``, ``SPLIT.fine`` times the size, and what it frees."""
+    N = len(P)
     fine = _k.shell_groups(P, hs, indptr, indices, SPLIT.fine * prm.shell_inner, SPLIT.fine * prm.shell_outer,
                            subset=sub)
     nf = flagged.copy()
@@ -161,59 +202,54 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
     t = freed[ka] & nf[kb]
     touch = np.unique(np.stack([lab[ka[t]], reg2[kb[t]]], axis=1), axis=0)  # sorted by chain
     tcut = np.searchsorted(touch[:, 0], np.arange(lab.max() + 2))
-    is_j = np.zeros(N, dtype=bool)  # points of the fine test in 3 or more groups
+    is_j = np.zeros(N, dtype=bool)
     is_j[sub] = fine[sub] >= SHELL.junction_groups
-    is_e = np.zeros(N, dtype=bool)  # and in 1 group (a free end)
+    is_e = np.zeros(N, dtype=bool)
     is_e[sub] = fine[sub] == 1
-    # the points of each big region, grouped (one sort, not one pass per region)
-    bsel = big[r]
-    bi, br = ids[bsel], r[bsel]
-    o = np.argsort(br, kind="stable")
-    bi, br = bi[o], br[o]
-    bcut = np.flatnonzero(np.r_[True, br[1:] != br[:-1], True])
-    out = flagged.copy()
-    for g0, g1 in zip(bcut[:-1], bcut[1:]):
-        b = br[g0]
-        pts = bi[g0:g1]
-        kept = pts[nf[pts]]
-        labs, c2 = np.unique(reg2[kept], return_counts=True)
-        # sub-regions of 2 or more points with a junction point (3 or more groups)
-        jun = np.isin(labs, reg2[kept[is_j[kept]]])
-        if noisy:
-            # under noise also with a free end point, when another is a junction: the shell,
-            # widened for noise, can be longer than a short branch, whose points then all
-            # look like its free end and join the junction's region (the finer shell sees
-            # the branch)
-            tip = np.isin(labs, reg2[kept[is_e[kept]]]) & ~jun
-            good = labs[(c2 >= SPLIT.min_points) & (jun | tip)]
-            ok = len(good) >= 2 and bool(np.isin(good, labs[jun]).any())
-        else:
-            good = labs[(c2 >= SPLIT.min_points) & jun]
-            ok = len(good) >= 2
-        if ok:
-            links = []
-            for c in np.unique(lab[pts[freed[pts]]]):
-                tb = touch[tcut[c]:tcut[c + 1], 1]
-                tb = tb[np.isin(tb, good)]
-                if len(tb) > 2:
-                    ok = False
-                elif len(tb) == 2:
-                    links.append(tuple(tb))
-            # one chain between two sub-regions and no chain among three: two junctions and
-            # the segment between them (two chains between the same two: a crossing split)
-            ok = ok and bool(links) and len(set(links)) == len(links)
-            if ok:  # and the two junctions clearly apart
-                far = SPLIT.sep * SPLIT.fine * prm.shell_outer * hmean[b]
-                for a_, b_ in links:
-                    ca = P[kept[reg2[kept] == a_]].mean(axis=0)
-                    cb = P[kept[reg2[kept] == b_]].mean(axis=0)
-                    ok = ok and np.linalg.norm(ca - cb) > far
-        if ok:
-            out[pts] = False
-            out[kept[np.isin(reg2[kept], good)]] = True
-    if np.array_equal(out, flagged):
-        return flagged, reg, n_reg
-    return (out, *components(N, ka, kb, out))
+    return _Fine(nf, reg2, freed, lab, touch, tcut, is_j, is_e)
+
+
+def _split_of(P, ft: _Fine, pts, kept, far, noisy):
+    """The sub-regions one big region splits into (their labels in ``ft.reg2``), or None.
+
+    ``pts``: the region's points; ``kept``: those still flagged by the fine test; ``far``: how
+    far apart two joined sub-regions' centroids must be.
+    """
+    reg2 = ft.reg2
+    labs, c2 = np.unique(reg2[kept], return_counts=True)
+    # sub-regions of 2 or more points with a junction point (3 or more groups)
+    jun = np.isin(labs, reg2[kept[ft.is_j[kept]]])
+    if noisy:
+        # under noise also with a free end point, when another is a junction: the shell,
+        # widened for noise, can be longer than a short branch, whose points then all
+        # look like its free end and join the junction's region (the finer shell sees
+        # the branch)
+        tip = np.isin(labs, reg2[kept[ft.is_e[kept]]]) & ~jun
+        good = labs[(c2 >= SPLIT.min_points) & (jun | tip)]
+        ok = len(good) >= 2 and bool(np.isin(good, labs[jun]).any())
+    else:
+        good = labs[(c2 >= SPLIT.min_points) & jun]
+        ok = len(good) >= 2
+    if not ok:
+        return None
+    links = []
+    for c in np.unique(ft.lab[pts[ft.freed[pts]]]):
+        tb = ft.touch[ft.tcut[c]:ft.tcut[c + 1], 1]
+        tb = tb[np.isin(tb, good)]
+        if len(tb) > 2:
+            return None
+        if len(tb) == 2:
+            links.append(tuple(tb))
+    # one chain between two sub-regions and no chain among three: two junctions and
+    # the segment between them (two chains between the same two: a crossing split)
+    if not links or len(set(links)) != len(links):
+        return None
+    for a_, b_ in links:  # and the two junctions clearly apart
+        ca = P[kept[reg2[kept] == a_]].mean(axis=0)
+        cb = P[kept[reg2[kept] == b_]].mean(axis=0)
+        if not np.linalg.norm(ca - cb) > far:
+            return None
+    return good
 
 
 def fork_possible(P, sc: Scales, prm: RobustParams, ids, rid):

@@ -9,6 +9,7 @@ topology only through its methods. :data:`ORDER` lists them in the order
 from __future__ import annotations
 
 import itertools
+from typing import NamedTuple
 
 import numpy as np
 
@@ -221,45 +222,87 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     too; near an end of the other chain, the free end joins the region there instead. Tips
     are handled in chain order; each moves at most once.
     """
-    P, h, chains, regions, v = topo.P, sc.h, topo.chains, topo.regions, topo.v
-    N = len(P)
-    owner = np.full(N, -1, dtype=np.int64)
+    chains = topo.chains
+    owner = np.full(len(topo.P), -1, dtype=np.int64)  # the live chain of every point (-1: none)
     for i, c in enumerate(chains):
         if topo.alive[i]:
             owner[c.ids] = i
     if not (owner >= 0).any():
         return
-    # the tree over all points (built for the k-NN query): the points of no chain it returns
-    # as well are left out below (owner -1), as are those of split-off cores
-    tree = sc.tree
-    noise = sc.noise
     tips = [(i, s) for i, c in enumerate(chains) if topo.alive[i] and not c.closed
-            for s in (0, 1) if v[c.ends[s]] == 1]
+            for s in (0, 1) if topo.v[c.ends[s]] == 1]
     if not tips:
         return
-    # what each tip needs, for all at once: a tip still to be handled has the chain end and
-    # region it had here (a move or a split changes only the valence-1 ends it involves), and
-    # its chain's points unless that chain was split meanwhile (then its end is redone below)
-    tchain = [chains[i] for i, _ in tips]
+    pre = _attach_prefilter(topo, sc, prm, tips, owner)
+    for t_, (i, s) in enumerate(tips):
+        c = chains[i]
+        if not topo.alive[i] or c.closed or topo.v[c.ends[s]] != 1:
+            continue
+        if not pre.has_cand[t_] and c is pre.tchain[t_]:
+            continue
+        found = _attach_target(topo, sc, prm, pre, t_, i, s, owner)
+        if found is None:
+            continue
+        q, j = found
+        cj = chains[j]
+        k = int(np.flatnonzero(cj.ids == q)[0])
+        m = len(cj.ids)
+        near_end = REPAIRS.attach_end_points
+        if not cj.closed and (k < near_end or k > m - 1 - near_end):
+            # near an end of the other chain: join its region there
+            rr = cj.ends[0 if k < near_end else 1]
+            if rr != c.ends[s]:
+                topo.absorb(c.ends[s], rr)
+            continue
+        # split chain j at q: q and its two chain neighbours form the new junction region
+        core = topo.split_chain(j, max(k - 1, 0), min(k + 2, m), i, s)
+        owner[core] = -1
+        if not cj.closed:  # the part after the split is a new chain
+            jn = len(chains) - 1
+            owner[chains[jn].ids] = jn
+
+
+class _Prefilter(NamedTuple):
+    """What :func:`attach_dangling` finds for all tips at once, before any moves."""
+
+    tchain: list  # the chain of each tip then
+    tms: list  # the point count of its end portion
+    tpts: list  # its region's points and its last chain point
+    toff: list  # offsets of tpts, concatenated
+    qall: np.ndarray  # chain points near each tip point, concatenated
+    qoff: np.ndarray  # their offsets per tip point
+    cnt: np.ndarray  # their count per tip point
+    has_cand: np.ndarray  # (n_tips,) bool: a point of another chain within reach, ahead
+
+
+def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
+    """The candidates of every tip in one threaded query (a test a little looser than the exact
+    one of :func:`_attach_target`, with the owners as they are now: a tip whose chain is
+    unchanged when its turn comes has no more candidates then).
+
+    A tip still to be handled has the chain end and region it had here (a move or a split
+    changes only the valence-1 ends it involves), and its chain's points unless that chain was
+    split meanwhile (then its end is redone in :func:`_attach_target`).
+    """
+    P, h, regions = topo.P, sc.h, topo.regions
+    tchain = [topo.chains[i] for i, _ in tips]
     tids = [c.ids if s == 1 else c.ids[::-1] for c, (_, s) in zip(tchain, tips)]  # towards the tip
     tms = end_counts(P, h, tids, REPAIRS.attach_span).tolist()
     tpts = [np.r_[regions[c.ends[s]], ids[-1]].astype(np.int64) for c, (_, s), ids in zip(tchain, tips, tids)]
-    reach_of = REPAIRS.attach * prm.link * h[[int(ids[-1]) for ids in tids]] + LINKS.gap_noise * noise
-    # chain points within reach of each tip point (one threaded query)
+    reach_of = REPAIRS.attach * prm.link * h[[int(ids[-1]) for ids in tids]] + LINKS.gap_noise * sc.noise
+    # chain points within reach of each tip point (one threaded query of the tree over all
+    # points, built for the k-NN query: points of no chain are left out by their owner -1)
     allp = np.concatenate(tpts)
     with _sigint.held():
-        near = tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
+        near = sc.tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
     cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
     qall = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))
     qoff = np.r_[0, np.cumsum(cnt)]
     toff = np.r_[0, np.cumsum([len(x) for x in tpts])].tolist()
-    # most tips have no point of another chain ahead within reach: found for all at once (a
-    # test a little looser than the one below, with the owners as they are now: a tip whose
-    # chain is unchanged when its turn comes has no more candidates then)
     tip_of = np.repeat(np.repeat(np.arange(len(tips)), np.diff(toff)), cnt)  # the tip of each pair
     e_t = np.array([int(ids[-1]) for ids in tids], dtype=np.int64)
-    # (the tip direction as below: from the first point of end_portion's end piece, ids[-m], to
-    # the tip; a prefilter only: the exact test below still runs on every tip kept)
+    # (the tip direction as in _attach_target: from the first point of end_portion's end
+    # piece, ids[-m], to the tip)
     b_t = np.array([int(ids[-m]) if m <= len(ids) else int(ids[0]) for ids, m in zip(tids, tms)], dtype=np.int64)
     u_t = P[e_t] - P[b_t]
     u_t /= np.maximum(np.sqrt((u_t * u_t).sum(axis=1)), NUMERIC.tiny)[:, None]
@@ -269,66 +312,51 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
             & ((vq_all * u_t[tip_of]).sum(axis=1)
                >= (REPAIRS.attach_cos - NUMERIC.rel_loose) * np.sqrt((vq_all * vq_all).sum(axis=1))))
     has_cand = np.bincount(tip_of[cand], minlength=len(tips)) > 0
-    for t_, (i, s) in enumerate(tips):
-        c = chains[i]
-        if not topo.alive[i] or c.closed or topo.v[c.ends[s]] != 1:
-            continue
-        if not has_cand[t_] and c is tchain[t_]:
-            continue
-        r = c.ends[s]
-        ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
-        e = int(ids[-1])
-        same = c is tchain[t_]
-        E = end_portion(P, h, ids, span=REPAIRS.attach_span, m=tms[t_] if same else None)
-        u = E[0] - E[-1]
-        nu = np.linalg.norm(u)
-        if nu == 0:
-            continue
-        u = u / nu
-        # chain points of other chains within reach of the tip, ahead of it (within 45 degrees
-        # of its direction): the nearest (then lowest id) is where it attaches
-        if same:
-            tip_pts = tpts[t_]
-            a0, a1 = toff[t_], toff[t_ + 1]
-            if qoff[a1] == qoff[a0]:
-                continue
-            q = qall[qoff[a0]:qoff[a1]]
-            tp = np.repeat(tip_pts, cnt[a0:a1])
-        else:  # its chain was split meanwhile: queried again
-            tip_pts = np.r_[regions[r], e].astype(np.int64)
-            near_t = tree.query_ball_point(P[tip_pts], REPAIRS.attach * prm.link * float(h[e]) + LINKS.gap_noise * noise)
-            cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
-            if not cnt_t.sum():
-                continue
-            q = np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])
-            tp = np.repeat(tip_pts, cnt_t)
-        j = owner[q]
-        vq = P[q] - P[e]
-        ok = (j >= 0) & (j != i) & ((vq @ u) >= REPAIRS.attach_cos * np.sqrt((vq * vq).sum(axis=1)))
-        ok[ok] = [topo.alive[x] for x in j[ok].tolist()]
-        if not ok.any():
-            continue
-        q, j, tp = q[ok], j[ok], tp[ok]
-        d = np.sqrt(((P[q] - P[tp]) ** 2).sum(axis=1))
-        b = np.lexsort((q, d))[0]
-        q, j = int(q[b]), int(j[b])
-        cj = chains[j]
-        k = int(np.flatnonzero(cj.ids == q)[0])
-        m = len(cj.ids)
-        near_end = REPAIRS.attach_end_points
-        if not cj.closed and (k < near_end or k > m - 1 - near_end):
-            # near an end of the other chain: join its region there
-            rr = cj.ends[0 if k < near_end else 1]
-            if rr == r:
-                continue
-            topo.absorb(r, rr)
-            continue
-        # split chain j at q: q and its two chain neighbours form the new junction region
-        core = topo.split_chain(j, max(k - 1, 0), min(k + 2, m), i, s)
-        owner[core] = -1
-        if not cj.closed:  # the part after the split is a new chain
-            jn = len(chains) - 1
-            owner[chains[jn].ids] = jn
+    return _Prefilter(tchain, tms, tpts, toff, qall, qoff, cnt, has_cand)
+
+
+def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
+    """Where tip ``t_`` (end ``s`` of chain ``i``) attaches: ``(point, chain)``, or None.
+
+    The chain points of other live chains within reach of the tip, ahead of it (within 45
+    degrees of its direction): the nearest (then lowest id).
+    """
+    P, h = topo.P, sc.h
+    c = topo.chains[i]
+    r = c.ends[s]
+    ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
+    e = int(ids[-1])
+    same = c is pre.tchain[t_]
+    E = end_portion(P, h, ids, span=REPAIRS.attach_span, m=pre.tms[t_] if same else None)
+    u = E[0] - E[-1]
+    nu = np.linalg.norm(u)
+    if nu == 0:
+        return None
+    u = u / nu
+    if same:
+        a0, a1 = pre.toff[t_], pre.toff[t_ + 1]
+        if pre.qoff[a1] == pre.qoff[a0]:
+            return None
+        q = pre.qall[pre.qoff[a0]:pre.qoff[a1]]
+        tp = np.repeat(pre.tpts[t_], pre.cnt[a0:a1])
+    else:  # its chain was split meanwhile: queried again
+        tip_pts = np.r_[topo.regions[r], e].astype(np.int64)
+        near_t = sc.tree.query_ball_point(P[tip_pts], REPAIRS.attach * prm.link * float(h[e]) + LINKS.gap_noise * sc.noise)
+        cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
+        if not cnt_t.sum():
+            return None
+        q = np.concatenate([np.asarray(x, dtype=np.int64) for x in near_t])
+        tp = np.repeat(tip_pts, cnt_t)
+    j = owner[q]
+    vq = P[q] - P[e]
+    ok = (j >= 0) & (j != i) & ((vq @ u) >= REPAIRS.attach_cos * np.sqrt((vq * vq).sum(axis=1)))
+    ok[ok] = [topo.alive[x] for x in j[ok].tolist()]
+    if not ok.any():
+        return None
+    q, j, tp = q[ok], j[ok], tp[ok]
+    d = np.sqrt(((P[q] - P[tp]) ** 2).sum(axis=1))
+    b = np.lexsort((q, d))[0]
+    return int(q[b]), int(j[b])
 
 
 def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
