@@ -16,7 +16,7 @@ import numpy as np
 
 from ...neighbors import build_tree, knn
 from . import kernels as _k
-from .params import RobustParams
+from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
 __all__ = ["Neighbours", "Frames", "neighbours", "frames", "duplicates", "local_spacing", "tangents",
@@ -73,18 +73,22 @@ def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
     return Neighbours(tree, dist, idx, h)
 
 
-def frames(P: np.ndarray, nb: Neighbours) -> Frames:
+def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None) -> Frames:
     """Stage 2: tangents, linearity and the noise level (see :func:`tangents`).
 
     Noise-free input (estimated noise under ``SPACING.dedup_noise`` median spacings) retries the
     tangents near close curves with the smaller margin (:func:`retry_tangents`); under noise
     the vote takes in more neighbours (a tangent thrown across close curves by noise has more
-    of its neighbours' to outvote it).
+    of its neighbours' to outvote it). ``est``: the whole cloud's median spacing and noise,
+    used instead of those of ``P`` (a tile of a larger cloud decides as the whole).
     """
     idx, h = nb.idx, nb.h
     t, lin, rms, gain = tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
-    sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
-    hmed = float(np.median(h))
+    if est is None:
+        sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+        hmed = float(np.median(h))
+    else:
+        sig, hmed = float(est.sigma), float(est.hmed)
     clean = sig < SPACING.dedup_noise * hmed
     if clean:
         t, lin = retry_tangents(P, idx, h, t, lin, gain)

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ...errors import InputError
-from .thresholds import DEFAULTS
+from .thresholds import DEFAULTS, SPACING
 
-__all__ = ["RobustParams", "Scales"]
+__all__ = ["RobustParams", "Scales", "Estimates"]
 
 _POSITIVE = ("k", "shell_inner", "shell_outer", "link", "link_width", "min_spur")
 
@@ -89,6 +89,33 @@ class RobustParams:
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+
+class Estimates(NamedTuple):
+    """Whole-cloud estimates that a part of the cloud (a tile) must share with the whole.
+
+    The method takes a few decisions from them: the noise gates (noise-free input or not: the
+    tangent retry, the vote's size, the strand test, the duplicate rule), the radii's growth
+    with the noise, and the joins measured in median spacings. A tile of a larger cloud run
+    with the whole cloud's :class:`Estimates` decides as the whole would
+    (:func:`~.pipeline.estimate` computes them; ``reconstruct_robust(points, estimates=...)``
+    takes them). The local spacing of every point stays its own.
+
+    Attributes
+    ----------
+    hmed : float
+        Median local spacing.
+    sigma : float
+        Noise standard deviation per coordinate.
+    """
+
+    hmed: float
+    sigma: float
+
+    @property
+    def clean(self) -> bool:
+        """The cloud counts as noise-free (``sigma`` under ``SPACING.dedup_noise`` median spacings)."""
+        return bool(self.sigma < SPACING.dedup_noise * self.hmed)
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ import time
 
 import numpy as np
 
+from ...errors import InputError
 from ...network import CurveNetwork
 from ...neighbors import locality_order
 from ...validate import as_points
@@ -35,12 +36,12 @@ from .frames import duplicates, frames, lex_order, local_spacing, neighbours
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
-from .params import RobustParams, Scales
+from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
 from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
 
-__all__ = ["reconstruct_robust", "local_spacing", "shell_group_counts"]
+__all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts"]
 
 
 def _reconstruct_robust(
@@ -55,6 +56,7 @@ def _reconstruct_robust(
     min_spur: float | None = None,
     smooth: bool = False,
     smoothing: float | None = None,
+    estimates: Estimates | None = None,
 ) -> CurveNetwork:
     """Reconstruct a curve network without tuning: the robust default method.
 
@@ -83,6 +85,10 @@ def _reconstruct_robust(
         Smoothing factor per point in squared spacings (default: the mean squared distance
         of a sample from its curve, estimated from the spread around the local tangents);
         used only with ``smooth=True``.
+    estimates : Estimates, optional
+        The median spacing and noise level of a larger cloud this one is a part of (a tile):
+        the decisions taken from them (noise gates, duplicate rule, radii) are then the whole
+        cloud's. Default: estimated on ``points`` (see :func:`estimate`).
 
     Returns
     -------
@@ -107,14 +113,16 @@ def _reconstruct_robust(
     nb = neighbours(P, prm)  # 1. neighbours and spacing
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    fr = frames(P, nb)  # 2. tangents and noise
+    fr = frames(P, nb, estimates)  # 2. tangents and noise
     keep = duplicates(nb, fr)  # (noise-free samples repeated in one place: dropped, all redone)
     params_out["duplicates_dropped"] = 0 if keep is None else int(N - len(keep))
     if keep is not None:
         P, order = P[keep], order[keep]
         nb = neighbours(P, prm)
-        fr = frames(P, nb)
+        fr = frames(P, nb, estimates)
     params_out.update(_spacing_report(prm, nb.h, fr))
+    if estimates is not None:
+        params_out["estimates_given"] = True
     graph = linked_graph(P, nb, fr, prm)  # 3. links
     tm["graph"] = time.perf_counter() - t1
 
@@ -189,6 +197,38 @@ def _smoothing(prm: RobustParams, fr, dim: int) -> float:
         return float(prm.smoothing)
     hm = fr.hmed
     return max(fr.sigma**2 * max(dim - 1, 1), NOISE.smooth_min * hm**2) / hm**2
+
+
+def estimate(points, *, spacing: float | None = None, k: int | None = None) -> Estimates:
+    """The whole-cloud estimates the method takes its decisions from (see :class:`Estimates`).
+
+    The very values :func:`reconstruct_robust` computes on ``points``: running it on any part
+    of them with ``estimates=estimate(points)`` takes those decisions as the whole would.
+
+    Parameters
+    ----------
+    points : (N, 2) or (N, 3) array_like
+    spacing, k : optional
+        As for :func:`reconstruct_robust`.
+
+    Returns
+    -------
+    Estimates
+    """
+    P0 = as_points(points)
+    prm = RobustParams.from_keywords(spacing=spacing, k=k)
+    if len(P0) < DEFAULTS.min_points:
+        raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
+    with _k.compiled_for(len(P0)):
+        P = P0[_internal_order(P0)]
+        nb = neighbours(P, prm)
+        fr = frames(P, nb)
+        keep = duplicates(nb, fr)
+        if keep is not None:
+            P = P[keep]
+            nb = neighbours(P, prm)
+            fr = frames(P, nb)
+    return Estimates(hmed=fr.hmed, sigma=fr.sigma)
 
 
 @functools.wraps(_reconstruct_robust)
