@@ -1944,9 +1944,8 @@ def _junction_positions(P, h, items, prm):
     if graph is None:
         graph = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
     noise = float(prm.get("_noise", 0.0))
-    consts = np.array([JSPAN, JN, WALK_DEV, NW, 3.0 * _DEFAULTS["shell_outer"],
-                       SWALLOW * prm["shell_outer"], SWALLOW_COS, WIDEN,
-                       1.0 if "_graph" in prm else 0.0])
+    consts = _k.JunctionParams(JSPAN, JN, WALK_DEV, NW, 3.0 * _DEFAULTS["shell_outer"],
+                               SWALLOW * prm["shell_outer"], SWALLOW_COS, WIDEN, "_graph" in prm)
     X, maybe = _k.junction_nodes(P, np.ascontiguousarray(h, dtype=np.float64), graph[0], graph[1],
                                  bflat, boff, jb, rflat, roff, hj,
                                  float(prm.get("_width", max(prm["link_width"], 0.0))), noise, consts)
