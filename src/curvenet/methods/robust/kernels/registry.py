@@ -209,16 +209,17 @@ def compiled_for(n: int, min_points: int | None = None, cached: tuple = ()):
 
 
 def _cache_index(name: str) -> str | None:
-    """Path of the index file numba's disk cache keeps for the kernel ``name`` (None without
-    numba). numba's documentation ("Notes on caching") describes the cache as an index file
+    """Path of the index file numba's disk cache keeps for the kernel ``name`` (None when it is
+    not compiled). numba's documentation ("Notes on caching") describes the cache as an index file
     (``.nbi``) and data files (``.nbc``) in the ``__pycache__`` folder beside the source (or in
     ``NUMBA_CACHE_DIR``); the index is named ``<module>.<qualname>-<first line>.py<version>.nbi``.
     """
     k = KERNELS[name]
-    if k.compiled is None:
+    stats = getattr(k.compiled, "stats", None)  # (none: no numba, or NUMBA_DISABLE_JIT=1)
+    if stats is None:
         return None
     f = k.plain
-    folder = k.compiled.stats.cache_path
+    folder = stats.cache_path
     module = os.path.splitext(os.path.basename(f.__code__.co_filename))[0]
     tag = "py%d%d%s" % (sys.version_info[0], sys.version_info[1], getattr(sys, "abiflags", ""))
     return os.path.join(folder, f"{module}.{f.__qualname__}-{f.__code__.co_firstlineno}.{tag}.nbi")
@@ -242,8 +243,8 @@ def _compiled_already() -> bool:
     """True once the compiled tangent kernel (which every robust run calls) ran in this process:
     numba's cache is then warm, and small inputs gain from the compiled kernels too. (The
     strand test's kernels run compiled on their own, see :data:`NUMBA_MIN_POINTS_NOISY`.)"""
-    jit = KERNELS["tangents"].compiled
-    return jit is not None and bool(jit.signatures)
+    # (no signatures: numba absent, or NUMBA_DISABLE_JIT=1 made its version plain Python)
+    return bool(getattr(KERNELS["tangents"].compiled, "signatures", None))
 
 
 def compiled_active() -> bool:
