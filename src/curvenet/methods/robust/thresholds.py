@@ -62,8 +62,9 @@ class Spacing(NamedTuple):
     mean_div: float = 1.5
     #: neighbours whose raw spacings, with the point's own, give the median (points)
     n_median: int = 8
-    #: accumulators of numpy's pairwise summation of a row (numpy's unrolling, reproduced so
-    #: the sums are the same bits; a property of numpy, not a tuning)
+    #: accumulators of numpy's pairwise summation of a row, summed as a binary tree (a power
+    #: of two: numpy's unrolling, reproduced so the sums are the same bits; a property of numpy,
+    #: not a tuning)
     numpy_lanes: int = 8
 
 

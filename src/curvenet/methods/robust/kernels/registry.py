@@ -11,6 +11,12 @@ only slow. Without numba (or with ``CURVENET_NO_NUMBA=1``) only the plain versio
 
 The fixed constants of the kernels (:mod:`curvenet.methods.robust.thresholds`) are appended to
 their arguments here (``Kernel.groups``): the compiled code never holds a value of its own.
+
+numba's disk cache (``cache=True``) checks only the source file of the function it caches: after
+editing a helper in another module (say ``linalg.py``), a kernel that calls it (say
+``frames._tangents``) loads its old compiled code until its own file changes too. Delete the
+``*.nbi`` / ``*.nbc`` files of ``kernels/__pycache__`` then (tests/test_robust_kernels.py's
+bit-equality checks of compiled against plain runs catch a stale cache).
 """
 
 from __future__ import annotations
@@ -69,6 +75,10 @@ ORDER_MIN_POINTS = 100_000
 #: Blocks per thread of the parallel shell kernel (a few, for balance; one scratch set of about
 #: 44 bytes a point per block). Results never depend on it.
 BLOCKS_PER_THREAD = 4
+
+#: The shell kernel numbers points with int32 ids (half the scratch memory): more points than
+#: this are refused.
+MAX_SHELL_POINTS = 2**31 - 1
 
 #: The kernels whose loops run in parallel when compiled (``prange`` over independent points or
 #: blocks of points); the light vote_agreement and short_links stay serial: their parallel
@@ -335,7 +345,7 @@ def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
     """Shell group count of every point (or of the points ``subset``, the others 0): see
     :func:`~.shell._shell_groups` (``order``: the visiting order of all points when already
     computed, see :func:`_order`)."""
-    if P.shape[0] >= 2**31 - 1:
+    if P.shape[0] >= MAX_SHELL_POINTS:
         raise ValueError("too many points for the shell test (int32 ids)")
     if subset is not None:
         order = np.sort(np.asarray(subset, dtype=np.int64))
