@@ -8,7 +8,8 @@ import pytest
 
 import curvenet
 from curvenet.methods.robust import kernels as K
-from curvenet.methods.robust.kernels import chains, frames, graph, heap, linalg, nodes, registry as KR, shell
+from curvenet.methods.robust.kernels import chains, frames, graph, heap, linalg, nodes, shell
+from curvenet.methods.robust.kernels import registry as KR
 from curvenet import synth
 
 

@@ -268,7 +268,8 @@ def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no 
     return m
 
 
-def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise, jp, en, nd, la):  # pragma: no cover - compiled
+def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise,  # pragma: no cover - compiled
+                    jp, en, nd, la):
     """Node position of many junctions at once (see ``robust._junction_positions``).
 
     Junction ``j`` has the branches ``jb[j] .. jb[j + 1] - 1``; branch ``b`` is
