@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+
 def _heap_pop(heap_k, heap_v, hs):  # pragma: no cover - compiled
     """Pop the smallest entry of the binary heap ``heap_k[:hs]`` / ``heap_v[:hs]`` (key, then
     id: equal keys come out by id, so the order never depends on the insertion order).
