@@ -1,10 +1,15 @@
-"""Small inputs run the plain-Python kernels (no numba compile on a first run); same results."""
+"""Small inputs run the plain-Python kernels (no numba compile on a first run); same results.
+The two versions of every kernel live side by side: switching never rewrites a module global."""
+
+import os
 
 import numpy as np
 import pytest
 
 import curvenet
 from curvenet.methods.robust import kernels as K
+from curvenet.methods.robust.kernels import chains, frames, graph, heap, linalg, nodes, shell
+from curvenet.methods.robust.kernels import registry as KR
 from curvenet import synth
 
 
@@ -14,24 +19,25 @@ def _sig(net):
 
 
 def test_size_picks_the_kernels(monkeypatch):
-    monkeypatch.setattr(K, "_compiled_already", lambda: False)  # as in a fresh process
+    monkeypatch.setattr(KR, "_compiled_already", lambda: False)  # as in a fresh process
     with K.compiled_for(10) as use:
         assert use is False
-        assert K._kernel("tangents") is K._PY["tangents"]
-        assert K._pca01 is K._PY_HELPERS["_pca01"]
+        assert KR._kernel("tangents") is KR.KERNELS["tangents"].plain is frames._tangents
     with K.compiled_for(10**6) as use:
         assert use is K.HAVE_NUMBA
+        if use:
+            assert KR._kernel("tangents") is KR.KERNELS["tangents"].compiled
 
 
 @pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed")
 def test_python_and_compiled_paths_agree(monkeypatch):
     truth = synth.model("crossing")
     pts, _ = synth.sample(truth, noise=0.3, density_ratio=3, rng=4)
-    monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 10**9)
+    monkeypatch.setattr(KR, "NUMBA_MIN_POINTS", 10**9)
     with monkeypatch.context() as m:
-        m.setattr(K, "_compiled_already", lambda: False)  # the Python run, even after compiled ones
+        m.setattr(KR, "_compiled_already", lambda: False)  # the Python run, even after compiled ones
         a = curvenet.reconstruct(pts)
-    monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 0)
+    monkeypatch.setattr(KR, "NUMBA_MIN_POINTS", 0)
     b = curvenet.reconstruct(pts)
     assert _sig(a) == _sig(b)
 
@@ -40,10 +46,10 @@ def test_python_and_compiled_paths_agree(monkeypatch):
 def test_small_inputs_use_compiled_kernels_once_loaded(monkeypatch):
     truth = synth.model("cube")
     pts, _ = synth.sample(truth, rng=1)
-    monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 0)
+    monkeypatch.setattr(KR, "NUMBA_MIN_POINTS", 0)
     curvenet.reconstruct(pts)  # compiles or loads every kernel that runs
-    monkeypatch.setattr(K, "NUMBA_MIN_POINTS", 10**9)
-    assert K._compiled_already()
+    monkeypatch.setattr(KR, "NUMBA_MIN_POINTS", 10**9)
+    assert KR._compiled_already()
     with K.compiled_for(10) as use:
         assert use is True
 
@@ -55,27 +61,91 @@ def test_small_noisy_input_runs_the_strand_kernels_compiled_once_cached(monkeypa
     # of a small input as plain Python; the same result
     truth = synth.model("crossing")
     pts, _ = synth.sample(truth, noise=0.3, density_ratio=3, rng=4)
-    assert K.NUMBA_MIN_POINTS_NOISY <= len(pts) < K.NUMBA_MIN_POINTS
+    assert K.NUMBA_MIN_POINTS_NOISY <= len(pts) < KR.NUMBA_MIN_POINTS
     with monkeypatch.context() as m:
-        m.setattr(K, "NUMBA_MIN_POINTS", 0)
+        m.setattr(KR, "NUMBA_MIN_POINTS", 0)
         curvenet.reconstruct(pts)  # compiles (or loads) every kernel: numba caches them
-    assert K._in_cache(K.STRAND_KERNELS)
-    monkeypatch.setattr(K, "_compiled_already", lambda: False)  # as in a fresh process
+    assert KR._in_cache(K.STRAND_KERNELS)
+    monkeypatch.setattr(KR, "_compiled_already", lambda: False)  # as in a fresh process
     seen: dict[str, set] = {}
-    kernel = K._kernel
+    kernel = KR._kernel
 
     def spy(name):
         f = kernel(name)
-        seen.setdefault(name, set()).add(f is K._PY[name])
+        seen.setdefault(name, set()).add(f is KR.KERNELS[name].plain)
         return f
 
-    monkeypatch.setattr(K, "_kernel", spy)
+    monkeypatch.setattr(KR, "_kernel", spy)
     a = curvenet.reconstruct(pts)
     assert seen["noisy_tangents"] == {False} and seen["strand_cuts"] == {False}
     assert seen["tangents"] == {True} and seen["shell_groups"] == {True}
     # not in the cache (a first run after installing): plain Python, no compile
-    monkeypatch.setattr(K, "_in_cache", lambda names: not names)
+    monkeypatch.setattr(KR, "_in_cache", lambda names: not names)
     seen.clear()
     b = curvenet.reconstruct(pts)
     assert seen["strand_cuts"] == {True} and seen["noisy_tangents"] == {True}
     assert _sig(a) == _sig(b)
+
+
+_MODULES = (K, KR, chains, frames, graph, heap, linalg, nodes, shell)
+
+
+def _globals():
+    return {(m.__name__, k): v for m in _MODULES for k, v in vars(m).items()}
+
+
+def _same_globals(a, b):
+    return a.keys() == b.keys() and all(a[k] is b[k] for k in a)
+
+
+def test_switching_versions_rewrites_no_module_global(monkeypatch):
+    # whole runs, compiled then plain then compiled (both orders), on a noisy input: every kernel
+    # runs (the strand test's too); the modules' globals are the same objects during each run
+    # and after, and the plain kernels keep calling plain helpers
+    truth = synth.model("crossing")
+    pts, _ = synth.sample(truth, noise=0.3, density_ratio=3, rng=4)
+    before = _globals()
+    seen = []
+    kernel = KR._kernel
+
+    def spy(name):
+        assert _same_globals(_globals(), before), name
+        f = kernel(name)
+        seen.append(f is KR.KERNELS[name].plain)
+        return f
+
+    monkeypatch.setattr(KR, "_kernel", spy)
+    before = _globals()
+    sigs = []
+    for compiled in (K.HAVE_NUMBA, False, K.HAVE_NUMBA):
+        with monkeypatch.context() as m:
+            m.setattr(KR, "_compiled_already", lambda: compiled)
+            m.setattr(KR, "NUMBA_MIN_POINTS", 0 if compiled else 10**9)
+            m.setattr(K, "NUMBA_MIN_POINTS_NOISY", 0 if compiled else 10**9)
+            before = _globals()
+            seen.clear()
+            sigs.append(_sig(curvenet.reconstruct(pts)))
+            assert set(seen) == {not compiled}
+            assert _same_globals(_globals(), before)
+    assert sigs[0] == sigs[1] == sigs[2]
+    for f in (frames._tangents_block, frames._noisy_tangent_at, graph._strand_cuts):
+        assert f.__globals__["_pca01"] is linalg._pca01
+    assert nodes._fit_end.__globals__["_eig_top"] is linalg._eig_top
+    assert shell._shell_groups_block.__globals__["_heap_push"] is heap._heap_push
+
+
+@pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed")
+def test_in_cache_reads_numba_s_index_file(monkeypatch, tmp_path):
+    # the index numba writes beside the source once a kernel is compiled: _in_cache finds it
+    KR.KERNELS["csr_union"].compiled(3, np.array([0, 1]), np.array([1, 2]))
+    path = KR._cache_index("csr_union")
+    assert os.path.isfile(path) and KR._in_cache(("csr_union",)) and KR._in_cache(())
+    # an index older than its source is stale (numba would compile): not in the cache
+    src = KR.KERNELS["csr_union"].plain.__code__.co_filename
+    stale = tmp_path / "stale.nbi"
+    stale.write_bytes(b"")
+    os.utime(stale, (os.path.getmtime(src) - 10, os.path.getmtime(src) - 10))
+    monkeypatch.setattr(KR, "_cache_index", lambda name: str(stale))
+    assert not KR._in_cache(("csr_union",))
+    monkeypatch.setattr(KR, "_cache_index", lambda name: str(tmp_path / "missing.nbi"))
+    assert not KR._in_cache(("csr_union",))

@@ -9,9 +9,16 @@ from curvenet.methods.robust import chains as RC
 from curvenet.methods.robust import frames as RF
 from curvenet.methods.robust import graph as RG
 from curvenet.methods.robust import kernels as K
-from curvenet.methods.robust.thresholds import SPACING, TANGENTS
+from curvenet.methods.robust.kernels import heap, linalg, nodes, registry as KR, shell
+from curvenet.methods.robust.thresholds import LINALG, SHELL, SPACING, STRIP, TANGENTS
 from curvenet import synth
 from curvenet.neighbors import build_tree, knn
+
+
+def _plain(name):
+    """The plain-Python version of the kernel ``name``, its threshold groups appended."""
+    k = KR.KERNELS[name]
+    return lambda *args: k.plain(*args, *k.groups)
 
 
 def _pca_dir(Q, w=None):
@@ -44,7 +51,7 @@ def test_eig_sym_matches_lapack(d):
             C = np.outer(A[:, 0], A[:, 0])
         V = np.zeros((d, d))
         ev = np.zeros(d)
-        K._eig_sym_py(C.copy(), V, ev)
+        linalg._eig_sym(C.copy(), V, ev, LINALG)
         ref, vref = np.linalg.eigh(C)
         scale = max(abs(ref).max(), 1e-300)
         assert np.allclose(ev, ref, atol=1e-12 * scale)
@@ -59,7 +66,7 @@ def test_eig_top_matches_lapack(d):
     # closed form for d = 2, 3 (Jacobi for the rest and near-equal top eigenvalues): all the
     # eigenvalues and the top eigenvector, the same bits compiled and in plain Python
     rng = np.random.default_rng(10 + d)
-    jit = K._JIT_HELPERS.get("_eig_top")
+    jit = KR.compiled_version(linalg._eig_top)
     for i in range(400):
         A = rng.normal(size=(d, 5)) * rng.uniform(1e-6, 1e6)
         C = A @ A.T
@@ -75,7 +82,7 @@ def test_eig_top_matches_lapack(d):
             C = C + 1e3 * abs(C).max() * np.eye(d)
         V = np.zeros((d, d))
         ev = np.zeros(d)
-        K._eig_top_py(C.copy(), V, ev)
+        linalg._eig_top(C.copy(), V, ev, LINALG)
         ref, vref = np.linalg.eigh(C)
         scale = max(abs(ref).max(), 1e-300)
         assert np.allclose(ev, ref, atol=1e-9 * scale), (i, ev, ref)
@@ -85,7 +92,7 @@ def test_eig_top_matches_lapack(d):
         if jit is not None:
             V2 = np.zeros((d, d))
             ev2 = np.zeros(d)
-            jit(C.copy(), V2, ev2)
+            jit(C.copy(), V2, ev2, LINALG)
             assert np.array_equal(V2[:, -1], V[:, -1]) and np.array_equal(ev2, ev)
 
 
@@ -99,7 +106,7 @@ def test_end_count_matches_numpy_prefix_sums():
         lim = float(rng.choice([rng.uniform(0, seg[-1] * 1.2), seg[rng.integers(len(seg))]]))
         ref = int(np.searchsorted(seg, lim, side="right"))
         assert K.end_count(P, ids, lim) == ref
-        assert K._end_count(P, ids, lim) == ref
+        assert nodes._end_count(P, ids, lim) == ref
 
 
 @pytest.fixture(scope="module")
@@ -141,15 +148,15 @@ def _check_tangents(P, idx, h, margin, subset):
     def strip_score(u):  # (n, d) unit directions -> (n,)
         al = np.einsum("nkd,nd->nk", rel[:, 1:], u)
         q = np.maximum(np.einsum("nkd,nkd->nk", rel[:, 1:], rel[:, 1:]) - al**2, 0.0)
-        near = np.abs(al) <= K.STRIP_A * h[:, None]
-        return (np.exp(-q / (K.STRIP_W * h[:, None]) ** 2) * near).sum(axis=1)
+        near = np.abs(al) <= STRIP.a * h[:, None]
+        return (np.exp(-q / (STRIP.w * h[:, None]) ** 2) * near).sum(axis=1)
 
     # where the 4-neighbour PCA is not clearly linear, the direction towards one of the 4 nearest
     # neighbours wins by a margin (first of the best)
     cand = rel[:, 1:5] / np.linalg.norm(rel[:, 1:5], axis=2, keepdims=True)
     sc = np.stack([strip_score(cand[:, j]) for j in range(4)], axis=1)
     j = np.argmax(sc, axis=1)
-    tried = lin4 < K.CAND_LIN
+    tried = lin4 < STRIP.cand_lin
     # the gain: best neighbour direction's score minus the 4-neighbour direction's, where tried
     gain_ref = np.where(tried, sc[np.arange(n), j] - strip_score(t4), -np.inf)
     assert np.allclose(gain[subset], gain_ref[subset], atol=1e-9, rtol=0)
@@ -228,7 +235,7 @@ def test_compiled_and_python_runs_agree(cloud, tmp_path):
 
 def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
     """The parallel kernels give the same arrays whether their loops run on all threads or on
-    one (:data:`_robust_kernels.PAR_MIN`), and as the plain-Python loops."""
+    one (:data:`kernels.registry.PAR_MIN`), and as the plain-Python loops."""
     P, dist, idx, h = cloud
     cand = np.arange(0, len(P), 3, dtype=np.int64)
 
@@ -242,16 +249,16 @@ def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
         g = K.shell_groups(P, h, indptr, indices, 1.5, 3.3)
         return (t, lin, chord, *e, *s, agree, *u, g)
 
-    monkeypatch.setattr(K, "PAR_MIN", {name: 1 << 62 for name in K.PAR_MIN})
+    monkeypatch.setattr(KR, "PAR_MIN", {name: 1 << 62 for name in KR.PAR_MIN})
     one = run()
-    monkeypatch.setattr(K, "PAR_MIN", {name: 0 for name in K.PAR_MIN})
+    monkeypatch.setattr(KR, "PAR_MIN", {name: 0 for name in KR.PAR_MIN})
     par = run()
     for a, b in zip(one, par):
         assert np.array_equal(a, b, equal_nan=True)
     t, lin = par[0], par[1]
-    for got, ref in ((par[3:6], K._PY["linked_edges"](P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
-                     (par[6:8], K._PY["short_links"](h, dist, idx, 2.5)),
-                     ((par[8],), (K._PY["vote_agreement"](t, idx, 8),))):
+    for got, ref in ((par[3:6], _plain("linked_edges")(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
+                     (par[6:8], _plain("short_links")(h, dist, idx, 2.5)),
+                     ((par[8],), (_plain("vote_agreement")(t, idx, 8),))):
         for a, b in zip(got, ref):
             assert np.array_equal(a, b)
 
@@ -328,7 +335,7 @@ def test_trim_ends_match_the_numpy_formula(py):
         d1.append(rng.uniform() < 0.8)
     flat = np.concatenate(chains).astype(np.int64)
     off = np.r_[0, np.cumsum([len(c) for c in chains])].astype(np.int64)
-    f = K._PY["trim_ends"] if py else K.trim_ends
+    f = _plain("trim_ends") if py else K.trim_ends
     lo, hi = f(P, h, flat, off, np.array(d0), np.array(d1), np.array(x0), np.array(x1), 12.0)
     dropped = 0
     for i, ids in enumerate(chains):
@@ -384,8 +391,8 @@ def test_junction_nodes_match_the_numpy_least_squares(py, d):
     boff = np.r_[0, np.cumsum([len(b) for b in bl])].astype(np.int64)
     jb = np.r_[0, np.cumsum(nb)].astype(np.int64)
     roff = np.zeros(31, dtype=np.int64)
-    consts = np.array([4.0, 6.0, 1.25, 4.5, 1e9, 0.8 * 5.5, 0.9, 1.5, 0.0])
-    f = K._PY["junction_nodes"] if py else K.junction_nodes
+    consts = K.JunctionParams(4.0, 6.0, 1.25, 4.5, 1e9, 0.8 * 5.5, 0.9, 1.5, False)
+    f = _plain("junction_nodes") if py else K.junction_nodes
     X, maybe = f(P, h, np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), bflat, boff, jb,
                  np.zeros(0, dtype=np.int64), roff, np.ones(30), 1.0, 0.0, consts)
     assert not maybe.any()
@@ -410,7 +417,7 @@ def test_vote_eig_matches_lapack(d):
     idx = np.stack([rng.choice(n, m, replace=False) for _ in range(n)]).astype(np.int64)
     cand = np.sort(rng.choice(n, 150, replace=False)).astype(np.int64)
     U, coh = K.vote_eig(t, idx, m, cand)
-    U_py, coh_py = K._PY["vote_eig"](t, idx, m, cand)
+    U_py, coh_py = _plain("vote_eig")(t, idx, m, cand)
     assert np.array_equal(U, U_py) and np.array_equal(coh, coh_py)  # compiled or not, same bits
     T = t[np.concatenate([cand[:, None], idx[cand]], axis=1)]
     ev, V = np.linalg.eigh(np.einsum("nki,nkj->nij", T, T))
@@ -482,14 +489,12 @@ def test_shell_groups_match_scipy_dijkstra(py, monkeypatch):
         got = K.shell_groups(P, h, indptr, indices, 2.5, 5.5, subset=pts)
         assert np.array_equal(got[pts], ref)
         return
-    monkeypatch.setattr(K, "_compiled_already", lambda: False)
     pushes = []
-    for fm in (K.FRONT_MAX, 0, 10**9):
-        monkeypatch.setattr(K, "FRONT_MAX", fm)
-        with K.compiled_for(0):  # plain Python kernels and helpers
-            push = K._heap_push  # (compiled_for puts the helpers back on leaving)
-            K._heap_push = lambda *a, _fm=fm: pushes.append(_fm) or push(*a)
-            got = K._PY["shell_groups"](P, h, indptr, indices, 2.5, 5.5, pts.astype(np.int64), 1)
+    for fm in (SHELL.front_max, 0, 10**9):
+        # the plain kernel calls the heap of its module's globals (the compiled one its own)
+        monkeypatch.setattr(shell, "_heap_push", lambda *a, _fm=fm: pushes.append(_fm) or heap._heap_push(*a))
+        got = shell._shell_groups(P, h, indptr, indices, 2.5, 5.5, pts.astype(np.int64), 1,
+                                  SHELL._replace(front_max=fm))
         assert np.array_equal(got[pts], ref), fm
     # the clump fills the short list (the heap is used), the curve points never do
     assert 0 < pushes.count(32) < pushes.count(0) and 10**9 not in pushes
@@ -530,7 +535,7 @@ def test_chain_order_matches_scipy_dijkstra(py):
     dst, dd = idx[keep], dist[keep]
     mask = rng.uniform(size=n) < 0.9  # "flagged" points cut the graph further
     chn, n_chn = RG.components(n, src, dst, mask)
-    f = K._PY["chain_order"] if py else K.chain_order
+    f = _plain("chain_order") if py else K.chain_order
     for w in (dd, np.round(dd / dd.mean(), 1), np.zeros_like(dd)):
         ids_o, par_o, bounds = f(n, src, dst, np.ascontiguousarray(w), chn, n_chn)
         ref = _chain_order_reference(n, src, dst, w, chn, n_chn)
@@ -548,7 +553,7 @@ def test_end_counts_match_end_portion(py):
     lists = [rng.integers(0, 200, size=int(rng.integers(0, 30))) for _ in range(300)]
     flat = np.concatenate(lists).astype(np.int64)
     off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
-    f = K._PY["end_counts"] if py else K.end_counts
+    f = _plain("end_counts") if py else K.end_counts
     for span in (0.0, 3.0, 4.0):
         m = f(P, h, flat, off, span)
         assert [int(x) for x in m] == [len(RC.end_portion(P, h, ids, span=span)) for ids in lists]
@@ -574,7 +579,7 @@ def _components_reference(n, a, b, mask):
 @pytest.mark.parametrize("py", [False, True])
 def test_components_match_scipy(py):
     rng = np.random.default_rng(2)
-    f = K._PY["components"] if py else K.components
+    f = _plain("components") if py else K.components
     for n, m, frac in ((1, 0, 1.0), (50, 0, 0.5), (3000, 2500, 0.8), (3000, 6000, 0.9), (500, 3000, 0.3)):
         a = rng.integers(0, n, size=m)
         b = rng.integers(0, n, size=m)
@@ -594,12 +599,12 @@ def test_spacing_kernel_matches_the_numpy_formula(cloud, k):
     P = P[np.lexsort(P.T[::-1])]
     dist, idx = knn(P, k)
     got = RF._spacing_floor(K.spacing(dist, idx, SPACING.dup, SPACING.dup_k))  # compiled when numba is there
-    py = RF._spacing_floor(K._PY["spacing"](dist, idx, SPACING.dup, SPACING.dup_k))
-    token = K._COMPILED.set(False)
+    py = RF._spacing_floor(_plain("spacing")(dist, idx, SPACING.dup, SPACING.dup_k))
+    token = KR._COMPILED.set(False)
     try:
         ref = RF.local_spacing(dist, idx)  # the numpy formula
     finally:
-        K._COMPILED.reset(token)
+        KR._COMPILED.reset(token)
     assert np.array_equal(got, ref) and np.array_equal(py, ref)
 
 
@@ -634,7 +639,7 @@ def test_untangle_makes_a_zigzag_a_path(py, dim):
     X = np.r_[X1, X2, X1[:3]]
     off = np.array([0, len(X1), len(X1) + len(X2), len(X)], dtype=np.int64)
     which = np.array([0, 1, 2], dtype=np.int64)
-    f = K._PY["untangle"] if py else K.untangle
+    f = _plain("untangle") if py else K.untangle
     order = f(X, off, which, 32, -0.5)
     assert sorted(order.tolist()) == list(range(len(X)))
     for c in range(3):
@@ -650,7 +655,7 @@ def test_untangle_makes_a_zigzag_a_path(py, dim):
     assert ((d[1:] * d[:-1]).sum(axis=1) < -0.5).sum() == 1  # only at the apex
     assert np.array_equal(order[len(X1):], np.arange(len(X1), len(X)))  # the path, the short one
     # compiled and Python runs agree
-    assert np.array_equal(order, K._PY["untangle"](X, off, which, 32, -0.5))
+    assert np.array_equal(order, _plain("untangle")(X, off, which, 32, -0.5))
 
 
 def _strands(gap, n=60, sigma=0.3, seed=0):

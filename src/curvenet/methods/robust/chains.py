@@ -15,7 +15,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from . import kernels as _k
 from .graph import Graph, components
-from .thresholds import CHAINS, NUMERIC
+from .thresholds import CHAINS, ENDS, NUMERIC
 
 __all__ = ["Chain", "trace_chains", "order_chains", "fit_line", "step_lengths", "polylen", "chain_lengths",
            "extent", "order_between", "end_portion", "end_counts"]
@@ -128,7 +128,7 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     # the linked graph inside the chains below (their loops are cut open on it)
     inside = (chn[src] >= 0) & (chn[src] == chn[dst])
     inside[inside] = np.isin(chn[src[inside]], special)
-    g = coo_matrix((np.maximum(dd[inside], NUMERIC.min_edge), (src[inside], dst[inside])), shape=(N, N)).tocsr()
+    g = coo_matrix((np.maximum(dd[inside], CHAINS.min_edge), (src[inside], dst[inside])), shape=(N, N)).tocsr()
     for ci in special.tolist():
         seg = ids_o[b[ci]:b[ci + 1]]
         if free[ci]:
@@ -150,12 +150,12 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
 def _other_end(ci, ends, regs, par, length, hl):
     """A short chain given the same region at both ends that also touches another region.
 
-    Under ``2 * CHAINS.short_reach`` spacings long, both halves of a chain may be linked mostly to
+    Under ``2 * CHAINS.end_reach`` spacings long, both halves of a chain may be linked mostly to
     the larger region at one end (a sparse free branch, whose long links reach the chain's far
     end): the other region touched (most contacts; ties: lowest id) takes the side its
     contacts lie on (mean position along the chain against that of the first region's).
     """
-    if length > 2 * CHAINS.short_reach * hl:
+    if length > 2 * CHAINS.end_reach * hl:
         return
     r = ends[ci, 0]
     other = regs != r
@@ -303,7 +303,7 @@ def end_portion(P, h, ids, span, m=None):
     if m is None:
         hl = float(h[ids[-1]])
         # arc length summed backwards from the end, only as far as needed (compiled kernel)
-        m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(CHAINS.end_min_points, n))
+        m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(ENDS.min_points, n))
     return P[ids[: -m - 1: -1]]
 
 

@@ -140,8 +140,8 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
         h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
                        float(SPACING.dup), float(SPACING.dup_k))
         return _spacing_floor(h)
-    m = min(SPACING.mean_of, dist.shape[1])
-    div = SPACING.mean_div if m >= SPACING.mean_of else 1.0
+    m = min(SPACING.n_mean, dist.shape[1])
+    div = SPACING.mean_div if m >= SPACING.n_mean else 1.0
     raw = np.empty(len(dist))
     step = SPACING.block  # rows at a time: the (rows, k) temporaries stay small at any N
     for a in range(0, len(dist), step):
@@ -154,7 +154,7 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
         sel = keep & (np.cumsum(keep, axis=1) <= m)
         cnt = sel.sum(axis=1)
         raw[a:a + step] = np.where(cnt >= m, np.where(sel, D, 0.0).sum(axis=1) / np.maximum(cnt, 1) / div, raw0)
-    j = min(SPACING.smooth_of, idx.shape[1])
+    j = min(SPACING.n_median, idx.shape[1])
     h = np.empty(len(dist))
     for a in range(0, len(dist), step):
         R = np.concatenate([raw[a:a + step, None], raw[idx[a:a + step, :j]]], axis=1)

@@ -314,8 +314,8 @@ def hidden_fork(P, sc: Scales, prm: RobustParams, ids, rid, paths):
         A += M
         bb += M @ cc
     anchor = P[S[p1[f]]]
-    A += NODES.fork_pull * np.eye(dim)
-    bb += NODES.fork_pull * anchor
+    A += NODES.anchor_pull * np.eye(dim)
+    bb += NODES.anchor_pull * anchor
     x = np.linalg.solve(A, bb)
     if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm.shell_outer * hs:
         x = anchor
@@ -330,7 +330,7 @@ def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):
     place): the region points along the segment from the node to it, without a gap, form it.
     """
     h = sc.h
-    if len(rid) < NODES.swallow_min_points:
+    if len(rid) < NODES.swallow_min:
         return []
     hl = float(np.median(h[rid]))
     noise = sc.noise

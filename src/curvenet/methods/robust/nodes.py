@@ -226,8 +226,8 @@ def junction_positions(P, sc: Scales, prm: RobustParams, items):
     rflat = rs[first]
     roff = np.r_[0, np.cumsum(np.bincount(gs[first], minlength=len(rids)))].astype(np.int64)
     noise = float(sc.noise)
-    consts = np.array([NODES.fit_span, NODES.fit_noise, NODES.walk_dev, LINKS.strip_noise, NODES.walk_far,
-                       NODES.swallow * prm.shell_outer, NODES.swallow_cos, SHELL.widen, 1.0])
+    consts = _k.JunctionParams(NODES.fit_span, NODES.fit_noise, NODES.walk_dev, LINKS.strip_noise, NODES.walk_far,
+                               NODES.swallow * prm.shell_outer, NODES.swallow_cos, SHELL.widen, True)
     X, maybe = _k.junction_nodes(P, np.ascontiguousarray(h, dtype=np.float64), sc.indptr, sc.indices,
                                  bflat, boff, jb, rflat, roff, hj, float(sc.width), noise, consts)
     return X, maybe

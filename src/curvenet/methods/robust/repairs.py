@@ -411,7 +411,7 @@ def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> 
     for r in np.flatnonzero(topo.v == 2).tolist():
         inc = sorted(set(topo.incident(r)))
         (i, _), (j, _) = inc
-        if i != j and len(topo.regions[r]) >= NODES.swallow_min_points:
+        if i != j and len(topo.regions[r]) >= NODES.swallow_min:
             X, maybe = junction_positions(P, sc, prm, [(topo.chains, inc, topo.regions[r])])
             if maybe[0] and swallowed_branches(P, sc, prm, topo.chains, inc, topo.regions[r], X[0]):
                 continue

@@ -1,0 +1,517 @@
+"""Node kernels: end portions of chains, junction node positions, and the trimming of chain
+points that lie behind their nodes.
+
+The fixed constants come in the groups :class:`~curvenet.methods.robust.thresholds.Ends`
+(``en``), ``Nodes`` (``nd``) and ``Linalg`` (``la``); the method's settings of the junction
+placement in a :class:`JunctionParams` (``jp``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .linalg import _eig_top, _solve_small
+
+
+class JunctionParams(NamedTuple):
+    """The method's settings of the junction placement (:func:`_junction_nodes`); lengths in
+    local spacings ``h`` unless said otherwise."""
+
+    #: the lines are fitted on each branch's end over this arc length (spacings; robust.JSPAN)
+    jspan: float
+    #: plus this many noise levels over the end's spacing (unitless; robust.JN)
+    jn: float
+    #: a walk into the region stops where it strays more than this many link widths from the
+    #: branch's line (unitless; robust.WALK_DEV)
+    walk_dev: float
+    #: the link width is at least this many noise levels (unitless; robust.NW)
+    nw: float
+    #: the node falls back to the anchor beyond this distance from it (spacings)
+    far: float
+    #: a hidden branch has region points beyond this distance from the node (spacings of the
+    #: widened junction spacing)
+    swallow_r: float
+    #: ... in a direction whose cosine to every branch is below this (cosine; robust.SWALLOW_COS)
+    swallow_cos: float
+    #: the junction spacing is widened by this many noise levels there (unitless; robust.WIDEN)
+    widen: float
+    #: whether the branches are walked into the region along the linked graph
+    use_graph: bool
+
+
+def _end_count(P, ids, lim):  # pragma: no cover - compiled
+    """How many points, from the last id of ``ids`` backwards, lie within arc length ``lim``.
+
+    The count of prefix sums ``0, |x1 - x0|, ...`` of the reversed polyline that are ``<= lim``
+    (what ``searchsorted(seg, lim, side="right")`` gives), with the sums formed exactly as numpy's
+    ``cumsum(norm(diff(X), axis=1))`` forms them, so the result is the same bit for bit.
+    """
+    n = ids.shape[0]
+    d = P.shape[1]
+    if n == 0 or not lim >= 0.0:
+        return 0
+    s = 0.0
+    m = 1
+    for q in range(n - 1, 0, -1):
+        a = ids[q]
+        b = ids[q - 1]
+        sq = 0.0
+        for c in range(d):
+            t = P[b, c] - P[a, c]
+            sq = sq + t * t if c > 0 else t * t
+        s += np.sqrt(sq)
+        if not s <= lim:
+            break
+        m += 1
+    return m
+
+
+def _end_counts(P, h, flat, off, span, en):  # pragma: no cover - compiled
+    """How many points of each id list make its end portion (see robust._end_portion).
+
+    For list ``b``, ``ids = flat[off[b]:off[b + 1]]`` (running towards its end): the count of
+    :func:`_end_count` within ``span * h[ids[-1]]``, at least ``min(en.min_points, len(ids))``.
+
+    Returns
+    -------
+    (n_lists,) ndarray of int64
+    """
+    nb = off.shape[0] - 1
+    out = np.zeros(nb, dtype=np.int64)
+    for b in range(nb):
+        n = off[b + 1] - off[b]
+        if n == 0:
+            continue
+        ids = flat[off[b]:off[b + 1]]
+        m = _end_count(P, ids, span * h[ids[n - 1]])
+        least = en.min_points if en.min_points < n else n
+        out[b] = m if m > least else least
+    return out
+
+
+def _branch_buffer(flat, off, extra):  # pragma: no cover - compiled
+    """Branches ``flat[off[b]:off[b + 1]]`` as the rows of an array with room for ``extra``
+    more ids each: ``buf`` (n_branches, longest + extra) and the lengths ``cnt``."""
+    nbr = off.shape[0] - 1
+    cap = 1
+    for b in range(nbr):
+        if off[b + 1] - off[b] > cap:
+            cap = off[b + 1] - off[b]
+    buf = np.zeros((nbr, cap + extra), dtype=np.int64)
+    cnt = np.zeros(nbr, dtype=np.int64)
+    for b in range(nbr):
+        n = off[b + 1] - off[b]
+        for i in range(n):
+            buf[b, i] = flat[off[b] + i]
+        cnt[b] = n
+    return buf, cnt
+
+
+def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en, nd):  # pragma: no cover - compiled
+    """Walk every branch end into its junction region, in turns (see robust._junction_positions).
+
+    Branch ``b`` is ``flat[off[b]:off[b + 1]]`` (running towards the junction); ``rs`` the sorted
+    unique region points. Each round, every active branch (at least 2 points) proposes the
+    nearest unclaimed region point linked to its end ``cur`` (CSR ``indptr``, ``indices``) that
+    lies ahead, ``al > nd.ahead * h_cur`` along the unit direction from the point ``en.walk_span * h_cur`` back
+    along the branch (as ``robust._end_portion``) to ``cur``, and within
+    ``max(width * h_cur, wnoise)`` of that line; distance ``hypot(al, perp)``, ties: lowest id.
+    A branch with no such point stops. Proposals are taken by increasing (distance, id), a
+    point claimed once only. Rounds stop when nothing is proposed.
+
+    Returns
+    -------
+    buf : (n_branches, cap) ndarray of int64
+    cnt : (n_branches,) ndarray of int64
+        Branch ``b`` extended is ``buf[b, :cnt[b]]``.
+    """
+    nbr = off.shape[0] - 1
+    nr = rs.shape[0]
+    d = P.shape[1]
+    buf, cnt = _branch_buffer(flat, off, nr + 1)
+    active = np.zeros(nbr, dtype=np.bool_)
+    for b in range(nbr):
+        active[b] = cnt[b] >= 2
+    claimed = np.zeros(nr, dtype=np.bool_)
+    pd_ = np.empty(nbr)
+    pj = np.empty(nbr, dtype=np.int64)
+    pb = np.empty(nbr, dtype=np.int64)
+    u = np.empty(d)
+    for it in range(nr + 1):
+        npr = 0
+        for bi in range(nbr):
+            if not active[bi]:
+                continue
+            n = cnt[bi]
+            cur = buf[bi, n - 1]
+            hl = h[cur]
+            # the end portion over en.walk_span h: prefix sums of the reversed branch
+            lim = en.walk_span * hl
+            s = 0.0
+            m = 1
+            for q in range(n - 1, 0, -1):
+                a = buf[bi, q]
+                c2 = buf[bi, q - 1]
+                sq = 0.0
+                for c in range(d):
+                    t = P[c2, c] - P[a, c]
+                    sq = sq + t * t if c > 0 else t * t
+                s += np.sqrt(sq)
+                if not s <= lim:
+                    break
+                m += 1
+            if m < en.min_points and n >= en.min_points:
+                m = en.min_points
+            elif m < n and n < en.min_points:
+                m = n
+            far = buf[bi, n - m]
+            nu2 = 0.0
+            for c in range(d):
+                u[c] = P[cur, c] - P[far, c]
+                nu2 += u[c] * u[c]
+            nu = np.sqrt(nu2)
+            if nu == 0:
+                active[bi] = False
+                continue
+            for c in range(d):
+                u[c] = u[c] / nu
+            w = width * hl
+            if wnoise > w:
+                w = wnoise
+            any_nb = False
+            best_d = np.inf
+            best_j = -1
+            for e in range(indptr[cur], indptr[cur + 1]):
+                j = indices[e]
+                pos = np.searchsorted(rs, j)
+                if pos >= nr or rs[pos] != j or claimed[pos]:
+                    continue
+                any_nb = True
+                al = 0.0
+                vv = 0.0
+                for c in range(d):
+                    v = P[j, c] - P[cur, c]
+                    al += v * u[c]
+                    vv = vv + v * v if c > 0 else v * v
+                x = vv - al * al
+                perp = np.sqrt(x if x > 0.0 else 0.0)
+                if al > nd.ahead * hl and perp <= w:
+                    dj = np.hypot(al, perp)
+                    if dj < best_d or (dj == best_d and j < best_j):
+                        best_d = dj
+                        best_j = j
+            if not any_nb or best_j < 0:
+                active[bi] = False
+                continue
+            # insert the proposal, sorted by (distance, id), stable
+            i = npr
+            while i > 0 and (pd_[i - 1] > best_d or (pd_[i - 1] == best_d and pj[i - 1] > best_j)):
+                pd_[i] = pd_[i - 1]
+                pj[i] = pj[i - 1]
+                pb[i] = pb[i - 1]
+                i -= 1
+            pd_[i] = best_d
+            pj[i] = best_j
+            pb[i] = bi
+            npr += 1
+        if npr == 0:
+            break
+        for i in range(npr):
+            pos = np.searchsorted(rs, pj[i])
+            if claimed[pos]:
+                continue
+            bi = pb[i]
+            buf[bi, cnt[bi]] = pj[i]
+            cnt[bi] += 1
+            claimed[pos] = True
+    return buf, cnt
+
+
+def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no cover - compiled
+    """Line through the end portion of ``ids`` (running towards the end) over ``span`` h.
+
+    The end portion is that of ``robust._end_portion``: the points from the last id backwards
+    within arc length ``span * h[ids[-1]]``, at least ``min(en.min_points, n)``. Its mean goes into ``mu``
+    and, when ``with_dir``, its principal direction into ``u``. Returns the number of points in
+    the portion (the direction is meaningful only when it is at least 2).
+    """
+    n = ids.shape[0]
+    d = P.shape[1]
+    if n < 2:
+        m = n
+    else:
+        m = _end_count(P, ids, span * h[ids[n - 1]])
+        if m < en.min_points and n >= en.min_points:
+            m = en.min_points
+        elif m < n and n < en.min_points:
+            m = n
+    for c in range(d):
+        acc = 0.0
+        for q in range(n - m, n):
+            acc += P[ids[q], c]
+        mu[c] = acc / m if m > 0 else 0.0
+    if not with_dir:
+        return m
+    for i in range(d):
+        for j in range(i, d):
+            acc = 0.0
+            for q in range(n - m, n):
+                acc += (P[ids[q], i] - mu[i]) * (P[ids[q], j] - mu[j])
+            C[i, j] = acc
+            C[j, i] = acc
+    if m >= 2:
+        _eig_top(C, V, ev, la)
+        for c in range(d):
+            u[c] = V[c, d - 1]
+    return m
+
+
+def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise,  # pragma: no cover - compiled
+                    jp, en, nd, la):
+    """Node position of many junctions at once (see ``robust._junction_positions``).
+
+    Junction ``j`` has the branches ``jb[j] .. jb[j + 1] - 1``; branch ``b`` is
+    ``bflat[boff[b]:boff[b + 1]]`` (point ids running towards the junction); its region points
+    are ``rflat[roff[j]:roff[j + 1]]`` (sorted, unique). ``hj[j]``: the junction's spacing (the
+    median over its region points; without region points, over its branches' first points).
+    ``jp``: the method's settings (:class:`JunctionParams`).
+
+    Each branch is walked into the region (:func:`_extend_into_region`), the walk cut where it
+    leaves a strip of ``jp.walk_dev`` link widths around the line fitted on the branch's end; the
+    node is the least-squares intersection of the lines fitted on the walked ends, pulled a
+    little (weight ``nd.anchor_pull``) towards the mean of the branch ends (the anchor), and the anchor when
+    it lands over the largest distance away.
+
+    Returns
+    -------
+    X : (n_junctions, d) ndarray
+        Node positions.
+    maybe : (n_junctions,) ndarray of bool
+        Whether a free branch may hide in the region (a superset of what
+        ``robust._swallowed_branches`` finds: False means it finds none).
+    """
+    nj = jb.shape[0] - 1
+    d = P.shape[1]
+    jspan = jp.jspan
+    jn = jp.jn
+    walk_dev = jp.walk_dev
+    nw = jp.nw
+    far = jp.far
+    swallow_r = jp.swallow_r
+    swallow_cos = jp.swallow_cos
+    widen = jp.widen
+    use_graph = jp.use_graph
+    X = np.zeros((nj, d))
+    maybe = np.zeros(nj, dtype=np.bool_)
+    mu = np.zeros(d)
+    u = np.zeros(d)
+    C = np.zeros((d, d))
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    A = np.zeros((d, d))
+    bb = np.zeros(d)
+    x = np.zeros(d)
+    anchor = np.zeros(d)
+    for j in range(nj):
+        b0 = jb[j]
+        b1 = jb[j + 1]
+        nbr = b1 - b0
+        rid = rflat[roff[j]:roff[j + 1]]
+        nr = rid.shape[0]
+        base = boff[b0]
+        flat = bflat[base:boff[b1]]
+        off = boff[b0:b1 + 1] - base
+        # walked branches: buf[bi, :L[bi]]
+        if nr > 0 and use_graph:
+            buf, cnt = _extend_into_region(P, h, indptr, indices, flat, off, rid, width, nw * noise, en, nd)
+            L = cnt.copy()
+            for bi in range(nbr):
+                n0 = off[bi + 1] - off[bi]
+                if cnt[bi] <= n0 or n0 < 2:
+                    continue
+                orig = flat[off[bi]:off[bi + 1]]
+                hl0 = h[orig[n0 - 1]]
+                m = _fit_end(P, h, orig, jspan + jn * noise / hl0, mu, u, C, V, ev, True, en, la)
+                if m < 2:
+                    continue
+                lim = width * hl0
+                if nw * noise > lim:
+                    lim = nw * noise
+                lim = walk_dev * lim
+                for q in range(n0, cnt[bi]):
+                    p = buf[bi, q]
+                    al = 0.0
+                    r2 = 0.0
+                    for c in range(d):
+                        t = P[p, c] - mu[c]
+                        al += t * u[c]
+                        r2 += t * t
+                    dv = r2 - al * al
+                    dev = np.sqrt(dv if dv > 0.0 else 0.0)
+                    if dev > lim:
+                        L[bi] = q
+                        break
+        else:
+            buf, L = _branch_buffer(flat, off, 0)
+        for a in range(d):
+            bb[a] = 0.0
+            anchor[a] = 0.0
+            for c in range(d):
+                A[a, c] = 0.0
+        ncs = 0
+        for bi in range(nbr):
+            ids = buf[bi, :L[bi]]
+            n = ids.shape[0]
+            if n == 0:
+                continue
+            m = _fit_end(P, h, ids, jspan + jn * noise / h[ids[n - 1]], mu, u, C, V, ev, True, en, la)
+            for c in range(d):
+                anchor[c] += P[ids[n - 1], c]
+            ncs += 1
+            if m < 2:
+                continue
+            # M = I - u u^T; A += M; b += M mu
+            um = 0.0
+            for c in range(d):
+                um += u[c] * mu[c]
+            for a in range(d):
+                for c in range(d):
+                    A[a, c] += (1.0 if a == c else 0.0) - u[a] * u[c]
+                bb[a] += mu[a] - u[a] * um
+        if ncs > 0:
+            for c in range(d):
+                anchor[c] = anchor[c] / ncs
+        else:
+            for c in range(d):
+                acc = 0.0
+                for q in range(nr):
+                    acc += P[rid[q], c]
+                anchor[c] = acc / nr if nr > 0 else 0.0
+        hl = hj[j]
+        for a in range(d):
+            A[a, a] += nd.anchor_pull
+            bb[a] += nd.anchor_pull * anchor[a]
+        ok = _solve_small(A, bb, x)
+        dist2 = 0.0
+        for c in range(d):
+            if not np.isfinite(x[c]):
+                ok = False
+            dist2 += (x[c] - anchor[c]) ** 2
+        if not ok or not np.sqrt(dist2) <= far * hl:
+            for c in range(d):
+                x[c] = anchor[c]
+        for c in range(d):
+            X[j, c] = x[c]
+        # a free branch hidden in the region: some region point far from the node, in a
+        # direction no branch takes (tested again exactly by robust._swallowed_branches)
+        if nr < nd.swallow_min:
+            continue
+        hs = hl + widen * noise
+        ndir = 0
+        D = np.zeros((nbr, d))
+        for bi in range(nbr):
+            orig = flat[off[bi]:off[bi + 1]]
+            _fit_end(P, h, orig, jspan, mu, u, C, V, ev, False, en, la)  # the mean of the end only
+            nu2 = 0.0
+            for c in range(d):
+                D[ndir, c] = mu[c] - x[c]
+                nu2 += D[ndir, c] ** 2
+            if nu2 > 0.0:
+                nu = np.sqrt(nu2)
+                for c in range(d):
+                    D[ndir, c] /= nu
+                ndir += 1
+        if ndir == 0:
+            continue
+        for q in range(nr):
+            p = rid[q]
+            r2 = 0.0
+            for c in range(d):
+                r2 += (P[p, c] - x[c]) ** 2
+            dq = np.sqrt(r2)
+            if not dq > swallow_r * hs * (1.0 - nd.swallow_tol):
+                continue
+            best = -np.inf
+            for k in range(ndir):
+                al = 0.0
+                for c in range(d):
+                    al += (P[p, c] - x[c]) * D[k, c]
+                if al > best:
+                    best = al
+            if best / dq < swallow_cos + nd.swallow_tol:
+                maybe[j] = True
+                break
+    return X, maybe
+
+
+def _behind_count(P, h, ids, lo, hi, step, x, span2, en):  # pragma: no cover - compiled
+    """How many leading ids of ``ids[lo:hi]`` (read from ``lo`` up when ``step`` is 1, from
+    ``hi - 1`` down when it is -1) lie behind the node ``x``.
+
+    The chain's direction is that from ``x`` to its point ``k``, the first at arc length
+    ``span2 * h`` from the start (at most the last); leading points whose offset from ``x`` has
+    no positive component along it are behind. At least 2 points are kept. (The numpy formula
+    is the reference of tests/test_robust_kernels.py.)"""
+    n = hi - lo
+    if n < en.trim_min:
+        return 0
+    d = P.shape[1]
+    first = ids[lo] if step == 1 else ids[hi - 1]
+    lim = span2 * h[first]
+    # k: the first index whose arc length from the start is >= lim (at most n - 1)
+    s = 0.0
+    k = 0
+    if not s >= lim:
+        k = n - 1
+        for i in range(1, n):
+            a = ids[lo + i - 1] if step == 1 else ids[hi - i]
+            b = ids[lo + i] if step == 1 else ids[hi - 1 - i]
+            sq = 0.0
+            for c in range(d):
+                t = P[b, c] - P[a, c]
+                sq += t * t
+            s += np.sqrt(sq)
+            if s >= lim:
+                k = i
+                break
+    pk = ids[lo + k] if step == 1 else ids[hi - 1 - k]
+    nu2 = 0.0
+    for c in range(d):
+        nu2 += (P[pk, c] - x[c]) ** 2
+    nu = np.sqrt(nu2)
+    if nu == 0:
+        return 0
+    j = 0
+    while j < k:
+        p = ids[lo + j] if step == 1 else ids[hi - 1 - j]
+        al = 0.0
+        for c in range(d):
+            al += (P[p, c] - x[c]) * ((P[pk, c] - x[c]) / nu)
+        if not al <= 0:
+            break
+        j += 1
+    return j if j < n - 2 else n - 2
+
+
+def _trim_ends(P, h, flat, off, do0, do1, XA, XB, span2, en):  # pragma: no cover - compiled
+    """Chain points lying behind their nodes, for many chains (see :func:`_behind_count`).
+
+    Chain ``c`` is ``flat[off[c]:off[c + 1]]``, from its node ``XA[c]`` to its node ``XB[c]``;
+    its start is trimmed when ``do0[c]``, then (what is left) its end when ``do1[c]``.
+
+    Returns
+    -------
+    lo, hi : (n_chains,) ndarray of int64
+        The kept points are ``flat[lo[c]:hi[c]]``.
+    """
+    nc = off.shape[0] - 1
+    lo = off[:-1].copy()
+    hi = off[1:].copy()
+    for c in range(nc):
+        if do0[c]:
+            lo[c] += _behind_count(P, h, flat, lo[c], hi[c], 1, XA[c], span2, en)
+        if do1[c]:
+            hi[c] -= _behind_count(P, h, flat, lo[c], hi[c], -1, XB[c], span2, en)
+    return lo, hi
