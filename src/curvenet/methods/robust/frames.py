@@ -243,7 +243,7 @@ def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
     cand = np.flatnonzero(agree <= bound * (1 + NUMERIC.rel))
     if len(cand) == 0:
         return t, lin
-    # the top eigenpair of C for the candidates (compiled, closed form: _robust_kernels._eig_top)
+    # the top eigenpair of C for the candidates (compiled, closed form: kernels.linalg._eig_top)
     u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m,
                          cand.astype(np.int64))
     swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < TANGENTS.vote_cos) & (coh >= TANGENTS.vote_coh)
@@ -257,7 +257,7 @@ def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
 
 def noisy_tangents(P, h, sig, tree, dist, idx):
     """Tangents and linearity of a noisy cloud found over a longer reach
-    (:func:`_robust_kernels._noisy_tangents`, over the ``TANGENTS.noisy_k`` nearest neighbours): the
+    (:func:`kernels.frames._noisy_tangents`, over the ``TANGENTS.noisy_k`` nearest neighbours): the
     frames of the strand test (:func:`cut_strand_links`).
 
     Where sparse, noisy curves run a few spacings apart, a point's nearest neighbours lie as
@@ -268,7 +268,7 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
 
     The method's own neighbours (``dist``, ``idx``: (N, k), sorted by distance) serve the
     points whose last one (or ``TANGENTS.noisy_k``-th) lies beyond the kernel's reach
-    (:func:`_robust_kernels.noisy_reach`): the farther ones would change nothing (on a lone
+    (:func:`kernels.noisy_reach`): the farther ones would change nothing (on a lone
     curve, most points). The others get their ``TANGENTS.noisy_k`` nearest from ``tree``, in blocks.
 
     Returns

@@ -76,7 +76,7 @@ def linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
     neighbour on each side along the tangent, within the strip, up to twice that length:
     this bridges the widest gaps of sparse, noisy sampling.
     """
-    # compiled, one kNN row at a time (the tests are spelled out in _robust_kernels.linked_edges):
+    # compiled, one kNN row at a time (the tests are spelled out in kernels.graph._linked_edges):
     # links at most LINKS.directional * (link * h + gap) long; the far end's distance from the tangent
     # line through either end within max(width * h, wmin) (or an end not linear, LINKS.lin_min); short
     # links need one tangent test, longer ones (up to link * h + gap) both; plus the nearest
@@ -88,7 +88,7 @@ def linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
 def cut_strand_links(P, h, idx, tn, src, dst, dd, sig):
     """The links without those that join two close parallel strands (noisy input).
 
-    :func:`_robust_kernels._strand_cuts` finds them; a pair is cut in both directions.
+    :func:`kernels.graph._strand_cuts` finds them; a pair is cut in both directions.
     """
     if len(src) == 0:
         return src, dst, dd

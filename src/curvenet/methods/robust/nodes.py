@@ -176,11 +176,11 @@ def junction_positions(P, sc: Scales, prm: RobustParams, items):
 
     ``items``: ``(chains, inc, rid)`` per junction, ``inc`` the (chain, side) ends at it and
     ``rid`` its region points. The branches are first walked into the junction region
-    (:func:`_robust_kernels._extend_into_region`), a walk that strays from the branch's own line
+    (:func:`kernels.nodes._extend_into_region`), a walk that strays from the branch's own line
     (onto another branch, led by noise) cut where it leaves a strip of ``NODES.walk_dev`` link widths
     around that line; the lines are then fitted close to the junction (over ``NODES.fit_span`` spacings, longer under
     noise: the fitted direction's error shrinks with the span) and extrapolated only a little.
-    All junctions run in one compiled call (:func:`_robust_kernels._junction_nodes`).
+    All junctions run in one compiled call (:func:`kernels.nodes._junction_nodes`).
 
     Returns
     -------

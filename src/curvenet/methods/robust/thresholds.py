@@ -335,7 +335,7 @@ CHAINS = Chains()
 
 
 class Ends(NamedTuple):
-    """End portions of chains and branches (``kernels/nodes.py``; as ``robust._end_portion``)."""
+    """End portions of chains and branches (``kernels/nodes.py``; as ``chains.end_portion``)."""
 
     #: an end portion holds at least ``min(min_points, n)`` points (points)
     min_points: int = 3
@@ -419,7 +419,7 @@ class Nodes(NamedTuple):
     #: squares (unitless; small: it only makes near-parallel lines well-posed)
     anchor_pull: float = 1e-2
     #: relative slack of the hidden-branch tests' comparisons (rounding guard; the exact test
-    #: is ``robust._swallowed_branches``)
+    #: is ``junctions.swallowed_branches``)
     swallow_tol: float = 1e-9
     #: a branch can hide in a region of at least this many points (points)
     swallow_min: int = 3

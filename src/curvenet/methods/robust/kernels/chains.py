@@ -13,7 +13,7 @@ from .heap import _heap_pop, _heap_push
 
 
 def _chain_order(n, src, dst, dd, chn, n_chn, ch):  # pragma: no cover - compiled
-    """Every chain ordered by geodesic distance from one end (see robust._order_chains).
+    """Every chain ordered by geodesic distance from one end (see chains.order_chains).
 
     Chain ``c`` is the set of points with ``chn == c`` (-1: none), joined by the edges
     ``(src[i], dst[i])`` with both ends in it, undirected, of length ``max(dd[i], ch.min_edge)``.
@@ -156,7 +156,7 @@ def _chain_order(n, src, dst, dd, chn, n_chn, ch):  # pragma: no cover - compile
 
 
 def _chain_ends(h, ids_o, par_o, bounds, c_reg, c_par, cb, ch):  # pragma: no cover - compiled
-    """The region each end of every chain touches (see robust._order_chains).
+    """The region each end of every chain touches (see chains.order_chains).
 
     Chain ``ci`` is ``ids_o[bounds[ci]:bounds[ci + 1]]`` with positions ``par_o`` (ascending,
     its length ``L`` the last one); its contacts ``cb[ci]:cb[ci + 1]`` give a region

@@ -15,7 +15,7 @@ prange = range  # numba.prange in the compiled copies (parallel loops over indep
 
 
 def _spacing(dist, idx, dup, dup_k, sp):  # pragma: no cover - compiled
-    """Local spacing of every point before its floor, in one pass (see robust.local_spacing,
+    """Local spacing of every point before its floor, in one pass (see frames.local_spacing,
     whose numpy formula it reproduces bit for bit for ``k <= 128`` neighbours: the sums run in
     numpy's order, the 4-term mean left to right and the k-term row sum pairwise).
 
@@ -247,7 +247,7 @@ def _tangents_block(P, idx, h, m, order, p0, p1, margin, T, lin, chord, gain, st
 
 
 def _tangents(P, idx, h, m, order, margin, st, la):  # pragma: no cover - compiled
-    """Tangent, linearity and strip chord distance of every point (see robust._tangents).
+    """Tangent, linearity and strip chord distance of every point (see frames.tangents).
 
     A first direction from the point and its 4 nearest neighbours, replaced by the direction
     towards one of those neighbours when that scores ``margin`` more (:func:`_strip_score`:
@@ -288,7 +288,7 @@ def _tangents(P, idx, h, m, order, margin, st, la):  # pragma: no cover - compil
 
 def _vote_agreement(t, idx, m):  # pragma: no cover - compiled
     """``sum_k (t[q_k] . t[p])^2`` over the point ``p`` itself and its ``m`` nearest neighbours
-    ``q_k = idx[p, k]``, for every point (see robust._vote_tangents)."""
+    ``q_k = idx[p, k]``, for every point (see frames.vote_tangents)."""
     n = t.shape[0]
     d = t.shape[1]
     out = np.zeros(n)
@@ -309,7 +309,7 @@ def _vote_agreement(t, idx, m):  # pragma: no cover - compiled
 
 def _vote_eig(t, idx, m, cand, vo, la):  # pragma: no cover - compiled
     """Top eigenvector and coherence ``1 - l2 / l1`` of ``C = sum_k t_k t_k^T`` over each
-    candidate point and its ``m`` nearest neighbours (see robust._vote_tangents).
+    candidate point and its ``m`` nearest neighbours (see frames.vote_tangents).
 
     Returns
     -------

@@ -15,7 +15,7 @@ prange = range  # numba.prange in the compiled copies (parallel loops over indep
 
 
 def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, lin_min):  # pragma: no cover - compiled
-    """Directed kNN edges kept by the distance and tangent tests (see robust._linked_edges).
+    """Directed kNN edges kept by the distance and tangent tests (see graph.linked_edges).
 
     For the edge from ``p`` to its neighbour ``q`` at distance ``d`` (rows sorted by distance):
     ``reach = link * (h_p + h_q) / 2 + gap``; edges longer than ``extra_len * reach`` (and

@@ -69,7 +69,7 @@ def _end_count(P, ids, lim):  # pragma: no cover - compiled
 
 
 def _end_counts(P, h, flat, off, span, en):  # pragma: no cover - compiled
-    """How many points of each id list make its end portion (see robust._end_portion).
+    """How many points of each id list make its end portion (see chains.end_portion).
 
     For list ``b``, ``ids = flat[off[b]:off[b + 1]]`` (running towards its end): the count of
     :func:`_end_count` within ``span * h[ids[-1]]``, at least ``min(en.min_points, len(ids))``.
@@ -110,13 +110,13 @@ def _branch_buffer(flat, off, extra):  # pragma: no cover - compiled
 
 
 def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en, nd):  # pragma: no cover - compiled
-    """Walk every branch end into its junction region, in turns (see robust._junction_positions).
+    """Walk every branch end into its junction region, in turns (see nodes.junction_positions).
 
     Branch ``b`` is ``flat[off[b]:off[b + 1]]`` (running towards the junction); ``rs`` the sorted
     unique region points. Each round, every active branch (at least 2 points) proposes the
     nearest unclaimed region point linked to its end ``cur`` (CSR ``indptr``, ``indices``) that
     lies ahead, ``al > nd.ahead * h_cur`` along the unit direction from the point ``en.walk_span * h_cur`` back
-    along the branch (as ``robust._end_portion``) to ``cur``, and within
+    along the branch (as ``chains.end_portion``) to ``cur``, and within
     ``max(width * h_cur, wnoise)`` of that line; distance ``hypot(al, perp)``, ties: lowest id.
     A branch with no such point stops. Proposals are taken by increasing (distance, id), a
     point claimed once only. Rounds stop when nothing is proposed.
@@ -232,7 +232,7 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en,
 def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no cover - compiled
     """Line through the end portion of ``ids`` (running towards the end) over ``span`` h.
 
-    The end portion is that of ``robust._end_portion``: the points from the last id backwards
+    The end portion is that of ``chains.end_portion``: the points from the last id backwards
     within arc length ``span * h[ids[-1]]``, at least ``min(en.min_points, n)``. Its mean goes into ``mu``
     and, when ``with_dir``, its principal direction into ``u``. Returns the number of points in
     the portion (the direction is meaningful only when it is at least 2).
@@ -270,7 +270,7 @@ def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no 
 
 def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise,  # pragma: no cover - compiled
                     jp, en, nd, la):
-    """Node position of many junctions at once (see ``robust._junction_positions``).
+    """Node position of many junctions at once (see ``nodes.junction_positions``).
 
     Junction ``j`` has the branches ``jb[j] .. jb[j + 1] - 1``; branch ``b`` is
     ``bflat[boff[b]:boff[b + 1]]`` (point ids running towards the junction); its region points
@@ -290,7 +290,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         Node positions.
     maybe : (n_junctions,) ndarray of bool
         Whether a free branch may hide in the region (a superset of what
-        ``robust._swallowed_branches`` finds: False means it finds none).
+        ``junctions.swallowed_branches`` finds: False means it finds none).
     """
     nj = jb.shape[0] - 1
     d = P.shape[1]
@@ -405,7 +405,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         for c in range(d):
             X[j, c] = x[c]
         # a free branch hidden in the region: some region point far from the node, in a
-        # direction no branch takes (tested again exactly by robust._swallowed_branches)
+        # direction no branch takes (tested again exactly by junctions.swallowed_branches)
         if nr < nd.swallow_min:
             continue
         hs = hl + widen * noise
