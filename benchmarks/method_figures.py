@@ -107,7 +107,7 @@ def examples(tiny: bool = False) -> list[Example]:
         return out
     fan = synth.model("fan")
     P_fan, _ = synth.sample(fan, noise=0.2, rng=7)
-    return [Example("fan", "fan, noise 0.2 h", P_fan, (-0.28, 0.3, -0.2, 0.22))] + out
+    return [Example("fan", "fan, noise 0.2 h", P_fan, (-0.14, 0.24, -0.12, 0.15))] + out
 
 
 # ------------------------------------------------------------------------------------ stages
