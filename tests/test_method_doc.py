@@ -196,3 +196,15 @@ def test_changed_points_marks_what_a_repair_changed():
     # a chain dropped: its points change, the others do not
     c = mf.TopoState([np.array([0, 1, 2])], [(0, 1)], [False], a.regions, np.array([1, 1, 0, 0]))
     assert a.changed_points(c).tolist() == [5, 6, 7]
+
+
+def test_the_readme_paragraph_is_short_and_links_here():
+    readme = (ROOT / "README.md").read_text()
+    m = re.search(r"^- \*\*`robust`, the default: no parameters to set\.\*\*(.*?)(?=^- |\Z)", readme, re.S | re.M)
+    assert m, "the README's robust bullet is gone"
+    text = m.group(1)
+    assert "(docs/method.md)" in text
+    assert len(text.split()) <= 120  # was 337 words
+    prose = text.replace("(docs/method.md)", "")
+    depth = np.cumsum([{"(": 1, ")": -1}.get(ch, 0) for ch in prose])
+    assert depth.max(initial=0) <= 1 and depth[-1] == 0  # no nested parentheses
