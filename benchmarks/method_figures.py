@@ -74,9 +74,9 @@ FIGURES = {
     "8-curves.png": "draw_curves",
 }
 
-#: The threshold groups of each table in docs/method.md (marker name -> module-level instance).
-GROUP_TABLES = ("LAYOUT", "SPACING", "TANGENTS", "NOISE", "LINKS", "SHELL", "SPLIT", "CHAINS", "REPAIRS",
-                "NODES", "CURVES", "NUMERIC", "DEFAULTS")
+#: Every threshold group of thresholds.py (its module-level instance's name), each a table of
+#: docs/method.md under that marker name: a new group needs its place in the doc.
+GROUP_TABLES = tuple(n for n in thresholds.__all__ if n.isupper() and isinstance(getattr(thresholds, n), tuple))
 
 
 # ------------------------------------------------------------------------------------ examples
@@ -371,13 +371,9 @@ def _region_colors(n: int) -> list[str]:
     return [PALETTE[i % len(PALETTE)] for i in range(n)]
 
 
-def _h_unit(run: StageRun) -> str:
-    return f"h = {run.hmed:.3g}" if run.hmed >= 0.01 else f"h = {run.hmed:.2g}"
-
-
 def draw_spacing(runs: list[StageRun], path: Path) -> Path:
     """Stage 1: the input points coloured by their local spacing h (duplicates dropped marked)."""
-    fig, axes = _figure(len(runs), 4.2)
+    fig, axes = _figure(len(runs), ROW_MAX)
     for ax, run in zip(axes, runs):
         sc = ax.scatter(*run.P.T[:2], s=_marker_size(run, False), c=run.h / run.hmed, cmap="viridis",
                         linewidths=0, zorder=2)
@@ -397,7 +393,7 @@ def draw_tangents(runs: list[StageRun], path: Path) -> Path:
     """Stage 2: tangents as short segments (close-up), coloured by linearity; the noise estimate."""
     from matplotlib.collections import LineCollection
 
-    fig, axes = _figure(len(runs), 4.2)
+    fig, axes = _figure(len(runs), ROW_MAX)
     for ax, run in zip(axes, runs):
         _faint(ax, run, zoom=True)
         half = 0.5 * TANGENT_LEN * run.h[:, None] * run.t
@@ -417,7 +413,7 @@ def draw_graph(runs: list[StageRun], path: Path) -> Path:
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
 
-    fig, axes = _figure(len(runs), 4.2)
+    fig, axes = _figure(len(runs), ROW_MAX)
     for ax, run in zip(axes, runs):
         _faint(ax, run, zoom=True)
         ax.add_collection(LineCollection(run.P[run.links][:, :, :2], colors=PALETTE[0], linewidths=1.0, zorder=2))
@@ -425,7 +421,8 @@ def draw_graph(runs: list[StageRun], path: Path) -> Path:
         if len(run.cut):
             ax.add_collection(LineCollection(run.P[run.cut][:, :, :2], colors=JUNCTION_COLOR, linewidths=2.2,
                                              linestyles="--", zorder=3))
-            handles.append(Line2D([], [], color=JUNCTION_COLOR, ls="--", lw=2, label=f"strand links cut ({len(run.cut)} in all)"))
+            handles.append(Line2D([], [], color=JUNCTION_COLOR, ls="--", lw=2,
+                                  label=f"strand links cut ({len(run.cut)} in all)"))
         _frame(ax, run, zoom=True)
         ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
         ax.set_title(f"{run.example.title} (close-up)", fontsize="medium")
@@ -530,7 +527,7 @@ def _draw_state(ax, run: StageRun, st: TopoState, zoom: bool = False) -> None:
 
 def draw_chains(runs: list[StageRun], path: Path) -> Path:
     """Stage 5: the chains between regions, one colour each, and the region points (black)."""
-    fig, axes = _figure(len(runs), 4.2)
+    fig, axes = _figure(len(runs), ROW_MAX)
     for ax, run in zip(axes, runs):
         _draw_state(ax, run, run.traced)
         n_reg = sum(1 for r in run.traced.regions if len(r))
@@ -573,7 +570,7 @@ def draw_repairs(runs: list[StageRun], path: Path) -> Path:
         final = run.repairs[-1][1]
         _draw_state(bx, run, final)
         acted = _acted(run)
-        for j, (name, ids) in enumerate(acted):
+        for j, (_, ids) in enumerate(acted):
             for X in _clusters(run.P[ids][:, :2], MARK_JOIN * run.hmed):
                 c = X.mean(axis=0)
                 rad = float(np.linalg.norm(X - c, axis=1).max()) + MARK_PAD * run.hmed
@@ -606,7 +603,7 @@ def _node_scatter(ax, net: CurveNetwork) -> list:
 
 def draw_nodes(runs: list[StageRun], path: Path) -> Path:
     """Stage 7: node positions over the repaired regions (black) and chains (one colour each)."""
-    fig, axes = _figure(len(runs), 4.2)
+    fig, axes = _figure(len(runs), ROW_MAX)
     for ax, run in zip(axes, runs):
         _draw_state(ax, run, run.repairs[-1][1])
         handles = _node_scatter(ax, run.net)
@@ -620,7 +617,7 @@ def draw_curves(runs: list[StageRun], path: Path) -> Path:
     from curvenet.plots.network_png import plot_network
     from matplotlib.lines import Line2D
 
-    fig, axes = _figure(len(runs), 4.2)
+    fig, axes = _figure(len(runs), ROW_MAX)
     for ax, run in zip(axes, runs):
         plot_network(run.net, points=run.P_in, ax=ax, legend=False, show_nodes=False,
                      title=f"{run.example.title}\n{run.net.n_nodes} nodes, {run.net.n_curves} curves")

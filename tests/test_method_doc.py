@@ -72,7 +72,7 @@ def test_every_threshold_is_in_the_doc_with_its_value():
         assert list(rows) == list(group._fields), name
         for field, value in zip(group._fields, group):
             shown = float(rows[field][0].replace(",", ""))
-            assert shown == pytest.approx(float(value), rel=1e-5), f"{name}.{field}: {shown} in the doc, {value} in the code"
+            assert shown == pytest.approx(float(value), rel=1e-5), f"{name}.{field}: doc {shown}, code {value}"
             assert rows[field][1], f"{name}.{field} has no meaning in the doc"
 
 
