@@ -74,9 +74,28 @@ FIGURES = {
     "8-curves.png": "draw_curves",
 }
 
-#: Every threshold group of thresholds.py (its module-level instance's name), each a table of
-#: docs/method.md under that marker name: a new group needs its place in the doc.
-GROUP_TABLES = tuple(n for n in thresholds.__all__ if n.isupper() and isinstance(getattr(thresholds, n), tuple))
+#: The sections of docs/method.md that hold threshold tables (marker name) and the groups of
+#: thresholds.py (module-level instance names) tabled there, in order. A group named here but
+#: not defined in thresholds.py is skipped; a group of thresholds.py named in no section stops
+#: the script (:func:`fill`): every constant has its place in the doc.
+SECTIONS = {
+    "KEYWORD_DEFAULTS": ("DEFAULTS",),
+    "INPUT_ORDER": ("LAYOUT",),
+    "SPACING": ("SPACING",),
+    "TANGENTS": ("TANGENTS", "STRIP", "VOTE", "NOISE"),
+    "LINKS": ("LINKS", "NOISY", "STRAND"),
+    "JUNCTIONS": ("SHELL", "SPLIT"),
+    "CHAINS": ("CHAINS", "ENDS"),
+    "REPAIRS": ("REPAIRS",),
+    "NODES": ("NODES",),
+    "CURVES": ("CURVES", "UNTANGLE"),
+    "NUMERIC": ("NUMERIC", "LINALG"),
+}
+
+
+def threshold_groups() -> tuple[str, ...]:
+    """Every threshold group of thresholds.py: the names of its module-level NamedTuple instances."""
+    return tuple(n for n in thresholds.__all__ if n.isupper() and hasattr(getattr(thresholds, n), "_fields"))
 
 
 # ------------------------------------------------------------------------------------ examples
@@ -744,8 +763,19 @@ def repairs_table() -> str:
 
 
 def tables() -> dict[str, str]:
-    """Every generated block of docs/method.md: marker name -> markdown."""
-    out = {name: group_table(name) for name in GROUP_TABLES}
+    """Every generated block of docs/method.md: marker name -> markdown.
+
+    Raises
+    ------
+    ValueError
+        When a threshold group has no section in :data:`SECTIONS`.
+    """
+    groups = threshold_groups()
+    placed = {g for names in SECTIONS.values() for g in names}
+    if set(groups) - placed:
+        raise ValueError(f"threshold groups without a section of the doc: {sorted(set(groups) - placed)} "
+                         "(add them to SECTIONS in benchmarks/method_figures.py)")
+    out = {sec: "\n\n".join(group_table(g) for g in names if g in groups) for sec, names in SECTIONS.items()}
     out["PARAMS"] = params_table()
     out["ORDER"] = repairs_table()
     return out

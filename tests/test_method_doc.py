@@ -53,6 +53,13 @@ def _block(doc: str, name: str) -> str:
     return m.group(1)
 
 
+def _group_table(doc: str, name: str) -> str:
+    """The table under the caption of threshold group ``name`` (e.g. "SPACING")."""
+    m = re.search(rf"^\*`thresholds\.{name}`:.*?\n\n((?:\|.*\n)+)", doc, re.M)
+    assert m, f"docs/method.md has no table of thresholds.{name}"
+    return m.group(1)
+
+
 def _rows(block: str) -> dict[str, list[str]]:
     """First column (without backquotes) -> the other cells, for every table row but the header."""
     out = {}
@@ -68,7 +75,7 @@ def test_every_threshold_is_in_the_doc_with_its_value():
     groups = _groups()
     assert len(groups) >= 13
     for name, group in groups.items():
-        rows = _rows(_block(doc, name))
+        rows = _rows(_group_table(doc, name))
         assert list(rows) == list(group._fields), name
         for field, value in zip(group._fields, group):
             shown = float(rows[field][0].replace(",", ""))
@@ -82,7 +89,7 @@ def test_the_meanings_are_the_field_comments():
     # every "#:" comment line of thresholds.py appears, reST quotes made markdown, in its table row
     rows = {}
     for name in _groups():
-        rows.update({(name, f): cells for f, cells in _rows(_block(doc, name)).items()})
+        rows.update({(name, f): cells for f, cells in _rows(_group_table(doc, name)).items()})
     comments = re.findall(r"#: (.*)\n(?:\s*#: .*\n)*\s*(\w+): ", src)
     assert len(comments) > 80
     by_field = {}
@@ -126,7 +133,17 @@ def test_a_changed_threshold_makes_the_doc_stale(monkeypatch, tmp_path, capsys):
     doc.write_text(DOC.read_text())
     assert mf.main(["--check", "--doc", str(doc)]) == 1
     doc.write_text(mf.fill(doc.read_text()))
-    assert _rows(_block(doc.read_text(), "SPACING"))["dedup"][0] == "0.25"
+    assert _rows(_group_table(doc.read_text(), "SPACING"))["dedup"][0] == "0.25"
+
+
+def test_a_new_threshold_group_needs_a_section(monkeypatch, capsys):
+    mf = _load()
+    extra = thresholds.SPLIT._replace()
+    monkeypatch.setattr(thresholds, "EXTRA", extra, raising=False)
+    monkeypatch.setattr(thresholds, "__all__", [*thresholds.__all__, "EXTRA"])
+    assert "EXTRA" in mf.threshold_groups()
+    assert mf.main(["--check", "--doc", str(DOC)]) == 2
+    assert "without a section" in capsys.readouterr().err
 
 
 def test_a_doc_without_markers_is_a_clear_error(tmp_path, capsys):
