@@ -1,7 +1,12 @@
 """Small shared fixtures: tiny named point sets."""
 
+import os
+
 import numpy as np
 import pytest
+
+# the robust method's Topology checks its invariants after every change (subprocesses inherit it)
+os.environ.setdefault("CURVENET_CHECK_TOPOLOGY", "1")
 
 
 def cube_edges_points(n_per_edge: int = 50, side: float = 1.0) -> np.ndarray:
