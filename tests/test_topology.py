@@ -92,6 +92,12 @@ def test_absorb_moves_points_ends_and_valence(t_shape):
     topo.check()
 
 
+def test_absorb_refuses_a_region_into_itself(t_shape):
+    # (it looped for ever, appending to the list it walked)
+    with pytest.raises(TopologyError, match="into itself"):
+        t_shape.absorb(J, J)
+
+
 def test_absorb_leaves_dead_chain_ends_behind(t_shape):
     topo = t_shape
     topo.drop(RIGHT)

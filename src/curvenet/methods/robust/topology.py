@@ -102,7 +102,15 @@ class Topology:
 
     # ------------------------------------------------------------------------------ changes
     def absorb(self, r: int, t: int) -> None:
-        """Merge region ``r`` into region ``t``: its points, the live chain ends at it, its valence."""
+        """Merge region ``r`` into region ``t``: its points, the live chain ends at it, its valence.
+
+        Raises
+        ------
+        TopologyError
+            ``r == t`` (a region merged into itself: a bug in the caller).
+        """
+        if r == t:
+            raise TopologyError(f"region {r} cannot be merged into itself")
         self.regions[t] = np.r_[self.regions[t], self.regions[r]]
         self.regions[r] = np.zeros(0, dtype=np.int64)
         for i, s in self._ends_at[r]:
