@@ -91,22 +91,17 @@ def _end_counts(P, h, flat, off, span, en):  # pragma: no cover - compiled
     return out
 
 
-def _branch_buffer(flat, off, extra):  # pragma: no cover - compiled
-    """Branches ``flat[off[b]:off[b + 1]]`` as the rows of an array with room for ``extra``
-    more ids each: ``buf`` (n_branches, longest + extra) and the lengths ``cnt``."""
-    nbr = off.shape[0] - 1
-    cap = 1
-    for b in range(nbr):
-        if off[b + 1] - off[b] > cap:
-            cap = off[b + 1] - off[b]
-    buf = np.zeros((nbr, cap + extra), dtype=np.int64)
-    cnt = np.zeros(nbr, dtype=np.int64)
-    for b in range(nbr):
-        n = off[b + 1] - off[b]
-        for i in range(n):
-            buf[b, i] = flat[off[b] + i]
-        cnt[b] = n
-    return buf, cnt
+def _point_back(flat, off, bi, n0, claim_pt, claim_prev, tail, k):  # pragma: no cover - compiled
+    """The point ``k`` steps back from the end of branch ``bi`` walked into its region: its
+    claimed points (a list linked backwards from ``tail[bi]``), then its own ``flat[off[bi]:]``."""
+    e = tail[bi]
+    q = n0 - 1
+    for _ in range(k):
+        if e >= 0:
+            e = claim_prev[e]
+        else:
+            q -= 1
+    return claim_pt[e] if e >= 0 else flat[off[bi] + q]
 
 
 def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en, nd):  # pragma: no cover - compiled
@@ -121,16 +116,25 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en,
     A branch with no such point stops. Proposals are taken by increasing (distance, id), a
     point claimed once only. Rounds stop when nothing is proposed.
 
+    Memory: the claims of all branches together are at most the region's points (each is
+    claimed once), kept as lists linked backwards per branch; no (branches, longest) array.
+
     Returns
     -------
-    buf : (n_branches, cap) ndarray of int64
-    cnt : (n_branches,) ndarray of int64
-        Branch ``b`` extended is ``buf[b, :cnt[b]]``.
+    ext : (n_claimed,) ndarray of int64
+    eoff : (n_branches + 1,) ndarray of int64
+        Branch ``b`` extended is ``flat[off[b]:off[b + 1]]`` followed by ``ext[eoff[b]:eoff[b + 1]]``.
     """
     nbr = off.shape[0] - 1
     nr = rs.shape[0]
     d = P.shape[1]
-    buf, cnt = _branch_buffer(flat, off, nr + 1)
+    cnt = np.empty(nbr, dtype=np.int64)
+    for b in range(nbr):
+        cnt[b] = off[b + 1] - off[b]
+    claim_pt = np.empty(nr, dtype=np.int64)
+    claim_prev = np.empty(nr, dtype=np.int64)
+    tail = np.full(nbr, -1, dtype=np.int64)
+    nc = 0
     active = np.zeros(nbr, dtype=np.bool_)
     for b in range(nbr):
         active[b] = cnt[b] >= 2
@@ -145,15 +149,24 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en,
             if not active[bi]:
                 continue
             n = cnt[bi]
-            cur = buf[bi, n - 1]
+            n0 = off[bi + 1] - off[bi]
+            cur = _point_back(flat, off, bi, n0, claim_pt, claim_prev, tail, 0)
             hl = h[cur]
-            # the end portion over en.walk_span h: prefix sums of the reversed branch
+            # the end portion over en.walk_span h: arc length summed backwards from the end
+            # (a cursor: claim e while e >= 0, then the branch's own point q)
             lim = en.walk_span * hl
             s = 0.0
             m = 1
-            for q in range(n - 1, 0, -1):
-                a = buf[bi, q]
-                c2 = buf[bi, q - 1]
+            far = cur
+            a = cur
+            e = tail[bi]
+            q = n0 - 1
+            for _ in range(n - 1):
+                if e >= 0:
+                    e = claim_prev[e]
+                else:
+                    q -= 1
+                c2 = claim_pt[e] if e >= 0 else flat[off[bi] + q]
                 sq = 0.0
                 for c in range(d):
                     t = P[c2, c] - P[a, c]
@@ -162,11 +175,14 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en,
                 if not s <= lim:
                     break
                 m += 1
+                far = c2
+                a = c2
             if m < en.min_points and n >= en.min_points:
                 m = en.min_points
+                far = _point_back(flat, off, bi, n0, claim_pt, claim_prev, tail, m - 1)
             elif m < n and n < en.min_points:
                 m = n
-            far = buf[bi, n - m]
+                far = flat[off[bi]]
             nu2 = 0.0
             for c in range(d):
                 u[c] = P[cur, c] - P[far, c]
@@ -223,10 +239,25 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en,
             if claimed[pos]:
                 continue
             bi = pb[i]
-            buf[bi, cnt[bi]] = pj[i]
+            claim_pt[nc] = pj[i]
+            claim_prev[nc] = tail[bi]
+            tail[bi] = nc
+            nc += 1
             cnt[bi] += 1
             claimed[pos] = True
-    return buf, cnt
+    # each branch's claims in order, one after the other
+    eoff = np.zeros(nbr + 1, dtype=np.int64)
+    for b in range(nbr):
+        eoff[b + 1] = eoff[b] + cnt[b] - (off[b + 1] - off[b])
+    ext = np.empty(nc, dtype=np.int64)
+    for b in range(nbr):
+        e = tail[b]
+        k = eoff[b + 1] - 1
+        while e >= 0:
+            ext[k] = claim_pt[e]
+            k -= 1
+            e = claim_prev[e]
+    return ext, eoff
 
 
 def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no cover - compiled
@@ -323,13 +354,17 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         base = boff[b0]
         flat = bflat[base:boff[b1]]
         off = boff[b0:b1 + 1] - base
-        # walked branches: buf[bi, :L[bi]]
+        # walked branches: flat[off[bi]:off[bi + 1]] then ext[eoff[bi]:], L[bi] points in all
+        L = np.empty(nbr, dtype=np.int64)
+        for bi in range(nbr):
+            L[bi] = off[bi + 1] - off[bi]
         if nr > 0 and use_graph:
-            buf, cnt = _extend_into_region(P, h, indptr, indices, flat, off, rid, width, nw * noise, en, nd)
-            L = cnt.copy()
+            ext, eoff = _extend_into_region(P, h, indptr, indices, flat, off, rid, width, nw * noise, en, nd)
+            for bi in range(nbr):
+                L[bi] += eoff[bi + 1] - eoff[bi]
             for bi in range(nbr):
                 n0 = off[bi + 1] - off[bi]
-                if cnt[bi] <= n0 or n0 < 2:
+                if eoff[bi + 1] == eoff[bi] or n0 < 2:
                     continue
                 orig = flat[off[bi]:off[bi + 1]]
                 hl0 = h[orig[n0 - 1]]
@@ -340,8 +375,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                 if nw * noise > lim:
                     lim = nw * noise
                 lim = walk_dev * lim
-                for q in range(n0, cnt[bi]):
-                    p = buf[bi, q]
+                for q in range(n0, L[bi]):
+                    p = ext[eoff[bi] + q - n0]
                     al = 0.0
                     r2 = 0.0
                     for c in range(d):
@@ -354,7 +389,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                         L[bi] = q
                         break
         else:
-            buf, L = _branch_buffer(flat, off, 0)
+            ext = np.zeros(0, dtype=np.int64)
+            eoff = np.zeros(nbr + 1, dtype=np.int64)
         for a in range(d):
             bb[a] = 0.0
             anchor[a] = 0.0
@@ -362,7 +398,10 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                 A[a, c] = 0.0
         ncs = 0
         for bi in range(nbr):
-            ids = buf[bi, :L[bi]]
+            n0 = off[bi + 1] - off[bi]
+            ids = np.empty(L[bi], dtype=np.int64)
+            for q in range(L[bi]):
+                ids[q] = flat[off[bi] + q] if q < n0 else ext[eoff[bi] + q - n0]
             n = ids.shape[0]
             if n == 0:
                 continue
