@@ -11,9 +11,9 @@ import numpy as np
 
 from .errors import InputError
 from .network import CurveNetwork
-from .validate import as_points
+from .validate import as_points, unit_frame
 
-__all__ = ["reconstruct", "METHODS", "DEFAULT_METHOD"]
+__all__ = ["reconstruct", "METHODS", "DEFAULT_METHOD", "LENGTH_PARAMETERS", "LENGTH_RESULTS"]
 
 #: Method name -> (module, function). Each function takes ``(points, **params)`` with points a
 #: checked (N, d) float array and returns a :class:`CurveNetwork`.
@@ -25,6 +25,22 @@ METHODS: dict[str, tuple[str, str]] = {
 
 #: The method used when none is named.
 DEFAULT_METHOD = "robust"
+
+#: Method name -> its parameters that are lengths in the units of the points: a given value is
+#: brought into the internal frame of the points (see :func:`curvenet.validate.unit_frame`).
+LENGTH_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "paper": ("tau_s",),
+    "emst": (),
+    "robust": ("spacing",),
+}
+
+#: Method name -> the entries of ``network.parameters`` and ``network.stats`` that are lengths
+#: (numbers or lists of numbers): brought back from the internal frame to the units of the points.
+LENGTH_RESULTS: dict[str, tuple[str, ...]] = {
+    "paper": ("tau_s", "h"),
+    "emst": (),
+    "robust": ("spacing", "spacing_range", "noise"),
+}
 
 
 def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
@@ -49,19 +65,34 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     Raises
     ------
     InputError
-        For invalid points, an unknown method or an unknown parameter.
+        For invalid points (among them points whose extent float64 cannot resolve, see
+        :func:`curvenet.validate.unit_frame`), an unknown method or an unknown parameter.
+
+    Notes
+    -----
+    The result does not depend on the units of the points: the method runs on the points
+    scaled by a power of two that brings their extent into [0.5, 1) (exact in float64), and
+    translated to the centre of their bounding box only when they lie far from the origin for
+    their extent (:data:`curvenet.validate.TRANSLATE_RATIO`). Given lengths
+    (:data:`LENGTH_PARAMETERS`) are scaled in, the network and the reported lengths
+    (:data:`LENGTH_RESULTS`) scaled back; without a translation both ways are exact.
     """
     name = DEFAULT_METHOD if method == "auto" else method
     if name not in METHODS:
         raise InputError(f"unknown method {method!r}; expected one of: auto, {', '.join(sorted(METHODS))}")
     pts = as_points(points, min_points=3)
-    if not np.ptp(pts, axis=0).any():
+    if not (pts.max(axis=0) > pts.min(axis=0)).any():
         raise InputError(f"all {len(pts)} points are identical; nothing to reconstruct")
     module, func = METHODS[name]
     fn = getattr(importlib.import_module(module), func)
     _check_params(name, fn, params)
+    shift, k = unit_frame(pts)
+    inner = np.ldexp(pts if shift is None else pts - shift, k)
+    for key in LENGTH_PARAMETERS.get(name, ()):
+        params[key] = _scaled(params.get(key), k)
     t0 = time.perf_counter()
-    net = fn(pts, **params)
+    net = fn(inner, **params)
+    _back_to_units(net, name, shift, k)
     net.parameters.setdefault("method", name)
     net.parameters["method"] = name
     stats = net.stats
@@ -84,3 +115,35 @@ def _check_params(name: str, fn, params: dict) -> None:
             raise InputError(
                 f"method {name!r} has no parameter {key!r}; its parameters: {', '.join(known) or 'none'}"
             )
+
+
+def _scaled(value, k: int):
+    """``value * 2**k`` for a number or a list of numbers (exact); anything else unchanged."""
+    if isinstance(value, bool) or value is None:
+        return value
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        v = float(value)
+        return float(np.ldexp(v, k)) if np.isfinite(v) else v
+    if isinstance(value, (list, tuple)):
+        return type(value)(_scaled(v, k) for v in value)
+    return value
+
+
+def _back_to_units(net: CurveNetwork, name: str, shift, k: int) -> None:
+    """Bring the network ``net`` computed in the internal frame ``(shift, k)`` back to the units
+    of the points, in place: coordinates times ``2**-k`` plus ``shift``, and the length entries
+    of :data:`LENGTH_RESULTS`."""
+    if shift is None and k == 0:
+        return
+
+    def back(a):
+        a = np.ldexp(np.asarray(a, dtype=np.float64), -k)
+        return a if shift is None else a + shift
+
+    net.nodes = back(net.nodes).reshape(np.shape(net.nodes))
+    for c in net.curves:
+        c.points = back(c.points).reshape(np.shape(c.points))
+    for key in LENGTH_RESULTS.get(name, ()):
+        for table in (net.parameters, net.stats):
+            if key in table:
+                table[key] = _scaled(table[key], -k)
