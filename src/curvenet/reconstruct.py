@@ -70,12 +70,14 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
 
     Notes
     -----
-    The result does not depend on the units of the points: the method runs on the points
-    scaled by a power of two that brings their extent into [0.5, 1) (exact in float64), and
-    translated to the centre of their bounding box only when they lie far from the origin for
-    their extent (:data:`curvenet.validate.TRANSLATE_RATIO`). Given lengths
-    (:data:`LENGTH_PARAMETERS`) are scaled in, the network and the reported lengths
-    (:data:`LENGTH_RESULTS`) scaled back; without a translation both ways are exact.
+    The result does not depend on the units of the points: points whose extent lies outside
+    :data:`curvenet.validate.UNSCALED_EXTENTS` (about 5e-20 to 2e19) are scaled by a power of
+    two that brings it into [0.5, 1) (exact in float64), and points far from the origin for
+    their extent (:data:`curvenet.validate.TRANSLATE_RATIO`) are translated to the centre of
+    their bounding box. Given lengths (:data:`LENGTH_PARAMETERS`) are scaled in, the network
+    and the reported lengths (:data:`LENGTH_RESULTS`) scaled back; without a translation both
+    ways are exact. So the points at 1e-200 or 1e200 give the network of the points at 1, up
+    to the last bits of coordinates (and exactly that of the points at ``2**-k``).
     """
     name = DEFAULT_METHOD if method == "auto" else method
     if name not in METHODS:

@@ -6,12 +6,18 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["as_points", "unit_frame", "MIN_EXTENT", "TRANSLATE_RATIO", "MAX_OFFSET_RATIO"]
+__all__ = ["as_points", "unit_frame", "MIN_EXTENT", "UNSCALED_EXTENTS", "TRANSLATE_RATIO", "MAX_OFFSET_RATIO"]
 
 #: The least extent (largest coordinate range) of points that float64 resolves: below it the
 #: differences between points fall among the subnormal numbers (under 2**-1022), where float64
 #: keeps fewer than its 53 significant bits.
 MIN_EXTENT = 2.0**-970
+
+#: Points whose extent lies in this range run in their own units; others are scaled by a power of
+#: two to an extent in [0.5, 1). Inside it, squares and higher powers of every length a method
+#: forms stay far from overflow and underflow; and the methods are not exactly scale-equivariant
+#: (a few absolute tolerances), so scaling ordinary inputs would change some networks' last bits.
+UNSCALED_EXTENTS = (2.0**-64, 2.0**64)
 
 #: Points whose largest coordinate (in absolute value) exceeds this many times their extent are
 #: translated to the centre of their bounding box before a method runs (far from the origin,
@@ -77,8 +83,9 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray | None, int]:
         The centre of the bounding box when the points lie farther than
         :data:`TRANSLATE_RATIO` times their extent from the origin, else None.
     k : int
-        The exponent that brings the extent into [0.5, 1): the internal points are
-        ``(points - shift) * 2**k``, exact in float64 when ``shift`` is None.
+        0 when the extent lies in :data:`UNSCALED_EXTENTS`, else the exponent that brings it
+        into [0.5, 1): the internal points are ``(points - shift) * 2**k``, exact in float64
+        when ``shift`` is None.
 
     Raises
     ------
@@ -110,5 +117,6 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray | None, int]:
     shift = None
     if far > TRANSLATE_RATIO * extent:
         shift = 0.5 * lo + 0.5 * hi
-    k = -int(np.frexp(extent)[1])
+    lo_ok, hi_ok = UNSCALED_EXTENTS
+    k = 0 if lo_ok <= extent <= hi_ok else -int(np.frexp(extent)[1])
     return shift, k
