@@ -14,6 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .._sigint import checkpoint
 from ..errors import FormatError, InputError, require
 
 __all__ = ["read_text", "read_npy", "read_ply", "read_obj", "read_las", "check_readable"]
@@ -243,16 +244,37 @@ def read_obj(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     return _finite(p, arr[:, cols], drop_nonfinite)
 
 
+#: Points decoded at a time from a LAS/LAZ file (bounded memory; Ctrl-C acted on between).
+LAS_CHUNK_POINTS = 1_000_000
+
+
 def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
-    """Read the x, y, z coordinates of a LAS or LAZ point cloud (needs laspy, extra ``io``)."""
+    """Read the x, y, z coordinates of a LAS or LAZ point cloud (needs laspy, extra ``io``).
+
+    The header is checked against the file's size first (:func:`curvenet.io.las_header.check_las`),
+    then the points are decoded :data:`LAS_CHUNK_POINTS` at a time.
+    """
+    from .las_header import check_las
+
     p = check_readable(path)
     laspy = require("laspy", "reading LAS/LAZ files", "io")
+    layout = check_las(p)
+    if layout.n_points == 0:
+        raise FormatError(f"{p}: LAS file has no points")
+    blocks = []
     try:
-        las = laspy.read(str(p))
-        arr = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)])
-    except Exception as exc:  # laspy raises many types on malformed files
+        with laspy.open(str(p)) as reader:
+            for chunk in reader.chunk_iterator(LAS_CHUNK_POINTS):
+                blocks.append(np.column_stack([np.asarray(chunk.x, dtype=np.float64),
+                                               np.asarray(chunk.y, dtype=np.float64),
+                                               np.asarray(chunk.z, dtype=np.float64)]))
+                checkpoint()
+    except (KeyboardInterrupt, MemoryError):
+        raise
+    except Exception as exc:  # laspy and lazrs raise many types on malformed files
         msg = str(exc).split("\n")[0] or type(exc).__name__
         raise FormatError(f"{p}: not a valid LAS/LAZ file ({msg})") from None
+    arr = np.vstack(blocks) if blocks else np.zeros((0, 3))
     if len(arr) == 0:
         raise FormatError(f"{p}: LAS file has no points")
     cols = _select(p, ["x", "y", "z"], 3, columns)
