@@ -11,7 +11,7 @@ import numpy as np
 
 from .errors import InputError
 from .network import CurveNetwork
-from .validate import as_points, unit_frame
+from .validate import reconstructable, unit_frame
 
 __all__ = ["reconstruct", "METHODS", "DEFAULT_METHOD", "LENGTH_PARAMETERS", "LENGTH_RESULTS"]
 
@@ -82,9 +82,7 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     name = DEFAULT_METHOD if method == "auto" else method
     if name not in METHODS:
         raise InputError(f"unknown method {method!r}; expected one of: auto, {', '.join(sorted(METHODS))}")
-    pts = as_points(points, min_points=3)
-    if not (pts.max(axis=0) > pts.min(axis=0)).any():
-        raise InputError(f"all {len(pts)} points are identical; nothing to reconstruct")
+    pts = reconstructable(points)
     module, func = METHODS[name]
     fn = getattr(importlib.import_module(module), func)
     _check_params(name, fn, params)
@@ -107,16 +105,47 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
 
 
 def _check_params(name: str, fn, params: dict) -> None:
-    """Raise InputError for a parameter the method does not take."""
+    """Raise InputError for a parameter the method does not take, or a value of another type
+    than its annotation says (a number for ``int`` and ``float``, true or false for ``bool``)."""
     sig = inspect.signature(fn)
     if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
         return
     known = [p for p in list(sig.parameters)[1:]]
-    for key in params:
+    for key, value in params.items():
         if key not in known:
             raise InputError(
                 f"method {name!r} has no parameter {key!r}; its parameters: {', '.join(known) or 'none'}"
             )
+        expected = _expected_type(sig.parameters[key])
+        if expected and not _has_type(value, expected):
+            raise InputError(f"parameter {key!r} of method {name!r} must be {expected}, got {value!r}")
+
+
+#: Annotation word -> what a value must be, in words (the first word found decides).
+_TYPE_WORDS = (("float", "a number"), ("int", "an integer"), ("bool", "true or false"))
+
+
+def _expected_type(param: inspect.Parameter) -> str | None:
+    """What a value of ``param`` must be, from its annotation, or None (anything)."""
+    ann = param.annotation
+    text = ann if isinstance(ann, str) else getattr(ann, "__name__", str(ann))
+    words = set(text.replace("|", " ").replace(",", " ").replace("[", " ").replace("]", " ").split())
+    for word, what in _TYPE_WORDS:
+        if word in words:
+            return what + (" or none" if "None" in words or param.default is None else "")
+    return None
+
+
+def _has_type(value, expected: str) -> bool:
+    if value is None:
+        return expected.endswith(" or none")
+    if expected.startswith("true or false"):
+        return isinstance(value, (bool, np.bool_))
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    if expected.startswith("an integer"):
+        return isinstance(value, (int, np.integer)) or (isinstance(value, (float, np.floating)) and float(value).is_integer())
+    return isinstance(value, (int, float, np.integer, np.floating))
 
 
 def _scaled(value, k: int):

@@ -6,7 +6,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["as_points", "unit_frame", "MIN_EXTENT", "UNSCALED_EXTENTS", "TRANSLATE_RATIO", "MAX_OFFSET_RATIO"]
+__all__ = ["as_points", "reconstructable", "unit_frame", "MIN_EXTENT", "UNSCALED_EXTENTS", "TRANSLATE_RATIO", "MAX_OFFSET_RATIO"]
 
 #: The least extent (largest coordinate range) of points that float64 resolves: below it the
 #: differences between points fall among the subnormal numbers (under 2**-1022), where float64
@@ -67,6 +67,35 @@ def as_points(points, *, min_points: int = 1, name: str = "points") -> np.ndarra
     if len(p) < min_points:
         raise InputError(f"{name}: {len(p)} point(s) given, at least {min_points} needed")
     return np.ascontiguousarray(p)
+
+
+#: The least number of points a reconstruction takes.
+MIN_RECONSTRUCT_POINTS = 3
+
+
+def reconstructable(points, *, name: str = "points") -> np.ndarray:
+    """Check points for a reconstruction: :func:`as_points`, at least
+    :data:`MIN_RECONSTRUCT_POINTS` of them, not all identical.
+
+    Parameters
+    ----------
+    points : (N, d) array_like
+    name : str
+        What to call them in messages (the command line gives the file name).
+
+    Returns
+    -------
+    (N, d) ndarray of float64
+
+    Raises
+    ------
+    InputError
+        ``"<name>: ..."``.
+    """
+    pts = as_points(points, min_points=MIN_RECONSTRUCT_POINTS, name=name)
+    if not (pts.max(axis=0) > pts.min(axis=0)).any():
+        raise InputError(f"{name}: all {len(pts)} points are identical; nothing to reconstruct")
+    return pts
 
 
 def unit_frame(points: np.ndarray) -> tuple[np.ndarray | None, int]:

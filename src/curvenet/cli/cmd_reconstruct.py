@@ -103,7 +103,9 @@ def run(args) -> int:
     from ..errors import FormatError
     from ..io import WRITERS, check_output_path, check_outputs, extension, read_points, write_network
     from ..reconstruct import reconstruct
+    from ..validate import reconstructable
     from .cmd_render import check_extension, picture_options
+    from .hints import empty_network_hint
     from .progress import Stages, _fmt, print_summary
 
     outputs = list(args.output)
@@ -131,8 +133,12 @@ def run(args) -> int:
     with st.stage(f"reading {Path(args.input).name}"):
         points = read_points(args.input, columns=args.columns, drop_nonfinite=args.drop_nonfinite)
     st.info(f"  {len(points)} points, dimension {points.shape[1]}")
+    reconstructable(points, name=args.input)  # too few or identical points: the file named
     with st.stage(f"reconstructing ({args.method})"):
         net = reconstruct(points, method=args.method, **params)
+    hint = empty_network_hint(net)
+    if hint and not args.quiet:
+        print(f"curvenet: warning: {hint}", file=sys.stderr)
     if st.verbose:
         st.info("  parameters used: " + ", ".join(f"{k}={_fmt(v)}" for k, v in net.parameters.items()))
         times = {k: v for k, v in net.stats.get("time", {}).items() if k != "total"}
