@@ -87,9 +87,10 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     fn = getattr(importlib.import_module(module), func)
     _check_params(name, fn, params)
     shift, k = unit_frame(pts)
-    inner = np.ldexp(pts if shift is None else pts - shift, k)
+    inner = pts if shift is None and k == 0 else np.ldexp(pts if shift is None else pts - shift, k)
     for key in LENGTH_PARAMETERS.get(name, ()):
-        params[key] = _scaled(params.get(key), k)
+        if key in params:
+            params[key] = _scaled(params[key], k)
     t0 = time.perf_counter()
     net = fn(inner, **params)
     _back_to_units(net, name, shift, k)
