@@ -110,3 +110,11 @@ def test_a_network_without_curves_is_said_and_explained(capsys):
     assert "warning: the network has no curves" in err and "lower --tau-s" in err
     assert main(["reconstruct", str(mug), "--method", "paper", "--epsilon", "0.9"]) == 0
     assert "lower --epsilon" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("raw", [b"# c\rx y z\r1 2 3\r4 5 6\r", b"# c\r\nx,y,z\r\n1,2,3\r\n4,5,6\r\n"])
+def test_cr_and_crlf_line_ends(tmp_path, raw):
+    """The block reader splits lines as the header detection does (\\n, \\r\\n, \\r)."""
+    f = tmp_path / "p.csv"
+    f.write_bytes(raw)
+    assert np.array_equal(read_points(f), [[1, 2, 3], [4, 5, 6]])

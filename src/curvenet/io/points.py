@@ -121,7 +121,10 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
     # the first non-comment line decides header and delimiter
     skip = 0
     first = None
-    lines = head.decode("utf-8", errors="replace").splitlines()
+    # lines split as the reader below splits them (universal newlines: \n, \r\n, \r)
+    lines = head.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
     for line in lines[:-1] if len(head) == 1 << 16 else lines:
         s = line.strip()
         if not s or s.startswith("#"):
@@ -155,18 +158,18 @@ def _read_rows(p: Path, skip: int, delim, ncols: int) -> np.ndarray:
     comment lines not counted, as in the NaN errors)."""
     blocks = []
     done = 0  # data rows parsed so far
-    with open(p, "rb") as f:
+    # Latin-1 decodes every byte: a stray byte in a comment is ignored, one in the data fails as
+    # a number that does not convert
+    with open(p, encoding="latin-1", newline=None) as f:
         for _ in range(skip):
             f.readline()
         while True:
             raw = f.read(TEXT_CHUNK_BYTES)
             if not raw:
                 break
-            if not raw.endswith((b"\n", b"\r")):
+            if not raw.endswith("\n"):
                 raw += f.readline()  # the rest of the last line
-            # Latin-1 decodes every byte: a stray byte in a comment is ignored, one in the data
-            # fails as a number that does not convert
-            text = _io.StringIO(raw.decode("latin-1"))
+            text = _io.StringIO(raw)
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
