@@ -33,6 +33,9 @@ EVLR_HEADER = 60
 LASZIP_USER = b"laszip encoded"
 LASZIP_RECORD = 22204
 
+#: Bytes of the LASzip VLR's fixed part (compressor to the number of items), before the items.
+LASZIP_VLR_FIXED = 34
+
 #: The chunk size of a LAZ file whose chunks vary in size (LASzip).
 LAZ_VARIABLE_CHUNKS = 0xFFFFFFFF
 
@@ -81,8 +84,8 @@ def check_las(path) -> LasLayout:
     p = Path(path)
     size = p.stat().st_size
     with open(p, "rb") as f:
-        head = f.read(375)
-        if len(head) < 227 or head[:4] != b"LASF":
+        head = f.read(max(HEADER_MIN.values()))
+        if len(head) < min(HEADER_MIN.values()) or head[:4] != b"LASF":
             raise _bad(p, "no LAS header")
         major, minor = head[24], head[25]
         if major != 1 or minor not in HEADER_MIN:
@@ -157,7 +160,7 @@ def _walk_evlrs(p, f, start: int, n: int, size: int) -> None:
 def _check_chunks(p, f, offset: int, end: int, size: int, n_points: int, laszip) -> None:
     """The LAZ chunk table: its offset inside the point data, and a number of chunks that
     matches the number of points (fixed chunk size) or the bytes there are (variable)."""
-    if laszip is None or len(laszip) < 34:
+    if laszip is None or len(laszip) < LASZIP_VLR_FIXED:
         raise _bad(p, "compressed points without a valid LASzip VLR")
     chunk_size = struct.unpack_from("<I", laszip, 12)[0]
     if chunk_size == 0:
