@@ -147,6 +147,11 @@ def test_las_header_counts_checked_against_the_file_size(tmp_path):
             f.write_bytes(bytes(b))
             with pytest.raises(CurvenetError, match="not a valid LAS/LAZ file"):
                 read_points(f)
+    # a block repeated inside the compressed points: lazrs panics ("capacity overflow"), a
+    # BaseException that an ``except Exception`` let through (exit 1 with a traceback)
+    f.write_bytes(raw[:865] + raw[188:865] + raw[865:])
+    with pytest.raises(CurvenetError, match="not a valid LAS/LAZ file"):
+        read_points(f)
     b = bytearray(raw)
     b[107:111] = struct.pack("<I", 2**32 - 1)  # the number of points
     f.write_bytes(bytes(b))

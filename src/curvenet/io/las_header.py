@@ -182,3 +182,30 @@ def _check_chunks(p, f, offset: int, end: int, size: int, n_points: int, laszip)
         raise _bad(p, f"{n_chunks} LAZ chunks announced in {table - offset - 8} bytes of point data")
     if chunk_size != LAZ_VARIABLE_CHUNKS and n_chunks != -(-n_points // chunk_size):
         raise _bad(p, f"{n_points} points announced, {n_chunks} LAZ chunks of {chunk_size} points")
+    _check_chunk_entries(p, f, offset, table, n_points, chunk_size, laszip)
+
+
+def _check_chunk_entries(p, f, offset: int, table: int, n_points: int, chunk_size: int, laszip) -> None:
+    """The entries of the LAZ chunk table (read by lazrs, when installed): the chunks' bytes
+    within the compressed data, their points (variable chunks) adding up to ``n_points``. A
+    garbage entry makes the decoder reserve an impossible buffer and panic."""
+    try:
+        import lazrs
+    except ImportError:  # laspy will say that LAZ needs it
+        return
+    f.seek(offset)
+    try:
+        entries = lazrs.read_chunk_table(f, lazrs.LazVlr(laszip))
+    except (KeyboardInterrupt, SystemExit, MemoryError):
+        raise
+    except BaseException as exc:  # lazrs errors, and Rust panics (BaseException)
+        raise _bad(p, f"unreadable LAZ chunk table ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+    room = table - offset - 8
+    used = points = 0
+    for i, (n, nbytes) in enumerate(entries):
+        used += nbytes
+        points += n
+        if used > room:
+            raise _bad(p, f"LAZ chunk {i + 1} of {len(entries)} ends after the compressed data ({room} bytes)")
+    if chunk_size == LAZ_VARIABLE_CHUNKS and points != n_points:
+        raise _bad(p, f"{n_points} points announced, the LAZ chunks hold {points}")

@@ -311,9 +311,9 @@ def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
                                                np.asarray(chunk.y, dtype=np.float64),
                                                np.asarray(chunk.z, dtype=np.float64)]))
                 checkpoint()
-    except (KeyboardInterrupt, MemoryError):
+    except (KeyboardInterrupt, SystemExit, MemoryError):
         raise
-    except Exception as exc:  # laspy and lazrs raise many types on malformed files
+    except BaseException as exc:  # laspy and lazrs raise many types (a Rust panic is a BaseException)
         msg = str(exc).split("\n")[0] or type(exc).__name__
         raise FormatError(f"{p}: not a valid LAS/LAZ file ({msg})") from None
     arr = np.vstack(blocks) if blocks else np.zeros((0, 3))
