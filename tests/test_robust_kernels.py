@@ -741,3 +741,29 @@ def test_knn_of_some_rows_equals_the_full_query():
     d, i = knn(P, 12, rows=rows)
     assert np.array_equal(i, idx[rows]) and np.array_equal(d, dist[rows])
     assert not (i == rows[:, None]).any()  # the point itself excluded
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_strand_cuts_survive_a_link_to_a_far_outlier(compiled):
+    """Issue 20 item 7: a link from a strand to an outlier far across it (every mean-shift
+    weight around the outlier underflows to 0) stopped the compiled kernel with
+    ZeroDivisionError; the link is simply not cut, compiled or not, without a warning."""
+    if compiled and not K.HAVE_NUMBA:
+        pytest.skip("numba not installed")
+    import warnings
+
+    for across in (30.0, 100.0, 1000.0):  # the outlier, this far across the strand
+        P, _ = _strands(None)
+        P = np.vstack([P, [[P[30, 0], across, 0.0]]])
+        q = len(P) - 1
+        dist, idx = knn(P, 16, ordered=True)
+        h = RF.local_spacing(dist, idx)
+        t = np.zeros_like(P)
+        t[:, 0] = 1.0  # every tangent along the strand, the outlier's too (a candidate link)
+        src = np.array([30, 31], dtype=np.int64)
+        dst = np.array([q, 32], dtype=np.int64)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # the plain-Python run divided by zero with a warning
+            with K.compiled_for(10**6 if compiled else 0):
+                cut = K.strand_cuts(P, h, idx, t, src, dst, 0.3)
+        assert not cut.any()

@@ -1,10 +1,15 @@
-"""Holding Ctrl-C back while native code runs in several threads.
+"""Holding Ctrl-C (and SIGTERM, SIGHUP) back while native code runs in several threads.
 
 A KeyboardInterrupt raised in the main thread while numba's parallel kernels or scipy's
 threaded k-d tree queries run can free arrays under their running threads, or break the wait
-on them: the process crashes instead of stopping. :func:`held` blocks SIGINT in the calling
-thread for the duration of such a call (threads started meanwhile inherit the block); a Ctrl-C
-pressed in between is delivered, and raised as usual, as soon as the call returns.
+on them: the process crashes instead of stopping. :func:`held` blocks the stopping signals
+(:data:`STOP_SIGNALS`) in the calling thread for the duration of such a call (threads started
+meanwhile inherit the block); a signal received in between is delivered, and raised as usual,
+as soon as the call returns.
+
+Under :func:`deferred` (the command line), SIGTERM and SIGHUP are handled as Ctrl-C is: a request
+acted on at the next :func:`checkpoint`, where :class:`Stopped` is raised (a KeyboardInterrupt
+carrying the signal number), so that no temporary file is left behind.
 """
 
 from __future__ import annotations
@@ -13,23 +18,49 @@ import signal
 import threading
 from contextlib import contextmanager
 
-__all__ = ["held", "deferred", "checkpoint"]
+__all__ = ["held", "deferred", "checkpoint", "Stopped", "STOP_SIGNALS"]
 
-#: Set by the handler of :func:`deferred` when Ctrl-C was pressed and not yet acted on.
+#: The signals that stop the command line cleanly: Ctrl-C, ``kill``/``timeout``, a closed terminal.
+STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+class Stopped(KeyboardInterrupt):
+    """Raised at a checkpoint for a stopping signal other than Ctrl-C (SIGTERM, SIGHUP).
+
+    Attributes
+    ----------
+    signum : int
+        The signal; the command line exits with ``128 + signum`` (143 for SIGTERM, 129 for
+        SIGHUP), as a shell reports a process killed by it.
+    """
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = int(signum)
+
+
+#: Set by the handler of :func:`deferred` when a stopping signal came and was not yet acted on.
 _pending = threading.Event()
+#: The first such signal.
+_pending_signum = [signal.SIGINT]
+
+
+def _stop(signum: int) -> KeyboardInterrupt:
+    return KeyboardInterrupt() if signum == signal.SIGINT else Stopped(signum)
 
 
 def checkpoint() -> None:
-    """Raise KeyboardInterrupt if Ctrl-C was pressed under :func:`deferred` (a safe point)."""
+    """Raise KeyboardInterrupt (or :class:`Stopped`) if a stopping signal came under
+    :func:`deferred` (a safe point)."""
     if _pending.is_set():
         _pending.clear()
-        raise KeyboardInterrupt
+        raise _stop(_pending_signum[0])
 
 
 @contextmanager
 def deferred():
-    """Turn Ctrl-C into a request acted on at the next :func:`checkpoint` (a second Ctrl-C
-    interrupts at once). For the command line: Python's default handler raises
+    """Turn Ctrl-C, SIGTERM and SIGHUP into a request acted on at the next :func:`checkpoint`
+    (a second one interrupts at once). For the command line: Python's default handler raises
     KeyboardInterrupt wherever the main thread is, which can be inside code whose native
     threads are still running."""
     if threading.current_thread() is not threading.main_thread():
@@ -38,25 +69,32 @@ def deferred():
 
     def handler(signum, frame):
         if _pending.is_set():
-            raise KeyboardInterrupt
+            _pending.clear()
+            raise _stop(_pending_signum[0])
+        _pending_signum[0] = signum
         _pending.set()
 
-    old = signal.signal(signal.SIGINT, handler)
+    old = {}
+    for s in STOP_SIGNALS:
+        if s != signal.SIGINT and signal.getsignal(s) is signal.SIG_IGN:
+            continue  # started under nohup: SIGHUP stays ignored
+        old[s] = signal.signal(s, handler)
     try:
         yield
         checkpoint()
     finally:
-        signal.signal(signal.SIGINT, old)
+        for s, h in old.items():
+            signal.signal(s, h)
         _pending.clear()
 
 
 @contextmanager
 def held():
-    """Block SIGINT in the main thread for the enclosed block (a no-op elsewhere)."""
+    """Block the stopping signals in the main thread for the enclosed block (a no-op elsewhere)."""
     if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, set(STOP_SIGNALS))
     try:
         yield
     finally:

@@ -50,10 +50,14 @@ def main(argv=None) -> int:
         parser.print_help()
         return 2
     verbose = getattr(args, "verbose", False)
-    from .._sigint import deferred
+    from .._sigint import Stopped, deferred
+
+    from ..io.atomic import all_or_nothing
 
     try:
-        with deferred():  # Ctrl-C acted on at safe points (see curvenet._sigint)
+        # Ctrl-C, SIGTERM, SIGHUP acted on at safe points (see curvenet._sigint); the files a
+        # command writes are renamed into place together when it succeeds, else none
+        with deferred(), all_or_nothing():
             return int(args.func(args) or 0)
     except CurvenetError as exc:
         if verbose:
@@ -68,6 +72,11 @@ def main(argv=None) -> int:
         except OSError:
             pass
         return 0
+    except Stopped as exc:  # SIGTERM, SIGHUP: as a shell reports a process killed by them
+        import signal
+
+        print(f"curvenet: stopped by {signal.Signals(exc.signum).name}", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
         print("curvenet: interrupted", file=sys.stderr)
         return 130

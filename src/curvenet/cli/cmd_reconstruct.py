@@ -79,6 +79,16 @@ def _param(text: str):
     return name, v
 
 
+def _output_roles(args) -> list:
+    """Every output of the run with what it holds, for :func:`curvenet.io.check_outputs`."""
+    from ..io import extension
+
+    roles = [(o, f"the network as {extension(o) or 'a file'}") for o in args.output]
+    roles += [(m, "the --surface mesh") for m in args.surface]
+    roles += [(p, what) for p, what in ((args.png, "the --png picture"), (args.html, "the --html viewer")) if p]
+    return roles
+
+
 def collect_params(args) -> dict:
     params = {name: getattr(args, opt) for opt, name in _PARAMS.items() if getattr(args, opt, None) is not None}
     for name, value in getattr(args, "param", []):
@@ -91,9 +101,11 @@ def collect_params(args) -> dict:
 
 def run(args) -> int:
     from ..errors import FormatError
-    from ..io import WRITERS, check_output_path, extension, read_points, write_network
+    from ..io import WRITERS, check_output_path, check_outputs, extension, read_points, write_network
     from ..reconstruct import reconstruct
+    from ..validate import reconstructable
     from .cmd_render import check_extension, picture_options
+    from .hints import empty_network_hint
     from .progress import Stages, _fmt, print_summary
 
     outputs = list(args.output)
@@ -110,9 +122,10 @@ def run(args) -> int:
         check_extension(args.html, ".html", "the --html viewer")
         check_output_path(args.html, inputs=inputs)
     if args.surface:
-        from .cmd_surface import check_outputs
+        from .cmd_surface import check_outputs as check_meshes
 
-        check_outputs(args.surface, inputs=inputs)
+        check_meshes(args.surface, inputs=inputs)
+    check_outputs(_output_roles(args), inputs=inputs)  # no file given twice for two contents
     st = Stages(quiet=args.quiet, verbose=args.verbose)
     params = collect_params(args)
     st.info(f"input: {args.input}; method: {args.method}; given parameters: "
@@ -120,8 +133,12 @@ def run(args) -> int:
     with st.stage(f"reading {Path(args.input).name}"):
         points = read_points(args.input, columns=args.columns, drop_nonfinite=args.drop_nonfinite)
     st.info(f"  {len(points)} points, dimension {points.shape[1]}")
+    reconstructable(points, name=args.input)  # too few or identical points: the file named
     with st.stage(f"reconstructing ({args.method})"):
         net = reconstruct(points, method=args.method, **params)
+    hint = empty_network_hint(net)
+    if hint and not args.quiet:
+        print(f"curvenet: warning: {hint}", file=sys.stderr)
     if st.verbose:
         st.info("  parameters used: " + ", ".join(f"{k}={_fmt(v)}" for k, v in net.parameters.items()))
         times = {k: v for k, v in net.stats.get("time", {}).items() if k != "total"}

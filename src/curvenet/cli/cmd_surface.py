@@ -30,6 +30,7 @@ def check_outputs(outputs, *, png=None, inputs=()) -> None:
     """Fail early on mesh outputs that cannot be written (bad extension, missing folder...)."""
     from ..errors import FormatError
     from ..io import check_output_path, extension
+    from ..io import check_outputs as check_all
     from ..surfacing import MESH_WRITERS
 
     for out in outputs:
@@ -41,6 +42,8 @@ def check_outputs(outputs, *, png=None, inputs=()) -> None:
         if extension(png) != ".png":
             raise FormatError(f"{png}: the --png picture must end in .png")
         check_output_path(png, inputs=inputs)
+    check_all([(o, f"the mesh as {extension(o)}") for o in outputs] + ([(png, "the --png picture")] if png else []),
+              inputs=inputs)
 
 
 def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=True):

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import CurveNetwork
-from .atomic import atomic_write, check_output_path
+from .atomic import all_or_nothing, atomic_write, check_output_path, check_outputs
 from .dxf import network_to_dxf
 from .graphml import network_to_graphml
 from .svg import network_to_svg
@@ -30,7 +30,9 @@ __all__ = [
     "write_network",
     "read_network",
     "atomic_write",
+    "all_or_nothing",
     "check_output_path",
+    "check_outputs",
     "extension",
 ]
 

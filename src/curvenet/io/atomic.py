@@ -1,15 +1,45 @@
-"""Atomic file output: a temporary file in the target folder, then a rename."""
+"""Atomic file output: a temporary file in the target folder, then a rename.
+
+One file: :func:`atomic_write`. Several files, all or nothing: inside :func:`all_or_nothing`,
+:func:`atomic_write` only writes each file's temporary file; the renames happen together when
+the block ends without error, and every temporary file is removed otherwise.
+"""
 
 from __future__ import annotations
 
+import contextvars
+import hashlib
 import os
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from .._sigint import checkpoint
 from ..errors import OutputError
 
-__all__ = ["atomic_write", "check_output_path"]
+__all__ = ["atomic_write", "check_output_path", "check_outputs", "all_or_nothing", "TEMP_PREFIX", "TEMP_SUFFIX"]
+
+#: Prefix and suffix of the temporary files, with 8 random characters between them: short, so
+#: that the temporary name fits wherever the output name does.
+TEMP_PREFIX = ".cn-"
+TEMP_SUFFIX = ".tmp"
+
+#: The longest file name when the system does not say (``NAME_MAX`` of Linux and macOS).
+DEFAULT_NAME_MAX = 255
+
+#: The outputs staged by the innermost :func:`all_or_nothing` (None outside).
+_BATCH: contextvars.ContextVar = contextvars.ContextVar("curvenet_output_batch", default=None)
+
+
+def _folder(p: Path) -> Path:
+    return p.parent if str(p.parent) else Path(".")
+
+
+def _name_max(folder: Path) -> int:
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return DEFAULT_NAME_MAX
 
 
 def check_output_path(path, *, inputs=()) -> Path:
@@ -29,14 +59,24 @@ def check_output_path(path, *, inputs=()) -> Path:
     Raises
     ------
     OutputError
-        When the folder does not exist, the path is a folder, or it is one of the inputs.
+        When the folder does not exist or cannot be written to, the name is too long for the
+        file system, the path is a folder, or it is one of the inputs.
     """
     p = Path(path)
-    parent = p.parent if str(p.parent) else Path(".")
+    parent = _folder(p)
     if not parent.is_dir():
         raise OutputError(f"{p}: cannot write output, folder {parent} does not exist")
-    if p.is_dir():
+    limit = _name_max(parent)
+    if len(os.fsencode(p.name)) > limit:
+        raise OutputError(f"{p}: cannot write output, the file name is longer than {limit} bytes")
+    try:
+        is_dir = p.is_dir()
+    except OSError as exc:
+        raise OutputError(f"{p}: cannot write output ({exc.strerror or exc})") from None
+    if is_dir:
         raise OutputError(f"{p}: cannot write output, it is a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputError(f"{p}: cannot write output, folder {parent} is not writable")
     for q in inputs:
         try:
             same = Path(q).resolve() == p.resolve()
@@ -47,33 +87,85 @@ def check_output_path(path, *, inputs=()) -> Path:
     return p
 
 
-def atomic_write(path, data, *, inputs=()) -> Path:
-    """Write ``data`` to ``path`` atomically.
-
-    The data go to a temporary file in the same folder, which is flushed, synced and renamed over
-    ``path``. If anything fails (including Ctrl-C), the temporary file is removed and an existing
-    ``path`` is left untouched.
+def check_outputs(outputs, *, inputs=()) -> None:
+    """Check every output of a run before the work: each path (see :func:`check_output_path`),
+    and no file given twice for different contents.
 
     Parameters
     ----------
-    path : str or Path
-        Target file.
-    data : bytes or str
-        Content; ``str`` is written as UTF-8.
+    outputs : iterable of (path, what)
+        Each output with what it holds (e.g. ``"the network"``, ``"the mesh"``); the same path
+        may come twice only for the same content.
     inputs : iterable of str or Path
-        Input files that must not be overwritten.
+        Input files of the run.
 
-    Returns
-    -------
-    Path
-        The written path.
+    Raises
+    ------
+    OutputError
     """
-    p = check_output_path(path, inputs=inputs)
-    if isinstance(data, str):
-        data = data.encode("utf-8")
-    parent = p.parent if str(p.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+    seen: dict[Path, tuple[str, str]] = {}
+    for path, what in outputs:
+        p = check_output_path(path, inputs=inputs)
+        key = p.resolve()
+        if key in seen and seen[key][1] != what:
+            raise OutputError(f"{p}: given as two outputs, {seen[key][1]} ({seen[key][0]}) and {what}")
+        seen.setdefault(key, (str(path), what))
+
+
+class _Batch:
+    """Temporary files written and waiting for their renames: target -> (temporary, digest)."""
+
+    def __init__(self):
+        self.staged: dict[Path, tuple[str, bytes, Path]] = {}
+
+    def discard(self) -> None:
+        for tmp, _, _ in self.staged.values():
+            _unlink(tmp)
+        self.staged.clear()
+
+    def commit(self) -> None:
+        checkpoint()  # a signal before the renames: no file changes
+        for key, (tmp, _, p) in list(self.staged.items()):
+            try:
+                os.replace(tmp, p)
+            except OSError as exc:
+                raise OutputError(f"{p}: cannot write output ({exc.strerror or exc})") from None
+            del self.staged[key]
+
+
+@contextmanager
+def all_or_nothing():
+    """Make the outputs written by :func:`atomic_write` inside the block all or nothing.
+
+    Each output goes to its temporary file when written; when the block ends without error,
+    every temporary file is renamed to its output, and on any error (a failed output,
+    Ctrl-C, SIGTERM) every temporary file is removed and no output is written or changed.
+    A path written twice must get the same bytes.
+    """
+    batch = _Batch()
+    token = _BATCH.set(batch)
     try:
+        yield
+        batch.commit()
+    finally:
+        _BATCH.reset(token)
+        batch.discard()  # nothing left after a commit; every temporary file after an error
+
+
+def _unlink(tmp) -> None:
+    try:
+        os.unlink(tmp)
+    except OSError:
+        pass
+
+
+def _write_temp(p: Path, data: bytes) -> str:
+    """Write ``data`` to a new temporary file beside ``p`` (synced, with ``p``'s permissions or
+    the default ones); returns its name. Removed again on any error."""
+    parent = _folder(p)
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=TEMP_SUFFIX, dir=parent)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
@@ -88,13 +180,62 @@ def atomic_write(path, data, *, inputs=()) -> Path:
             os.umask(umask)
             os.chmod(tmp, 0o666 & ~umask)
         checkpoint()  # Ctrl-C pressed while writing: no file (see curvenet._sigint)
-        os.replace(tmp, p)
+        return tmp
     except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        if tmp is not None:
+            _unlink(tmp)
         if isinstance(exc, OSError) and not isinstance(exc, OutputError):
             raise OutputError(f"{p}: cannot write output ({exc.strerror or exc})") from None
         raise
+
+
+def atomic_write(path, data, *, inputs=()) -> Path:
+    """Write ``data`` to ``path`` atomically.
+
+    The data go to a temporary file in the same folder, which is flushed, synced and renamed over
+    ``path``. If anything fails (including Ctrl-C), the temporary file is removed and an existing
+    ``path`` is left untouched. Inside :func:`all_or_nothing` the rename waits for the end of
+    the block.
+
+    Parameters
+    ----------
+    path : str or Path
+        Target file.
+    data : bytes or str
+        Content; ``str`` is written as UTF-8.
+    inputs : iterable of str or Path
+        Input files that must not be overwritten.
+
+    Returns
+    -------
+    Path
+        The written path.
+
+    Raises
+    ------
+    OutputError
+        When the file cannot be written, or (inside :func:`all_or_nothing`) when the same path
+        was written before with other bytes.
+    """
+    p = check_output_path(path, inputs=inputs)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    batch = _BATCH.get()
+    if batch is None:
+        tmp = _write_temp(p, data)
+        try:
+            os.replace(tmp, p)
+        except BaseException as exc:
+            _unlink(tmp)
+            if isinstance(exc, OSError):
+                raise OutputError(f"{p}: cannot write output ({exc.strerror or exc})") from None
+            raise
+        return p
+    key = p.resolve()
+    digest = hashlib.sha256(data).digest()
+    if key in batch.staged:
+        if batch.staged[key][1] != digest:
+            raise OutputError(f"{p}: written twice in one run with different contents")
+        return p
+    batch.staged[key] = (_write_temp(p, data), digest, p)
     return p

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -132,17 +133,29 @@ def network_to_ply(net: CurveNetwork) -> bytes:
 def read_network(path) -> CurveNetwork:
     """Read a curve network written in the curvenet JSON format.
 
+    The whole document is checked first against the format (see
+    :mod:`curvenet.io.network_schema`, published in ``docs/network-format.md``).
+
     Raises
     ------
     FormatError
-        When the file is not valid JSON or not a curvenet network.
+        When the file is not valid JSON or not a curvenet network: a one-line message with the
+        file and the JSON path of the first problem.
     """
+    from .network_schema import check_network_document
+
     p = check_readable(path)
     try:
         data = json.loads(Path(p).read_bytes().decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise FormatError(f"{p}: not a valid JSON file ({str(exc).splitlines()[0]})") from None
+    except UnicodeDecodeError as exc:
+        raise FormatError(f"{p}: not a valid JSON file (undecodable bytes at offset {exc.start})") from None
+    except RecursionError:
+        raise FormatError(f"{p}: not a curvenet network (JSON nested too deeply)") from None
+    except ValueError as exc:  # JSONDecodeError, and integers longer than Python converts
+        msg = re.sub(r";\s*use sys\.set_int_max_str_digits.*$", "", str(exc).splitlines()[0])
+        raise FormatError(f"{p}: not a valid JSON file ({msg})") from None
     try:
+        check_network_document(data)
         return CurveNetwork.from_dict(data)
     except FormatError as exc:
-        raise FormatError(f"{p}: {exc}") from None
+        raise FormatError(f"{p}: invalid curvenet network {exc}") from None

@@ -14,6 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .._sigint import checkpoint
 from ..errors import FormatError, InputError, require
 
 __all__ = ["read_text", "read_npy", "read_ply", "read_obj", "read_las", "check_readable"]
@@ -111,15 +112,19 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         head = f.read(1 << 16)
     if b"\x00" in head:
         raise FormatError(f"{p}: binary data in a text point file")
+    data_part = b"\n".join(line.split(b"#", 1)[0] for line in head.splitlines())  # comments may hold any bytes
     try:
-        head.decode("utf-8")
+        data_part.decode("utf-8")
     except UnicodeDecodeError as exc:
-        if exc.start < len(head) - 4:  # not just a character cut at the end of the block
-            raise FormatError(f"{p}: not a text file (undecodable bytes near offset {exc.start})") from None
+        if exc.start < len(data_part) - 4:  # not just a character cut at the end of the block
+            raise FormatError(f"{p}: not a text file (undecodable bytes outside comments)") from None
     # the first non-comment line decides header and delimiter
     skip = 0
     first = None
-    lines = head.decode("utf-8", errors="replace").splitlines()
+    # lines split as the reader below splits them (universal newlines: \n, \r\n, \r)
+    lines = head.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
     for line in lines[:-1] if len(head) == 1 << 16 else lines:
         s = line.strip()
         if not s or s.startswith("#"):
@@ -137,24 +142,58 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         skip += 1
     ncols = len(toks)
     cols = _select(p, names, ncols, columns)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": handled below
-            arr = np.loadtxt(p, delimiter=delim, skiprows=skip, comments="#", ndmin=2, dtype=np.float64, encoding="utf-8")
-    except ValueError as exc:
-        msg = str(exc).split("\n")[0]
-        msg = re.sub(r"; use `usecols`.*$", "", msg)
-        m = re.search(r"at row (\d+)", msg)
-        if m:  # numpy counts rows after skiprows, from 0 or 1 depending on the message
-            msg = msg[: m.start()] + f"in data row {m.group(1)}" + msg[m.end():]
-        raise FormatError(f"{p}: {msg.rstrip('.')}") from None
-    except UnicodeDecodeError as exc:
-        raise FormatError(f"{p}: not a text file (undecodable bytes at offset {exc.start})") from None
+    arr = _read_rows(p, skip, delim, ncols)
     if arr.size == 0:
         raise FormatError(f"{p}: a header but no data rows" if names else f"{p}: no data rows")
-    if arr.shape[1] != ncols:
-        raise FormatError(f"{p}: rows have {arr.shape[1]} values, the first has {ncols}")
     return _finite(p, arr[:, cols], drop_nonfinite)
+
+
+#: Bytes of a text point file parsed at a time, cut at a line end (Ctrl-C acted on between).
+TEXT_CHUNK_BYTES = 1 << 23
+
+
+def _read_rows(p: Path, skip: int, delim, ncols: int) -> np.ndarray:
+    """The numbers of a text point file after its first ``skip`` lines, about
+    :data:`TEXT_CHUNK_BYTES` at a time; errors name the data row (counted from 1, blank and
+    comment lines not counted, as in the NaN errors)."""
+    blocks = []
+    done = 0  # data rows parsed so far
+    # Latin-1 decodes every byte: a stray byte in a comment is ignored, one in the data fails as
+    # a number that does not convert
+    with open(p, encoding="latin-1", newline=None) as f:
+        for _ in range(skip):
+            f.readline()
+        while True:
+            raw = f.read(TEXT_CHUNK_BYTES)
+            if not raw:
+                break
+            if not raw.endswith("\n"):
+                raw += f.readline()  # the rest of the last line
+            text = _io.StringIO(raw)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
+                    arr = np.loadtxt(text, delimiter=delim, comments="#", ndmin=2, dtype=np.float64)
+            except ValueError as exc:
+                raise FormatError(f"{p}: {_row_message(str(exc), done)}") from None
+            if arr.size:
+                if arr.shape[1] != ncols:
+                    raise FormatError(f"{p}: data row {done + 1} has {arr.shape[1]} values, the first row {ncols}")
+                blocks.append(arr)
+                done += len(arr)
+            checkpoint()  # Ctrl-C during a long read: acted on here (see curvenet._sigint)
+    return np.vstack(blocks) if blocks else np.zeros((0, ncols))
+
+
+def _row_message(msg: str, done: int) -> str:
+    """numpy's loadtxt message with its row number made a data row of the file (from 1)."""
+    msg = msg.split("\n")[0]
+    msg = re.sub(r"; use `usecols`.*$", "", msg).rstrip(".")
+    m = re.search(r"at row (\d+)", msg)
+    if m:  # numpy counts the rows of its input from 0 in conversion errors, from 1 in others
+        row = int(m.group(1)) + (1 if msg.startswith("could not convert") else 0)
+        msg = msg[: m.start()] + f"in data row {done + row}" + msg[m.end():]
+    return msg
 
 
 def _finite(path, arr: np.ndarray, drop: bool) -> np.ndarray:
@@ -178,6 +217,10 @@ def _from_array(path, arr: np.ndarray, columns: Columns, drop_nonfinite: bool) -
     if arr.dtype.names:
         names = [n.lower() for n in arr.dtype.names]
         cols = _select(path, names, len(names), columns)
+        for c in cols:
+            field = arr.dtype[arr.dtype.names[c]]
+            if field.kind not in "iuf" or field.shape:
+                raise FormatError(f"{path}: field {arr.dtype.names[c]!r} holds {field}, not numbers")
         arr = np.stack([arr[arr.dtype.names[c]].astype(np.float64) for c in cols], axis=1)
         return _finite(path, arr.reshape(-1, len(cols)), drop_nonfinite)
     if arr.ndim != 2:
@@ -243,16 +286,37 @@ def read_obj(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     return _finite(p, arr[:, cols], drop_nonfinite)
 
 
+#: Points decoded at a time from a LAS/LAZ file (bounded memory; Ctrl-C acted on between).
+LAS_CHUNK_POINTS = 1_000_000
+
+
 def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
-    """Read the x, y, z coordinates of a LAS or LAZ point cloud (needs laspy, extra ``io``)."""
+    """Read the x, y, z coordinates of a LAS or LAZ point cloud (needs laspy, extra ``io``).
+
+    The header is checked against the file's size first (:func:`curvenet.io.las_header.check_las`),
+    then the points are decoded :data:`LAS_CHUNK_POINTS` at a time.
+    """
+    from .las_header import check_las
+
     p = check_readable(path)
     laspy = require("laspy", "reading LAS/LAZ files", "io")
+    layout = check_las(p)
+    if layout.n_points == 0:
+        raise FormatError(f"{p}: LAS file has no points")
+    blocks = []
     try:
-        las = laspy.read(str(p))
-        arr = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)])
-    except Exception as exc:  # laspy raises many types on malformed files
+        with laspy.open(str(p)) as reader:
+            for chunk in reader.chunk_iterator(LAS_CHUNK_POINTS):
+                blocks.append(np.column_stack([np.asarray(chunk.x, dtype=np.float64),
+                                               np.asarray(chunk.y, dtype=np.float64),
+                                               np.asarray(chunk.z, dtype=np.float64)]))
+                checkpoint()
+    except (KeyboardInterrupt, SystemExit, MemoryError):
+        raise
+    except BaseException as exc:  # laspy and lazrs raise many types (a Rust panic is a BaseException)
         msg = str(exc).split("\n")[0] or type(exc).__name__
         raise FormatError(f"{p}: not a valid LAS/LAZ file ({msg})") from None
+    arr = np.vstack(blocks) if blocks else np.zeros((0, 3))
     if len(arr) == 0:
         raise FormatError(f"{p}: LAS file has no points")
     cols = _select(p, ["x", "y", "z"], 3, columns)

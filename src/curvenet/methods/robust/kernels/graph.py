@@ -207,6 +207,8 @@ def _shift_mode(L, cnt, x0, b, out, sd):  # pragma: no cover - compiled
             sw += wi
             for c in range(d):
                 x2[c] += wi * L[i, c]
+        if not sw > 0.0:  # every weight underflowed (x0 far from all rows): x0 stays the mode
+            break
         mv = 0.0
         for c in range(d):
             x2[c] /= sw

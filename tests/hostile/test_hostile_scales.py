@@ -1,0 +1,105 @@
+"""Issue 20 item 5: the same network at any scale where float64 holds the points."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curvenet import InputError
+from curvenet.io import read_points
+from curvenet.reconstruct import reconstruct
+
+MUG = Path(__file__).resolve().parents[2] / "examples" / "mug.xyz"
+
+
+@pytest.fixture(scope="module")
+def mug():
+    return read_points(MUG)
+
+
+@pytest.fixture(scope="module")
+def mug_net(mug):
+    return reconstruct(mug)
+
+
+def _same_up_to_scale(a, b, s, rtol=1e-9):
+    """Networks ``a`` and ``b`` with ``b`` = ``a`` scaled by ``s``: same nodes, curves, indices."""
+    ca, cb = a.canonical(), b.canonical()
+    assert (a.n_nodes, a.n_curves) == (b.n_nodes, b.n_curves)
+    np.testing.assert_allclose(cb.nodes / s, ca.nodes, rtol=rtol, atol=rtol)
+    for x, y in zip(ca.curves, cb.curves):
+        assert (x.start, x.end, x.closed) == (y.start, y.end, y.closed)
+        assert np.array_equal(x.indices, y.indices)
+        np.testing.assert_allclose(y.points / s, x.points, rtol=rtol, atol=rtol)
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e-155, 1e155, 1e200])
+def test_mug_at_extreme_scales(mug, mug_net, s):
+    """On main: 1e+-200 gave an empty network or an IndexError, 1e+-155 overflow warnings."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        net = reconstruct(mug * s)
+    assert mug_net.n_curves > 0
+    _same_up_to_scale(mug_net, net, s)
+    assert net.parameters["spacing"] == pytest.approx(mug_net.parameters["spacing"] * s, rel=1e-9)
+
+
+@pytest.mark.parametrize("k", [-900, 600])
+def test_power_of_two_scales_are_exact(mug, k):
+    """Scaling by 2**k is exact: outside the unscaled range, the network at 2**(k + 300) is the
+    one at 2**k times 2**300 to the bit; inside it, points run as given (the default method's
+    networks unchanged: the digest check)."""
+    a = reconstruct(np.ldexp(mug, k))
+    b = reconstruct(np.ldexp(mug, k + 300))
+    assert a.n_curves > 0
+    assert np.array_equal(b.nodes, np.ldexp(a.nodes, 300))
+    for x, y in zip(a.curves, b.curves):
+        assert np.array_equal(y.points, np.ldexp(x.points, 300))
+        assert np.array_equal(x.indices, y.indices)
+    assert b.parameters["spacing"] == np.ldexp(a.parameters["spacing"], 300)
+    assert b.parameters["spacing_range"] == [np.ldexp(v, 300) for v in a.parameters["spacing_range"]]
+
+
+def test_ordinary_scales_run_unscaled(mug, mug_net):
+    from curvenet.validate import UNSCALED_EXTENTS, unit_frame
+
+    assert unit_frame(mug) == (None, 0)
+    assert unit_frame(mug * 1e-15) == (None, 0) and unit_frame(mug * 1e15) == (None, 0)
+    assert unit_frame(np.ldexp(mug, 64))[1] < 0 and UNSCALED_EXTENTS[0] <= 2.0**-64
+
+
+def test_a_given_length_is_in_the_units_of_the_points(mug):
+    ref = reconstruct(mug, spacing=0.01)
+    net = reconstruct(mug * 1e200, spacing=0.01 * 1e200)
+    _same_up_to_scale(ref, net, 1e200)
+    assert net.parameters["spacing"] == 0.01 * 1e200
+
+
+def test_paper_method_at_extreme_scales(cube_points):
+    ref = reconstruct(cube_points, method="paper")
+    assert ref.n_curves > 0
+    for s in (1e-200, 1e200):
+        net = reconstruct(cube_points * s, method="paper", tau_s=0.1 * s)
+        _same_up_to_scale(reconstruct(cube_points, method="paper", tau_s=0.1), net, s)
+        assert net.parameters["tau_s"] == pytest.approx(0.1 * s)
+
+
+def test_far_from_the_origin(mug, mug_net):
+    """Points 1e9 extents away are translated internally: the same network, shifted."""
+    off = np.array([1e9, -2e9, 3e9])
+    net = reconstruct(mug + off)
+    ca, cb = mug_net.canonical(), net.canonical()
+    assert (ca.n_nodes, ca.n_curves) == (cb.n_nodes, cb.n_curves)
+    np.testing.assert_allclose(cb.nodes - off, ca.nodes, atol=1e-5)
+
+
+@pytest.mark.parametrize("pts, what", [
+    (np.array([[0.0, 0, 0], [1e-300, 0, 0], [0, 1e-300, 0], [0, 0, 2e-300]]), "cannot resolve"),
+    (np.array([[-1e308, 0, 0], [1e308, 0, 0], [0, 1.0, 0], [0, 0, 1.0]]), "span more than float64"),
+    (np.array([[1e15, 0, 0], [1e15 + 0.25, 0, 0], [1e15, 0.25, 0], [1e15, 0, 0.5]]), "from the origin"),
+])
+def test_points_float64_cannot_resolve_are_refused(pts, what):
+    with pytest.raises(InputError, match=what):
+        reconstruct(pts)
