@@ -17,9 +17,12 @@ from ..errors import FormatError
 from ..network import CurveNetwork
 from .atomic import atomic_write, check_output_path
 from .dxf import network_to_dxf
+from .geojson import network_to_geojson
 from .graphml import network_to_graphml
 from .svg import network_to_svg
+from .swc import network_to_swc
 from .vtp import network_to_vtp
+from .vtu import network_to_vtu
 from .network_io import network_to_json, network_to_obj, network_to_ply, read_network
 from .points import check_readable, read_las, read_npy, read_obj, read_ply, read_text
 
@@ -50,12 +53,15 @@ READERS: dict[str, tuple[Callable[..., np.ndarray], str]] = {
 #: extension -> (writer, description)
 WRITERS: dict[str, tuple[Callable[..., Any], str]] = {
     ".json": (network_to_json, "curvenet JSON network"),
-    ".obj": (network_to_obj, "Wavefront OBJ polylines (l lines)"),
-    ".ply": (network_to_ply, "PLY vertices and edges"),
-    ".dxf": (network_to_dxf, "DXF: 3D polylines or splines (layer CURVES), node points (NODES) (extra io)"),
-    ".svg": (network_to_svg, "SVG drawing of a 2D network or a projection of a 3D one"),
+    ".obj": (network_to_obj, "Wavefront OBJ polylines (l lines: Blender, MeshLab, ParaView)"),
+    ".ply": (network_to_ply, "PLY vertices and edges (a line set in trimesh, Open3D, MeshLab, Blender)"),
+    ".dxf": (network_to_dxf, "DXF: 3D polylines or splines (layer CURVES), node points (NODES); --units (extra io)"),
+    ".svg": (network_to_svg, "SVG drawing of a 2D network or a view of a 3D one (--view top|front|side|iso)"),
     ".vtp": (network_to_vtp, "VTK XML PolyData polylines and node vertices (ParaView)"),
+    ".vtu": (network_to_vtu, "VTK XML UnstructuredGrid line cells with curve ids (meshio, ParaView)"),
     ".graphml": (network_to_graphml, "GraphML graph: nodes with x y z, one edge per curve with its polyline"),
+    ".geojson": (network_to_geojson, "GeoJSON: curves as LineStrings, nodes as Points (QGIS, GDAL, shapely)"),
+    ".swc": (network_to_swc, "SWC tree samples with parent links, fork and end types (navis, NEURON)"),
 }
 
 
