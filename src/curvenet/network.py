@@ -51,7 +51,7 @@ class Curve:
     start: int | None
     end: int | None
     closed: bool = False
-    indices: np.ndarray | None = None
+    indices: np.ndarray = None  # type: ignore[assignment]  # None: all -1, set in __post_init__
 
     def __post_init__(self) -> None:
         self.points = np.asarray(self.points, dtype=float)
@@ -230,8 +230,8 @@ class CurveNetwork:
         """(c, 2) int array of the end nodes of each curve, ``-1`` for loops without nodes."""
         e = np.full((len(self.curves), 2), -1, dtype=np.int64)
         for i, c in enumerate(self.curves):
-            if c.start is not None:
-                e[i] = (c.start, c.end)
+            if c.start is not None and c.end is not None:
+                e[i] = (int(c.start), int(c.end))
         return e
 
     @property
@@ -346,7 +346,9 @@ class CurveNetwork:
                 rev.indices = np.roll(rev.indices, 1)
                 if _key(rev, decimals) < _key(cc, decimals):
                     cc = rev
-            elif s is not None and (e < s or (e == s and _key(cc.reversed(), decimals) < _key(cc, decimals))):
+            elif s is not None and e is not None and (
+                e < s or (e == s and _key(cc.reversed(), decimals) < _key(cc, decimals))
+            ):
                 cc = cc.reversed()
             curves.append(cc)
         curves.sort(key=lambda c: _key(c, decimals))
@@ -391,7 +393,7 @@ class CurveNetwork:
             g.add_node(j, pos=tuple(float(x) for x in p), valence=v, kind=kind, anchor=False)
         n_anchor = len(self.nodes)
         for i, c in enumerate(self.curves):
-            if c.start is None:
+            if c.start is None or c.end is None:
                 a = n_anchor
                 n_anchor += 1
                 first = c.points[0] if len(c.points) else np.zeros(self.dimension)
@@ -563,13 +565,13 @@ def _lexmin(p: np.ndarray) -> int:
     return int(np.lexsort(p.T[::-1])[0])
 
 
-def _key(c: Curve, decimals: int):
+def _key(c: Curve, decimals: int) -> tuple[int, int, tuple[float, ...]]:
     s = -1 if c.start is None else c.start
     e = -1 if c.end is None else c.end
     return (s, e, tuple(np.round(c.points, decimals).ravel().tolist()))
 
 
-def _jsonable(obj):
+def _jsonable(obj: Any) -> Any:
     """Convert numpy scalars and arrays inside dicts/lists to plain Python values."""
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}

@@ -5,9 +5,10 @@ from __future__ import annotations
 import importlib
 import inspect
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import InputError
 from .network import CurveNetwork
@@ -27,7 +28,7 @@ METHODS: dict[str, tuple[str, str]] = {
 DEFAULT_METHOD = "robust"
 
 
-def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
+def reconstruct(points: ArrayLike, *, method: str = "auto", **params: Any) -> CurveNetwork:
     """Reconstruct a curve network from unorganized points.
 
     Parameters
@@ -73,7 +74,7 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     return net
 
 
-def _check_params(name: str, fn, params: dict) -> None:
+def _check_params(name: str, fn: Callable[..., CurveNetwork], params: dict[str, Any]) -> None:
     """Raise InputError for a parameter the method does not take."""
     sig = inspect.signature(fn)
     if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):

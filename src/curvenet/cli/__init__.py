@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK
 """The ``curvenet`` command-line tool: a thin front over the library.
 
 Each command lives in ``cmd_<name>.py`` with ``register(subparsers)`` and ``run(args) -> int``.
@@ -23,6 +24,7 @@ COMMANDS = (
     "view",
     "bench",
     "surface",
+    "completion",
 )
 
 
@@ -35,6 +37,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"{__name__}.cmd_{name}").register(sub)
+    from .examples import HelpFormatter, epilog
+
+    for name, p in sub.choices.items():
+        p.epilog = epilog(name)
+        p.formatter_class = HelpFormatter
     return parser
 
 
@@ -50,6 +57,7 @@ def main(argv=None) -> int:
     from ..errors import CurvenetError
 
     parser = build_parser()
+    _autocomplete(parser)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
@@ -84,6 +92,17 @@ def main(argv=None) -> int:
             raise
         print(f"curvenet: internal error: {type(exc).__name__}: {exc} (run with --verbose for details)", file=sys.stderr)
         return 1
+
+
+def _autocomplete(parser: argparse.ArgumentParser) -> None:
+    """Answer a shell's completion request (argcomplete; a no-op otherwise or without it)."""
+    if "_ARGCOMPLETE" not in os.environ:
+        return
+    try:
+        import argcomplete
+    except ImportError:
+        return
+    argcomplete.autocomplete(parser)
 
 
 def console() -> None:

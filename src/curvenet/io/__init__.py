@@ -9,7 +9,7 @@ atomically.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -24,6 +24,7 @@ from .swc import network_to_swc
 from .vtp import network_to_vtp
 from .vtu import network_to_vtu
 from .network_io import network_to_json, network_to_obj, network_to_ply, read_network
+from .pcd import read_pcd
 from .points import check_readable, read_las, read_npy, read_obj, read_ply, read_text
 
 __all__ = [
@@ -42,7 +43,9 @@ READERS: dict[str, tuple[Callable[..., np.ndarray], str]] = {
     ".xyz": (read_text, "text, x y [z] per line"),
     ".txt": (read_text, "text, x y [z] per line"),
     ".pts": (read_text, "text, x y [z] per line"),
-    ".csv": (read_text, "comma-separated values, optional header"),
+    ".csv": (read_text, "comma-separated values, optional header; text columns skipped"),
+    ".tsv": (read_text, "tab-separated values, optional header; text columns skipped"),
+    ".pcd": (read_pcd, "PCL/Open3D point cloud, ascii, binary or binary_compressed"),
     ".npy": (read_npy, "NumPy array (N, 2|3)"),
     ".ply": (read_ply, "PLY vertices, ASCII or binary (extra io)"),
     ".obj": (read_obj, "Wavefront OBJ vertices"),
@@ -65,12 +68,14 @@ WRITERS: dict[str, tuple[Callable[..., Any], str]] = {
 }
 
 
-def extension(path) -> str:
+def extension(path: str | Path) -> str:
     """Lower-case extension of ``path`` (e.g. ``".xyz"``)."""
     return Path(path).suffix.lower()
 
 
-def read_points(path, *, columns=None, drop_nonfinite: bool = False) -> np.ndarray:
+def read_points(
+    path: str | Path, *, columns: Sequence[int | str] | None = None, drop_nonfinite: bool = False
+) -> np.ndarray:
     """Read points from a file, choosing the reader by extension.
 
     Parameters
@@ -99,7 +104,7 @@ def read_points(path, *, columns=None, drop_nonfinite: bool = False) -> np.ndarr
     return READERS[ext][0](path, columns=columns, drop_nonfinite=drop_nonfinite)
 
 
-def write_network(net: CurveNetwork, path, *, inputs=(), **options) -> Path:
+def write_network(net: CurveNetwork, path: str | Path, *, inputs: Iterable[str | Path] = (), **options: Any) -> Path:
     """Write a network to ``path`` in the format given by its extension, atomically.
 
     Parameters

@@ -9,6 +9,7 @@ from __future__ import annotations
 import io
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InputError
 from ..network import CurveNetwork
@@ -21,7 +22,7 @@ __all__ = ["point_labels", "labels_to_csv", "labels_to_npy", "LABEL_REACH"]
 LABEL_REACH = 3.0
 
 
-def point_labels(net: CurveNetwork, points, *, reach: float | None = None) -> np.ndarray:
+def point_labels(net: CurveNetwork, points: ArrayLike, *, reach: float | None = None) -> np.ndarray:
     """For each input point, the id of its curve or of its node, or -1.
 
     A point that a curve passes through (its index is in ``curve.indices``) gets that curve's
@@ -86,8 +87,8 @@ def _spacing(net: CurveNetwork) -> float:
     h = net.parameters.get("spacing")
     if isinstance(h, (int, float)) and not isinstance(h, bool) and np.isfinite(h) and h > 0:
         return float(h)
-    steps = [np.linalg.norm(np.diff(c.points, axis=0), axis=1) for c in net.curves if len(c.points) > 1]
-    steps = np.concatenate(steps) if steps else np.zeros(0)
+    parts = [np.linalg.norm(np.diff(c.points, axis=0), axis=1) for c in net.curves if len(c.points) > 1]
+    steps = np.concatenate(parts) if parts else np.zeros(0)
     steps = steps[steps > 0]
     return float(np.median(steps)) if len(steps) else 0.0
 

@@ -131,7 +131,7 @@ def network_to_ply(net: CurveNetwork, *, curve_ids: bool = False) -> bytes:
     return header.encode("ascii") + vert.tobytes() + edge.tobytes()
 
 
-def read_network(path) -> CurveNetwork:
+def read_network(path: str | Path) -> CurveNetwork:
     """Read a curve network written in the curvenet JSON format.
 
     Raises

@@ -8,11 +8,12 @@ Text writers use these instead of a fixed ``%.17g`` (which writes ``0.4995589999
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["shortest", "shortest_rows"]
 
 
-def shortest(values, sep: str = " ") -> str:
+def shortest(values: ArrayLike, sep: str = " ") -> str:
     """The values as shortest round-trip decimals, joined by ``sep``.
 
     Parameters
@@ -34,7 +35,7 @@ def shortest(values, sep: str = " ") -> str:
     return sep.join(map(repr, np.asarray(values, dtype=np.float64).ravel().tolist()))
 
 
-def shortest_rows(rows, prefix: str = "", sep: str = " ") -> list[str]:
+def shortest_rows(rows: ArrayLike, prefix: str = "", sep: str = " ") -> list[str]:
     """One line per row of an (n, m) array: ``prefix`` then the row's shortest decimals.
 
     Parameters

@@ -77,6 +77,15 @@ def _select(path, names: list[str] | None, ncols: int, columns: Columns) -> list
     )
 
 
+def _first_data_row(lines: list[str], skip: int, delim: str | None) -> list[str] | None:
+    """The tokens of the first data line after ``skip`` lines (comments and blanks skipped)."""
+    for line in lines[skip:]:
+        t = line.strip()
+        if t and not t.startswith("#"):
+            return [x.strip() for x in (line.split(delim) if delim else t.split())]
+    return None
+
+
 def _is_number(tok: str) -> bool:
     try:
         float(tok)
@@ -86,12 +95,13 @@ def _is_number(tok: str) -> bool:
 
 
 def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
-    """Read points from a delimited text file (``.xyz``, ``.txt``, ``.pts``, ``.csv``).
+    """Read points from a delimited text file (``.xyz``, ``.txt``, ``.pts``, ``.csv``, ``.tsv``).
 
-    Values are separated by commas, semicolons, tabs or spaces; lines starting with ``#`` are
-    comments; an optional header line names the columns. Without a column choice, a file with
-    2 or 3 columns is read whole, a header naming ``x``, ``y`` (and ``z``) picks those columns,
-    and any other column count is an error.
+    Values are separated by commas, semicolons, tabs (always in ``.tsv``) or spaces; lines
+    starting with ``#`` are comments; an optional header line names the columns. Without a
+    column choice, a file with 2 or 3 columns is read whole, a header naming ``x``, ``y`` (and
+    ``z``) picks those columns, and any other column count is an error. Only the chosen columns
+    are read, so other columns may hold text (ids, labels).
 
     Parameters
     ----------
@@ -129,7 +139,10 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         break
     if first is None:
         raise FormatError(f"{p}: no data (only blank or comment lines)")
-    delim = "," if "," in first else (";" if ";" in first else None)
+    if p.suffix.lower() == ".tsv":
+        delim = "\t"
+    else:
+        delim = "," if "," in first else (";" if ";" in first else None)
     toks = [t.strip() for t in (first.split(delim) if delim else first.split())]
     names = None
     if not all(_is_number(t) for t in toks):
@@ -137,10 +150,23 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         skip += 1
     ncols = len(toks)
     cols = _select(p, names, ncols, columns)
+    data_row = _first_data_row(lines, skip, delim)
+    text_cols = [i for i, t in enumerate(data_row or []) if not _is_number(t)]
+    if text_cols:  # a text column (an id, a label): read the chosen columns only
+        chosen_text = [i for i in cols if i in text_cols]
+        if chosen_text:
+            i = chosen_text[0]
+            what = repr(names[i]) if names and i < len(names) else str(i)
+            raise FormatError(f"{p}: column {what} is not numeric (first data row has {data_row[i]!r}); "
+                              "choose the coordinate columns with --columns")
+        usecols = cols
+    else:
+        usecols = None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # "input contained no data": handled below
-            arr = np.loadtxt(p, delimiter=delim, skiprows=skip, comments="#", ndmin=2, dtype=np.float64, encoding="utf-8")
+            arr = np.loadtxt(p, delimiter=delim, skiprows=skip, comments="#", ndmin=2, dtype=np.float64,
+                             encoding="utf-8", usecols=usecols)
     except ValueError as exc:
         msg = str(exc).split("\n")[0]
         msg = re.sub(r"; use `usecols`.*$", "", msg)
@@ -152,6 +178,8 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         raise FormatError(f"{p}: not a text file (undecodable bytes at offset {exc.start})") from None
     if arr.size == 0:
         raise FormatError(f"{p}: a header but no data rows" if names else f"{p}: no data rows")
+    if usecols is not None:
+        return _finite(p, arr, drop_nonfinite)
     if arr.shape[1] != ncols:
         raise FormatError(f"{p}: rows have {arr.shape[1]} values, the first has {ncols}")
     return _finite(p, arr[:, cols], drop_nonfinite)

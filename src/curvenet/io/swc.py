@@ -77,7 +77,7 @@ def network_to_swc(
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type))
     at_node: list[list[int]] = [[] for _ in range(n)]
     for i, c in enumerate(net.curves):
-        if c.start is not None:
+        if c.start is not None and c.end is not None:
             at_node[int(c.start)].append(i)
             if int(c.end) != int(c.start):
                 at_node[int(c.end)].append(i)
@@ -103,8 +103,9 @@ def network_to_swc(
                     continue
                 used[i] = True
                 c = net.curves[i]
-                pts = c.points if int(c.start) == j else c.points[::-1]
-                other = int(c.end) if int(c.start) == j else int(c.start)
+                a, b = int(c.start or 0), int(c.end or 0)  # curves listed at a node have both
+                pts = c.points if a == j else c.points[::-1]
+                other = b if a == j else a
                 parent = int(sample_of_node[j])
                 for p in pts[1:-1]:
                     parent = add(sample_type, p, parent)

@@ -39,7 +39,7 @@ def network_to_vtu(net: CurveNetwork) -> str:
     node_id = np.full(len(v), -1, dtype=np.int64)
     node_id[: net.n_nodes] = np.arange(net.n_nodes)
 
-    def ints(a) -> str:
+    def ints(a: np.ndarray) -> str:
         return " ".join(map(str, np.asarray(a, dtype=np.int64).ravel().tolist()))
 
     out = [
