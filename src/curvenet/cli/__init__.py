@@ -102,6 +102,12 @@ def _autocomplete(parser: argparse.ArgumentParser) -> None:
         import argcomplete
     except ImportError:
         return
+    # a prefix of two options (--sh: --shell-inner, --shell-outer) is an argparse error that
+    # stops argcomplete's parse half way (argcomplete 3.7 then fails); complete it instead
+    parsers = [parser] + [p for a in parser._subparsers._group_actions for p in a.choices.values()] \
+        if parser._subparsers else [parser]
+    for p in parsers:
+        p.allow_abbrev = False
     argcomplete.autocomplete(parser)
 
 

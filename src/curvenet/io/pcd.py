@@ -126,7 +126,10 @@ def _ascii(p: Path, body: bytes, dtype: np.dtype, npts: int) -> np.ndarray:
         flat = np.array(rows[: npts * width], dtype=np.float64).reshape(npts, width)
     except ValueError:
         raise FormatError(f"{p}: PCD ascii data holds a value that is not a number") from None
-    out = np.zeros(npts, dtype=dtype)
+    # text keeps its digits: float fields are read as float64 whatever SIZE says (Open3D writes
+    # ten significant digits under "F 4", and reads them back as doubles)
+    wide = np.dtype([(f, "<f8" if dtype[f].base.kind == "f" else dtype[f].base, dtype[f].shape) for f in names])
+    out = np.zeros(npts, dtype=wide)
     col = 0
     for f in names:
         w = int(np.prod(dtype[f].shape))
