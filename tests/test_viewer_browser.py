@@ -265,3 +265,19 @@ def test_wide_network_framed_whole_in_chromium(browser, tmp_path):
         assert problems == []
     finally:
         page.close()
+
+
+def test_view_command_says_when_it_thins(tmp_path, capsys):
+    from curvenet.cli import main
+    from curvenet.io import write_network
+
+    net = wide_network(20, 200)
+    write_network(net, tmp_path / "n.json")
+    np.save(tmp_path / "p.npy", np.random.default_rng(1).random((250_000, 3)) * [100, 3, 1])
+    out = tmp_path / "v.html"
+    assert main(["view", str(tmp_path / "n.json"), "-o", str(out), "--points", str(tmp_path / "p.npy"),
+                 "--max-mb", "6"]) == 0
+    err = capsys.readouterr().err
+    assert "of 250000 input points" in err and "under 6 MB" in err and out.stat().st_size <= 6_000_000
+    assert main(["view", str(tmp_path / "n.json"), "-o", str(out), "--max-mb", "3"]) == 2
+    assert "--max-mb must be at least 5" in capsys.readouterr().err

@@ -30,12 +30,19 @@ MAX_CURVE_TRACES = 300
 #: plotly's JavaScript alone is about 4.8 MB of it (the least a page can weigh).
 MAX_VIEWER_BYTES = 20_000_000
 
+#: The smallest page budget accepted by ``curvenet view --max-mb``, in bytes (plotly's
+#: JavaScript and a small network).
+MIN_VIEWER_BYTES = 5_000_000
+
 #: Bytes a coordinate takes in the page (plotly 6+ writes arrays as base64 float64: measured
 #: 40.4 bytes per 3D point on 100,000 points, including the array framing).
 _BYTES_PER_COORD = 14
 
 #: Bytes of a per-sample hover text when curves share a trace (measured: 73 per sample).
 _BYTES_PER_SHARED_HOVER = 75
+
+#: Bytes of a node's marker and hover text ("node 12<br>valence 3").
+_BYTES_PER_NODE_HOVER = 30
 
 #: Bytes of the page around the data (HTML, layout, legend, buttons) and of each trace.
 _PAGE_BYTES = 60_000
@@ -166,7 +173,7 @@ def plan_display(net: CurveNetwork, points=None, *, max_points: int = MAX_VIEWER
     per = _BYTES_PER_COORD * d
     per_sample = per + (_BYTES_PER_SHARED_HOVER if net.n_curves > max_curve_traces else 0)
     fixed = len(get_plotlyjs()) + _PAGE_BYTES + _TRACE_BYTES * min(net.n_curves, max_curve_traces)
-    fixed += net.n_nodes * (per + 30)
+    fixed += net.n_nodes * (per + _BYTES_PER_NODE_HOVER)
     avail = max(0, max_bytes - fixed)
     curves = samples * per_sample
     stride = 1

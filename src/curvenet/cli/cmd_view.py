@@ -50,8 +50,11 @@ def run(args) -> int:
     check_extension(args.output, ".html", "the viewer")
     if args.max_points is not None and args.max_points < 0:
         raise InputError(f"--max-points must be >= 0, got {args.max_points}")
-    if args.max_mb is not None and not (args.max_mb == 0 or 5 <= args.max_mb):
-        raise InputError(f"--max-mb must be at least 5 (plotly's JavaScript alone takes 4.8 MB) or 0, got {args.max_mb}")
+    from ..viewer import MIN_VIEWER_BYTES
+
+    if args.max_mb is not None and not (args.max_mb == 0 or args.max_mb * 1e6 >= MIN_VIEWER_BYTES):
+        raise InputError(f"--max-mb must be at least {MIN_VIEWER_BYTES / 1e6:g} (plotly's JavaScript alone "
+                         f"takes 4.8 MB) or 0 (no limit), got {args.max_mb:g}")
     st, net, pts, inputs = open_network(args)
     opts = viewer_options(args)
     with st.stage("writing viewer"):

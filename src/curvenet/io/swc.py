@@ -26,6 +26,8 @@ SWC_END = 6
 #: Default radius of every sample, as a fraction of the median distance between consecutive
 #: curve points (the data hold no radius; a positive one keeps viewers from drawing nothing).
 SWC_RADIUS_FRACTION = 0.5
+#: Radius of every sample when the curves have no step to measure (points only).
+SWC_FALLBACK_RADIUS = 1.0
 
 
 def network_to_swc(
@@ -73,7 +75,7 @@ def network_to_swc(
     if radius is None:
         steps = [np.linalg.norm(np.diff(c.points, axis=0), axis=1) for c in net.curves if len(c.points) > 1]
         step = float(np.median(np.concatenate(steps))) if steps else 0.0
-        radius = SWC_RADIUS_FRACTION * step if step > 0 else 1.0
+        radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type))
     at_node: list[list[int]] = [[] for _ in range(n)]
     for i, c in enumerate(net.curves):
