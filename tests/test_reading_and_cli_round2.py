@@ -223,3 +223,15 @@ def test_cli_view_units_labels(tmp_path, capsys):
     assert np.array_equal(np.load(out[4]), lab[:, 1:])
     assert main(["reconstruct", str(f), "--labels", str(tmp_path / "l.txt"), "-q"]) == 2
     assert "--labels file must end in .csv or .npy" in capsys.readouterr().err
+
+
+def test_formats_lists_the_new_readers_and_writers(capsys):
+    import re
+
+    assert main(["formats"]) == 0
+    out = capsys.readouterr().out
+    readable, writable = out.split("Writable network files")[0], out.split("Writable network files")[1]
+    for ext in (".tsv", ".pcd"):
+        assert re.search(rf"^  {re.escape(ext)} ", readable, re.M), ext
+    for ext in (".vtu", ".geojson", ".swc"):
+        assert re.search(rf"^  {re.escape(ext)} ", writable, re.M), ext

@@ -48,7 +48,7 @@ def register(sub) -> None:
     g0 = p.add_argument_group("parameter of both methods")
     g0.add_argument("--k", type=int, default=None,
                     help="nearest neighbours: of the linked graph (robust, default 16), of the PCA of "
-                         "equation (1) (paper, default 8)")
+                         "equation (1) (paper, default 6)")
     g2 = p.add_argument_group(f"parameters of the default method, {DEFAULT_METHOD} (estimated when not given)")
     g2.add_argument("--spacing", type=float, default=None, help="sampling spacing h in input units (default: "
                     "estimated per point)")
@@ -70,7 +70,7 @@ def register(sub) -> None:
     g.add_argument("--epsilon", type=float, default=None,
                    help="point-variation threshold for candidate nodes, eq. 2 (default 1e-3 in 3D, 2e-2 in 2D)")
     g.add_argument("--tau-s", dest="tau_s", type=float, default=None,
-                   help="grouping distance of candidate nodes, in input units (default 15 spacings)")
+                   help="grouping distance of candidate nodes, in input units (default 1.5 k spacings: 9)")
     g.add_argument("--theta", type=float, default=None,
                    help="minimum angle at a curve point in degrees, 100 to 150 (default 120)")
     p.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE", type=_param,
