@@ -235,3 +235,19 @@ def test_formats_lists_the_new_readers_and_writers(capsys):
         assert re.search(rf"^  {re.escape(ext)} ", readable, re.M), ext
     for ext in (".vtu", ".geojson", ".swc"):
         assert re.search(rf"^  {re.escape(ext)} ", writable, re.M), ext
+
+
+def test_progress_log_lines_name_and_number_the_stages(tmp_path, monkeypatch, capsys):
+    f = tmp_path / "t.xyz"
+    np.savetxt(f, tee_points(20))
+    monkeypatch.setenv("CURVENET_PROGRESS", "log")
+    assert main(["reconstruct", str(f), "-o", str(tmp_path / "a.json"), "-o", str(tmp_path / "a.ply")]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    import re
+
+    assert len(lines) == 3, lines
+    assert re.fullmatch(r"curvenet: \[1/3\] reading t\.xyz: \d+\.\d\d s", lines[0])
+    assert re.fullmatch(r"curvenet: \[2/3\] reconstructing \(robust\) \u00b7 61 points: \d+\.\d\d s", lines[1])
+    assert re.fullmatch(r"curvenet: \[3/3\] writing \u00b7 2 file\(s\): \d+\.\d\d s", lines[2])
+    assert main(["reconstruct", str(f), "-o", str(tmp_path / "b.json"), "-q"]) == 0
+    assert capsys.readouterr().err == ""  # --quiet wins

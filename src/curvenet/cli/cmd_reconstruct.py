@@ -174,7 +174,8 @@ def run(args) -> int:
 
         check_outputs(args.surface, inputs=inputs)
     to_stdout = STDIO in outputs
-    st = Stages(quiet=args.quiet, verbose=args.verbose)
+    n_files = len(outputs) + bool(args.png) + bool(args.html) + bool(args.labels)
+    st = Stages(quiet=args.quiet, verbose=args.verbose, stages=3 + bool(args.surface))
     params = collect_params(args)
     method = DEFAULT_METHOD if args.method == "auto" else args.method
     name = "<stdin>" if from_stdin else Path(args.input).name
@@ -186,7 +187,7 @@ def run(args) -> int:
         else:
             points = read_points(args.input, columns=args.columns, drop_nonfinite=args.drop_nonfinite)
     st.info(f"  {len(points)} points, dimension {points.shape[1]}")
-    with st.stage(f"reconstructing ({method})"):
+    with st.stage(f"reconstructing ({method})", detail=f"{len(points):,} points"):
         net = reconstruct(points, method=method, **params)
     if st.verbose:
         st.info("  parameters used: " + ", ".join(f"{k}={_fmt(v)}" for k, v in net.parameters.items()))
@@ -194,8 +195,7 @@ def run(args) -> int:
         if times:
             st.info("  method stages: " + ", ".join(f"{k} {v:.3f} s" for k, v in times.items()))
     written = []
-    n_files = len(outputs) + bool(args.png) + bool(args.html) + bool(args.labels)
-    with st.stage("writing", total=n_files) as bar:
+    with st.stage("writing", total=n_files, detail=f"{n_files} file(s)") as bar:
         for out in outputs:
             if out == STDIO:
                 ext = stdout_extension(args.output_format)
