@@ -183,7 +183,7 @@ def test_criterion3_stops_a_free_end_jumping_onto_a_nearby_curve():
     arms = star([(1, 0), (-1, 0), (0, 1)])
     seg = np.c_[np.linspace(0.95, 1.6, 27), np.full(27, 0.3)]
     pts = np.vstack([arms, seg])
-    net = reconstruct_paper(pts, theta=150.0)
+    net = reconstruct_paper(pts, theta=150.0, k=10)  # tau_s = 15 h: the segment is within reach
     assert net.parameters["tau_s"] > 0.3
     check_consistent(net, pts)
     assert net.n_nodes == 4 and net.n_curves == 3

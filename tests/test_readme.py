@@ -31,3 +31,25 @@ def test_api_example_runs(tmp_path, monkeypatch):
     assert (tmp_path / "mug.png").stat().st_size > 10_000
     assert (tmp_path / "mug.dxf").read_text().count("POLYLINE") >= 15
     assert len(ns["mesh"].triangles) > 0
+    assert (ns["paper"].n_nodes, ns["paper"].n_curves) == (8, 12)  # a meaningful paper example
+
+
+def test_usage_paper_example_gives_a_network(tmp_path, monkeypatch, capsys):
+    """The Usage block's paper example (clean cube points, then --method paper) finds the cube."""
+    import json
+    import subprocess
+    import sys
+
+    from curvenet.cli import main
+
+    block = re.search(r"## Usage\n\n```bash\n(.*?)```", README, re.S).group(1).splitlines()
+    make = next(line for line in block if line.startswith("python -c"))
+    run = next(line for line in block if "--method paper" in line)
+    monkeypatch.chdir(tmp_path)
+    code = re.search(r'-c "(.*)"', make).group(1)
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=tmp_path, env=env, timeout=120)
+    args = run.split("#")[0].split()
+    assert args[0] == "curvenet" and main(args[1:]) == 0
+    out = json.loads((tmp_path / "cube.json").read_text())
+    assert (len(out["nodes"]), len(out["curves"])) == (8, 12)

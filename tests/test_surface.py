@@ -443,10 +443,11 @@ def test_writers_roundtrip(tmp_path, meshes):
         tm = trimesh.load(path, process=False, force="mesh")
         assert np.allclose(tm.vertices, mesh.vertices, atol=1e-8)
         assert np.array_equal(tm.faces, mesh.triangles)
-    # a second reader; meshio 5 cannot read binary PLY faces with an extra property (its bug)
+    # a second reader; meshio 5 cannot read binary PLY faces with an extra property (its bug),
+    # so the patch property is an option (tests/test_third_party_readers.py reads the default)
     meshio = pytest.importorskip("meshio")
     path = tmp_path / "ascii.ply"
-    path.write_bytes(mesh_to_ply(mesh, binary=False))
+    path.write_bytes(mesh_to_ply(mesh, binary=False, patch=True))
     m = meshio.read(path)
     assert np.allclose(m.points, mesh.vertices)
     assert np.array_equal(m.cells_dict["triangle"], mesh.triangles)

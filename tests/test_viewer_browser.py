@@ -57,7 +57,7 @@ def test_figure_traces_and_hover_texts():
     nodes = [t for t in fig.data if t.legendgroup == "nodes"]
     texts = [s for t in nodes for s in t.hovertext]
     assert sorted(texts) == sorted(f"node {j}<br>valence {v}" for j, v in enumerate(net.valence))
-    assert fig.layout.scene.aspectmode == "data"
+    assert fig.layout.scene.aspectmode == "manual" and max(fig.layout.scene.aspectratio.to_plotly_json().values()) == 1
     assert [b.label for b in fig.layout.updatemenus[0].buttons] == ["all", "curves + nodes", "curves only", "points only"]
 
 
@@ -194,3 +194,90 @@ def test_viewer_draws_in_chromium(browser, tmp_path, d):
         assert problems == []
     finally:
         page.close()
+
+
+# ----------------------------------------------------------------------------- scaling (issue 21)
+def wide_network(n_curves=40, per_curve=400):
+    """A long chain of curves along x (100 wide, 3 deep, 1 high) with a node every curve."""
+    nodes = np.column_stack([np.linspace(0, 100, n_curves + 1), np.zeros(n_curves + 1), np.zeros(n_curves + 1)])
+    curves = []
+    for i in range(n_curves):
+        t = np.linspace(0, 1, per_curve)[:, None]
+        p = nodes[i] + t * (nodes[i + 1] - nodes[i])
+        p[:, 1] = 3 * np.sin(np.pi * t[:, 0]) * (1 if i % 2 else -1)
+        p[:, 2] = np.sin(np.pi * t[:, 0])
+        curves.append(Curve(p, i, i + 1))
+    return CurveNetwork(nodes, curves)
+
+
+def test_page_stays_under_its_budget_and_says_so(tmp_path):
+    net = wide_network(60, 2000)  # 120,000 curve samples
+    pts = np.random.default_rng(0).random((300_000, 3)) * [100, 3, 1]
+    budget = 8_000_000
+    plan = viewer.plan_display(net, pts, max_bytes=budget)
+    assert plan.points_shown < 200_000 and plan.curve_stride > 1 and "curve ends kept" in plan.message()
+    html = viewer.network_to_html(net, points=pts, max_bytes=budget)
+    assert len(html) <= budget
+    fig = viewer.network_figure(net, points=pts, max_bytes=budget)
+    curves = [t for t in fig.data if t.legendgroup == "curves"]
+    assert f"1 in {plan.curve_stride} samples shown" in curves[0].name and "shown" in fig.data[0].name
+    for t, c in zip(curves, net.curves):  # topology kept: each curve still runs node to node
+        assert (t.x[0], t.x[-1]) == (c.points[0, 0], c.points[-1, 0]) and len(t.x) < len(c.points)
+    small = viewer.network_to_html(theta_network(3))  # nothing to thin: nothing said
+    assert viewer.plan_display(theta_network(3)).message() == "" and len(small) < 5_100_000
+    assert len(viewer.network_to_html(net, points=pts)) <= viewer.MAX_VIEWER_BYTES
+
+
+def test_points_only_button_only_with_points_and_markers_by_scene():
+    fig = viewer.network_figure(theta_network(3))
+    assert [b.label for b in fig.layout.updatemenus[0].buttons] == ["all", "curves + nodes", "curves only"]
+    small = [t.marker.size for t in fig.data if t.legendgroup == "nodes"]
+    many = [t.marker.size for t in viewer.network_figure(wide_network(400, 5)).data if t.legendgroup == "nodes"]
+    assert max(many) < min(small)
+
+
+@pytest.mark.browser
+def test_wide_network_framed_whole_in_chromium(browser, tmp_path):
+    net = wide_network()
+    path = viewer.save_html(net, tmp_path / "wide.html", title="a wide network")
+    page, problems = open_page(browser, path)
+    try:
+        img = shot(page)
+        assert page.locator(".gtitle").text_content() == "a wide network"
+        legend = " ".join(page.locator(".legendtext").all_text_contents())
+        assert "curves (40)" in legend and "junctions" not in legend and "free ends (2)" in legend
+        assert "points only" not in page.locator(".updatemenu-container").text_content()
+        drawn = np.zeros(img.shape[:2], dtype=bool)
+        for c in set(curve_colors(net)):
+            rgb = np.array([int(c[i: i + 2], 16) for i in (1, 3, 5)])
+            drawn |= np.abs(img - rgb).max(axis=-1) <= 10
+        box = page.locator("#curvenet-viewer").bounding_box()
+        leg = page.locator("#curvenet-viewer .legend").bounding_box()
+        drawn[:, int(leg["x"] - box["x"]):] = False  # the legend's line swatch is not the scene
+        cols = np.flatnonzero(drawn.any(axis=0))
+        rows = np.flatnonzero(drawn.any(axis=1))
+        w, h = img.shape[1], img.shape[0]
+        assert drawn.sum() > 1000  # a non-empty canvas
+        # the whole chain is in view: it spans a good part of the width and touches no edge (the
+        # former camera, aspectmode "data", showed a third of it, cut at the left edge)
+        assert cols.max() - cols.min() > 0.35 * w and cols.min() > 0.03 * w
+        assert rows.min() > 0.03 * h and rows.max() < 0.97 * h
+        assert problems == []
+    finally:
+        page.close()
+
+
+def test_view_command_says_when_it_thins(tmp_path, capsys):
+    from curvenet.cli import main
+    from curvenet.io import write_network
+
+    net = wide_network(20, 200)
+    write_network(net, tmp_path / "n.json")
+    np.save(tmp_path / "p.npy", np.random.default_rng(1).random((250_000, 3)) * [100, 3, 1])
+    out = tmp_path / "v.html"
+    assert main(["view", str(tmp_path / "n.json"), "-o", str(out), "--points", str(tmp_path / "p.npy"),
+                 "--max-mb", "6"]) == 0
+    err = capsys.readouterr().err
+    assert "of 250000 input points" in err and "under 6 MB" in err and out.stat().st_size <= 6_000_000
+    assert main(["view", str(tmp_path / "n.json"), "-o", str(out), "--max-mb", "3"]) == 2
+    assert "--max-mb must be at least 5" in capsys.readouterr().err

@@ -151,7 +151,7 @@ def test_svg_projections_of_3d(projection):
         got = _poly_points(el) * [1, -1]
         if projection == "iso":
             x, y, z = c.points.T
-            want = np.column_stack([(x - y) * np.cos(np.pi / 6), z - (x + y) * 0.5])
+            want = np.column_stack([(x - y) / np.sqrt(2), (2 * z - x - y) / np.sqrt(6)])
         else:
             want = c.points[:, cols[projection]]
         np.testing.assert_allclose(got, want, atol=1e-8)

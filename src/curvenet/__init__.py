@@ -1,7 +1,13 @@
 """curvenet: reconstruct curve networks from unorganized 2D/3D points.
 
-The main entry point is :func:`reconstruct`, which returns a :class:`CurveNetwork`.
+The main entry point is :func:`reconstruct`, which returns a :class:`CurveNetwork`;
+:func:`save` writes one in any format (by extension) and :func:`load` reads a saved ``.json``.
 """
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
 
 from ._version import __version__
 from .errors import (
@@ -16,7 +22,66 @@ from .network import Curve, CurveNetwork
 from .reconstruct import METHODS, reconstruct
 
 
-def surface(network, **options):
+def save(network: CurveNetwork, path: str | Path, **options: Any) -> Path:
+    """Write a network to ``path``, the format chosen by the extension, atomically.
+
+    Parameters
+    ----------
+    network : CurveNetwork
+    path : str or Path
+        ``.json`` (readable by :func:`load`), ``.ply``, ``.obj``, ``.vtu``, ``.svg``,
+        ``.dxf``, ``.geojson``, ``.swc``... (``curvenet formats`` lists them).
+    **options
+        Options of the format's writer (e.g. ``projection="iso"`` for ``.svg``,
+        ``units="mm"`` for ``.dxf``).
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    FormatError
+        For an unknown extension.
+    OutputError
+        When the file cannot be written.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> net = CurveNetwork(np.array([[0.0, 0], [1, 0]]), [Curve(np.array([[0.0, 0], [1, 0]]), 0, 1)])
+    >>> path = save(net, os.path.join(tempfile.mkdtemp(), "net.json"))
+    >>> load(path) == net
+    True
+    """
+    from .io import write_network
+
+    return write_network(network, path, **options)
+
+
+def load(path: str | Path) -> CurveNetwork:
+    """Read a network saved in the curvenet JSON format (``.json``).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    CurveNetwork
+
+    Raises
+    ------
+    InputError, FormatError
+        When the file is missing or is not a curvenet network.
+    """
+    from .io import read_network
+
+    return read_network(path)
+
+
+def surface(network: CurveNetwork, **options: Any) -> Any:
     """Turn a curve network into a surface mesh (the paper's third step).
 
     A thin front of :func:`curvenet.surfacing.surface` (extra ``surface``); see it for the
@@ -42,6 +107,8 @@ __all__ = [
     "__version__",
     "reconstruct",
     "surface",
+    "save",
+    "load",
     "METHODS",
     "Curve",
     "CurveNetwork",

@@ -3,15 +3,27 @@
 A curve network is a graph whose vertices are *nodes* (junctions where curves meet, and free
 ends) and whose edges are *curves* (polylines through the input points). A closed loop that
 meets no other curve has no node at all.
+
+Networks and curves are plain, **mutable** containers (like a networkx graph): their arrays and
+lists can be changed in place, and every derived value (valence, Betti numbers, lengths) is
+recomputed from them on each access, so it never goes stale. ``==`` compares two networks
+exactly, :meth:`CurveNetwork.allclose` within a tolerance; both compare nodes and curves in
+the order they are stored (compare :meth:`CurveNetwork.canonical` forms to ignore the order).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:  # optional packages, imported by the converters only when called
+    import networkx
+    import open3d
+    import pyvista
+    import trimesh
 
 __all__ = ["Curve", "CurveNetwork", "NODE_KINDS"]
 
@@ -21,7 +33,7 @@ __all__ = ["Curve", "CurveNetwork", "NODE_KINDS"]
 NODE_KINDS = ("junction", "end", "other")
 
 
-@dataclass
+@dataclass(eq=False)
 class Curve:
     """One curve segment of a network.
 
@@ -44,9 +56,9 @@ class Curve:
     start: int | None
     end: int | None
     closed: bool = False
-    indices: np.ndarray | None = None
+    indices: np.ndarray = None  # type: ignore[assignment]  # None: all -1, set in __post_init__
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.points = np.asarray(self.points, dtype=float)
         if self.indices is None:
             self.indices = np.full(len(self.points), -1, dtype=np.int64)
@@ -67,8 +79,49 @@ class Curve:
         """The same curve traversed the other way."""
         return Curve(self.points[::-1].copy(), self.end, self.start, self.closed, self.indices[::-1].copy())
 
+    def __len__(self) -> int:
+        """Number of polyline points."""
+        return int(len(self.points))
 
-@dataclass
+    def __eq__(self, other: object) -> bool:
+        """Exact equality: same end nodes, closedness, points and input indices."""
+        if not isinstance(other, Curve):
+            return NotImplemented
+        return (
+            _same_end(self.start, other.start)
+            and _same_end(self.end, other.end)
+            and bool(self.closed) == bool(other.closed)
+            and self.points.shape == other.points.shape
+            and bool(np.array_equal(self.points, other.points))
+            and bool(np.array_equal(self.indices, other.indices))
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # mutable: not hashable
+
+    def allclose(self, other: "Curve", *, rtol: float = 1e-5, atol: float = 1e-8) -> bool:
+        """True when ``other`` has the same ends and closedness and points within tolerance.
+
+        Parameters
+        ----------
+        other : Curve
+        rtol, atol : float
+            Relative and absolute tolerance of :func:`numpy.allclose` on the (m, d) points.
+            Input indices are not compared.
+
+        Returns
+        -------
+        bool
+        """
+        return (
+            _same_end(self.start, other.start)
+            and _same_end(self.end, other.end)
+            and bool(self.closed) == bool(other.closed)
+            and self.points.shape == other.points.shape
+            and bool(np.allclose(self.points, other.points, rtol=rtol, atol=atol))
+        )
+
+
+@dataclass(eq=False)
 class CurveNetwork:
     """A reconstructed curve network.
 
@@ -85,8 +138,18 @@ class CurveNetwork:
 
     Notes
     -----
-    Derived values (valence, Betti numbers) are computed on demand and cached; do not change
-    ``nodes`` or ``curves`` in place after reading them.
+    Mutable: ``nodes``, ``curves`` and the dictionaries may be changed in place; derived values
+    (valence, Betti numbers, lengths) are computed on each access. ``len(net)`` is the number
+    of curves and iterating over a network yields its curves. ``net_a == net_b`` is exact
+    equality of nodes and curves (parameters and stats are not compared); see
+    :meth:`allclose` for a tolerance and :meth:`canonical` to ignore the storage order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> net = CurveNetwork(np.array([[0.0, 0], [1, 0]]), [Curve(np.array([[0.0, 0], [1, 0]]), 0, 1)])
+    >>> len(net), net.valence.tolist(), net == net.canonical()
+    (1, [1, 1], True)
     """
 
     nodes: np.ndarray
@@ -94,7 +157,7 @@ class CurveNetwork:
     parameters: dict[str, Any] = field(default_factory=dict)
     stats: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.nodes = np.asarray(self.nodes, dtype=float)
         if self.nodes.ndim != 2:
             self.nodes = self.nodes.reshape(0, self.nodes.shape[-1] if self.nodes.ndim else 3)
@@ -111,22 +174,72 @@ class CurveNetwork:
 
     @property
     def n_nodes(self) -> int:
+        """Number of nodes."""
         return int(len(self.nodes))
 
     @property
     def n_curves(self) -> int:
+        """Number of curves."""
         return len(self.curves)
+
+    def __len__(self) -> int:
+        """Number of curves."""
+        return len(self.curves)
+
+    def __iter__(self) -> Iterator[Curve]:
+        """The curves, in order."""
+        return iter(self.curves)
+
+    def __eq__(self, other: object) -> bool:
+        """Exact equality of the nodes and curves, in order (parameters and stats aside)."""
+        if not isinstance(other, CurveNetwork):
+            return NotImplemented
+        return (
+            self.dimension == other.dimension
+            and self.nodes.shape == other.nodes.shape
+            and bool(np.array_equal(self.nodes, other.nodes))
+            and len(self.curves) == len(other.curves)
+            and all(a == b for a, b in zip(self.curves, other.curves))
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # mutable: not hashable
+
+    def allclose(self, other: "CurveNetwork", *, rtol: float = 1e-5, atol: float = 1e-8) -> bool:
+        """True when ``other`` has the same topology and coordinates within tolerance.
+
+        The same node count and curve count, each curve with the same end nodes, closedness and
+        number of points, and every coordinate within :func:`numpy.allclose`'s tolerance. Nodes
+        and curves are compared in storage order: compare ``a.canonical()`` with
+        ``b.canonical()`` to ignore it.
+
+        Parameters
+        ----------
+        other : CurveNetwork
+        rtol, atol : float
+            Relative and absolute tolerance, as in :func:`numpy.allclose`.
+
+        Returns
+        -------
+        bool
+        """
+        return (
+            self.dimension == other.dimension
+            and self.nodes.shape == other.nodes.shape
+            and bool(np.allclose(self.nodes, other.nodes, rtol=rtol, atol=atol))
+            and len(self.curves) == len(other.curves)
+            and all(a.allclose(b, rtol=rtol, atol=atol) for a, b in zip(self.curves, other.curves))
+        )
 
     @property
     def edges(self) -> np.ndarray:
         """(c, 2) int array of the end nodes of each curve, ``-1`` for loops without nodes."""
         e = np.full((len(self.curves), 2), -1, dtype=np.int64)
         for i, c in enumerate(self.curves):
-            if c.start is not None:
-                e[i] = (c.start, c.end)
+            if c.start is not None and c.end is not None:
+                e[i] = (int(c.start), int(c.end))
         return e
 
-    @cached_property
+    @property
     def valence(self) -> np.ndarray:
         """(n,) int array: number of curve ends at each node (a loop through a node counts 2)."""
         v = np.zeros(len(self.nodes), dtype=np.int64)
@@ -145,7 +258,7 @@ class CurveNetwork:
         kinds[v >= 3] = "junction"
         return kinds
 
-    @cached_property
+    @property
     def betti(self) -> tuple[int, int]:
         """Betti numbers (β0, β1) of the network as a 1-dimensional complex."""
         from scipy.sparse import coo_matrix
@@ -248,13 +361,15 @@ class CurveNetwork:
                 rev.indices = np.roll(rev.indices, 1)
                 if _key(rev, decimals) < _key(cc, decimals):
                     cc = rev
-            elif s is not None and (e < s or (e == s and _key(cc.reversed(), decimals) < _key(cc, decimals))):
+            elif s is not None and e is not None and (
+                e < s or (e == s and _key(cc.reversed(), decimals) < _key(cc, decimals))
+            ):
                 cc = cc.reversed()
             curves.append(cc)
         curves.sort(key=lambda c: _key(c, decimals))
         return CurveNetwork(self.nodes[order], curves, dict(self.parameters), dict(self.stats))
 
-    def to_networkx(self):
+    def to_networkx(self) -> "networkx.MultiGraph":
         """The network as a ``networkx.MultiGraph``: one node per network node, one edge per curve.
 
         Returns
@@ -293,7 +408,7 @@ class CurveNetwork:
             g.add_node(j, pos=tuple(float(x) for x in p), valence=v, kind=kind, anchor=False)
         n_anchor = len(self.nodes)
         for i, c in enumerate(self.curves):
-            if c.start is None:
+            if c.start is None or c.end is None:
                 a = n_anchor
                 n_anchor += 1
                 first = c.points[0] if len(c.points) else np.zeros(self.dimension)
@@ -305,6 +420,138 @@ class CurveNetwork:
                        length=c.length, start=c.start, end=c.end)
         return g
 
+
+    def polyline_vertices(self) -> tuple[np.ndarray, list[np.ndarray]]:
+        """One vertex list shared by all curves, node vertices shared by the curves meeting there.
+
+        Returns
+        -------
+        vertices : (V, 3) ndarray of float
+            Node positions first (vertex ``i`` is node ``i``), then the inner points of each
+            curve in order; 2D networks get z = 0.
+        polylines : list of (m,) ndarray of int
+            Vertex indices of each curve in order; a closed curve repeats its first vertex at
+            the end.
+        """
+        d = self.dimension
+        blocks = [self.nodes.reshape(-1, d)]
+        polylines = []
+        nv = len(self.nodes)
+        for c in self.curves:
+            pts = c.points.reshape(-1, d)
+            if c.start is not None:
+                inner = pts[1:-1] if len(pts) >= 2 else pts[:0]
+                ids = np.concatenate([[c.start], nv + np.arange(len(inner)), [c.end]])
+            else:
+                inner = pts
+                ids = nv + np.arange(len(inner))
+                if c.closed and len(ids):
+                    ids = np.append(ids, ids[0])
+            blocks.append(inner)
+            nv += len(inner)
+            polylines.append(ids.astype(np.int64))
+        v = np.vstack(blocks)
+        if d == 2:
+            v = np.column_stack([v, np.zeros(len(v))])
+        return v, polylines
+
+    def segments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The network as straight segments between shared vertices.
+
+        Returns
+        -------
+        vertices : (V, 3) ndarray of float
+            As in :meth:`polyline_vertices` (nodes first).
+        segments : (S, 2) ndarray of int
+            Vertex indices of each segment, curve after curve, in polyline order.
+        curve_ids : (S,) ndarray of int
+            The curve each segment belongs to.
+        """
+        v, lines = self.polyline_vertices()
+        seg = [np.column_stack([ids[:-1], ids[1:]]) for ids in lines]
+        cid = [np.full(len(ids) - 1, i, dtype=np.int64) for i, ids in enumerate(lines) if len(ids) > 1]
+        seg = [s for s in seg if len(s)]
+        if not seg:
+            return v, np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64)
+        return v, np.vstack(seg).astype(np.int64), np.concatenate(cid)
+
+    def to_open3d(self) -> "open3d.geometry.LineSet":
+        """The network as an Open3D ``LineSet`` (package ``open3d``, extra ``convert``).
+
+        Returns
+        -------
+        open3d.geometry.LineSet
+            Points (V, 3) as in :meth:`polyline_vertices` (nodes first, 2D networks at z = 0),
+            one line per segment (see :meth:`segments`); the segments of curve ``i`` share
+            colour ``i`` of a fixed ten-colour palette.
+
+        Raises
+        ------
+        MissingDependencyError
+            When open3d is not installed.
+        """
+        from .errors import require
+
+        o3d = require("open3d", "CurveNetwork.to_open3d", "convert")
+        v, seg, cid = self.segments()
+        ls = o3d.geometry.LineSet()
+        ls.points = o3d.utility.Vector3dVector(np.ascontiguousarray(v, dtype=np.float64))
+        ls.lines = o3d.utility.Vector2iVector(np.ascontiguousarray(seg, dtype=np.int32))
+        if len(seg):
+            ls.colors = o3d.utility.Vector3dVector(_curve_rgb(cid))
+        return ls
+
+    def to_pyvista(self) -> "pyvista.PolyData":
+        """The network as a PyVista ``PolyData`` of polylines (package ``pyvista``, extra ``convert``).
+
+        Returns
+        -------
+        pyvista.PolyData
+            Points (V, 3) as in :meth:`polyline_vertices`, one polyline cell per curve (a closed
+            loop repeats its first point), cell data ``curve_id`` and point data ``node_id``
+            (node index, -1 elsewhere).
+
+        Raises
+        ------
+        MissingDependencyError
+            When pyvista is not installed.
+        """
+        from .errors import require
+
+        pv = require("pyvista", "CurveNetwork.to_pyvista", "convert")
+        v, lines = self.polyline_vertices()
+        keep = [i for i, ids in enumerate(lines) if len(ids) >= 2]
+        cells = np.concatenate([np.concatenate([[len(lines[i])], lines[i]]) for i in keep]) if keep else None
+        poly = pv.PolyData(np.ascontiguousarray(v, dtype=np.float64), lines=cells)
+        poly.cell_data["curve_id"] = np.asarray(keep, dtype=np.int64)
+        node_id = np.full(len(v), -1, dtype=np.int64)
+        node_id[: self.n_nodes] = np.arange(self.n_nodes)
+        poly.point_data["node_id"] = node_id
+        return poly
+
+    def to_trimesh(self) -> "trimesh.path.Path3D":
+        """The network as a trimesh ``Path3D``: one ``Line`` entity per curve (extra ``surface``).
+
+        Returns
+        -------
+        trimesh.path.Path3D
+            Vertices (V, 3) as in :meth:`polyline_vertices` (nodes first, 2D networks at
+            z = 0); entity ``i`` is curve ``i`` (a closed loop repeats its first vertex).
+
+        Raises
+        ------
+        MissingDependencyError
+            When trimesh is not installed.
+        """
+        from .errors import require
+
+        trimesh = require("trimesh", "CurveNetwork.to_trimesh", "surface")
+        from trimesh.path.entities import Line
+
+        v, lines = self.polyline_vertices()
+        entities = [Line(points=ids) for ids in lines if len(ids) >= 2]
+        return trimesh.path.Path3D(entities=entities, vertices=v, process=False)
+
     def __repr__(self) -> str:
         return (
             f"CurveNetwork(dimension={self.dimension}, nodes={self.n_nodes}, "
@@ -312,17 +559,34 @@ class CurveNetwork:
         )
 
 
+def _same_end(a: int | None, b: int | None) -> bool:
+    return (a is None and b is None) or (a is not None and b is not None and int(a) == int(b))
+
+
+def _curve_rgb(curve_ids: np.ndarray) -> np.ndarray:
+    """(S, 3) float colours in [0, 1] cycling through a fixed qualitative palette by curve id."""
+    palette = np.array(_PALETTE, dtype=np.float64) / 255.0
+    return palette[np.asarray(curve_ids) % len(palette)]
+
+
+#: Curve colours of :meth:`CurveNetwork.to_open3d` (matplotlib's tab10), as 8-bit RGB.
+_PALETTE = (
+    (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
+    (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
+)
+
+
 def _lexmin(p: np.ndarray) -> int:
     return int(np.lexsort(p.T[::-1])[0])
 
 
-def _key(c: Curve, decimals: int):
+def _key(c: Curve, decimals: int) -> tuple[int, int, tuple[float, ...]]:
     s = -1 if c.start is None else c.start
     e = -1 if c.end is None else c.end
     return (s, e, tuple(np.round(c.points, decimals).ravel().tolist()))
 
 
-def _jsonable(obj):
+def _jsonable(obj: Any) -> Any:
     """Convert numpy scalars and arrays inside dicts/lists to plain Python values."""
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}

@@ -5,9 +5,10 @@ from __future__ import annotations
 import importlib
 import inspect
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import InputError
 from .network import CurveNetwork
@@ -43,7 +44,7 @@ LENGTH_RESULTS: dict[str, tuple[str, ...]] = {
 }
 
 
-def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
+def reconstruct(points: ArrayLike, *, method: str = "auto", **params: Any) -> CurveNetwork:
     """Reconstruct a curve network from unorganized points.
 
     Parameters
@@ -105,7 +106,7 @@ def reconstruct(points, *, method: str = "auto", **params: Any) -> CurveNetwork:
     return net
 
 
-def _check_params(name: str, fn, params: dict) -> None:
+def _check_params(name: str, fn: Callable[..., CurveNetwork], params: dict[str, Any]) -> None:
     """Raise InputError for a parameter the method does not take, or a value of another type
     than its annotation says (a number for ``int`` and ``float``, true or false for ``bool``)."""
     sig = inspect.signature(fn)

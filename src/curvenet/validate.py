@@ -35,8 +35,10 @@ def as_points(points, *, min_points: int = 1, name: str = "points") -> np.ndarra
 
     Parameters
     ----------
-    points : (N, d) array_like
-        Point coordinates, ``d`` = 2 or 3.
+    points : (N, d) array_like, or a point cloud object
+        Point coordinates, ``d`` = 2 or 3: an array, a pandas DataFrame, or the point clouds of
+        other libraries: ``open3d.geometry.PointCloud``, ``trimesh.PointCloud`` and laspy's
+        ``LasData`` (recognised by their type, without importing those packages).
     min_points : int
         The least number of points accepted.
     name : str
@@ -53,6 +55,7 @@ def as_points(points, *, min_points: int = 1, name: str = "points") -> np.ndarra
         If the array is not numeric, not (N, 2) or (N, 3), has NaN or infinite values, or fewer
         than ``min_points`` rows.
     """
+    points = _coordinates_of(points)
     try:
         p = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError):
@@ -149,3 +152,15 @@ def unit_frame(points: np.ndarray) -> tuple[np.ndarray | None, int]:
     lo_ok, hi_ok = UNSCALED_EXTENTS
     k = 0 if lo_ok <= extent <= hi_ok else -int(np.frexp(extent)[1])
     return shift, k
+
+
+def _coordinates_of(obj):
+    """The coordinate array of another library's point cloud, or ``obj`` itself."""
+    module = type(obj).__module__.split(".")[0]
+    if module == "open3d" and hasattr(obj, "points"):  # open3d.geometry.PointCloud
+        return np.asarray(obj.points)
+    if module == "trimesh" and hasattr(obj, "vertices"):  # trimesh.PointCloud (or a mesh's vertices)
+        return np.asarray(obj.vertices)
+    if module == "laspy" and all(hasattr(obj, a) for a in "xyz"):  # laspy.LasData: scaled x, y, z
+        return np.column_stack([np.asarray(obj.x), np.asarray(obj.y), np.asarray(obj.z)])
+    return obj

@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK
 """The ``curvenet`` command-line tool: a thin front over the library.
 
 Each command lives in ``cmd_<name>.py`` with ``register(subparsers)`` and ``run(args) -> int``;
@@ -25,6 +26,7 @@ COMMANDS = (
     "view",
     "bench",
     "surface",
+    "completion",
 )
 
 
@@ -37,6 +39,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"{__name__}.cmd_{name}").register(sub)
+    from .examples import HelpFormatter, epilog
+
+    for name, p in sub.choices.items():
+        p.epilog = epilog(name)
+        p.formatter_class = HelpFormatter
     return parser
 
 
@@ -45,6 +52,7 @@ def main(argv=None) -> int:
     from ..errors import CurvenetError
 
     parser = build_parser()
+    _autocomplete(parser)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
@@ -88,6 +96,23 @@ def main(argv=None) -> int:
             raise
         print(f"curvenet: internal error: {type(exc).__name__}: {exc} (run with --verbose for details)", file=sys.stderr)
         return 1
+
+
+def _autocomplete(parser: argparse.ArgumentParser) -> None:
+    """Answer a shell's completion request (argcomplete; a no-op otherwise or without it)."""
+    if "_ARGCOMPLETE" not in os.environ:
+        return
+    try:
+        import argcomplete
+    except ImportError:
+        return
+    # a prefix of two options (--sh: --shell-inner, --shell-outer) is an argparse error that
+    # stops argcomplete's parse half way (argcomplete 3.7 then fails); complete it instead
+    parsers = [parser] + [p for a in parser._subparsers._group_actions for p in a.choices.values()] \
+        if parser._subparsers else [parser]
+    for p in parsers:
+        p.allow_abbrev = False
+    argcomplete.autocomplete(parser)
 
 
 def console() -> None:

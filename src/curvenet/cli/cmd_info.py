@@ -8,7 +8,13 @@ from .options import add_common
 
 
 def register(sub) -> None:
-    p = sub.add_parser("info", help="describe a point file or a network (.json)")
+    p = sub.add_parser(
+        "info",
+        help="describe a point file or a network (.json)",
+        description="Describe a point file (count, dimension, bounding box, nearest-neighbour spacing, "
+                    "duplicated points) or a curvenet network (nodes, free ends, junctions, curves, "
+                    "loops, total length, Betti numbers, the parameters used).",
+    )
     p.add_argument("file", help="a point file or a curvenet .json network")
     p.add_argument("--columns", type=_columns, default=None, help="coordinate columns, e.g. 0,1,2 or x,y,z")
     add_common(p)

@@ -5,8 +5,9 @@ Progress bars (rich) appear on standard error only when a stage runs longer than
 nothing is drawn. Two environment variables change this (used by the tests, handy in CI logs):
 
 ``CURVENET_PROGRESS``
-    ``auto`` (default), ``always`` (draw even when standard error is not a terminal) or
-    ``never``.
+    ``auto`` (default), ``always`` (draw even when standard error is not a terminal),
+    ``log`` (no bars: one line per stage on standard error when it ends, with its number, name,
+    detail and time; for CI logs and batch jobs) or ``never``.
 ``CURVENET_PROGRESS_DELAY``
     Seconds a stage must run before its bar appears (default 1).
 
@@ -29,10 +30,13 @@ __all__ = ["Stages", "print_summary", "summary_rows", "PROGRESS_DELAY"]
 #: A stage's progress bar appears once it has run this many seconds.
 PROGRESS_DELAY = 1.0
 
+#: Values of ``CURVENET_PROGRESS``.
+PROGRESS_MODES = ("auto", "always", "log", "never")
+
 
 def _progress_mode() -> str:
     mode = os.environ.get("CURVENET_PROGRESS", "auto").strip().lower()
-    return mode if mode in ("auto", "always", "never") else "auto"
+    return mode if mode in PROGRESS_MODES else "auto"
 
 
 def _delay() -> float:
@@ -77,6 +81,8 @@ class Stages:
         Print each stage's time on standard error when it ends.
     file : text stream, optional
         Where progress and timings go (standard error by default).
+    stages : int, optional
+        How many stages the command runs: bars and log lines then number them ``[i/n]``.
 
     Examples
     --------
@@ -87,13 +93,16 @@ class Stages:
     ['reading']
     """
 
-    def __init__(self, *, quiet: bool = False, verbose: bool = False, file=None):
+    def __init__(self, *, quiet: bool = False, verbose: bool = False, file=None, stages: int | None = None):
         self.quiet = quiet
         self.verbose = verbose and not quiet
         self.file = file if file is not None else sys.stderr
         self.times: dict[str, float] = {}
+        self.n_stages = stages
+        self._count = 0
         mode = _progress_mode()
-        self._bars = not quiet and mode != "never" and (mode == "always" or _isatty(self.file))
+        self._log = not quiet and mode == "log"
+        self._bars = not quiet and mode not in ("never", "log") and (mode == "always" or _isatty(self.file))
         if self._bars:
             try:
                 import rich  # noqa: F401
@@ -107,8 +116,18 @@ class Stages:
             print(message, file=self.file, flush=True)
 
     @contextmanager
-    def stage(self, label: str, *, total: int | None = None):
-        """Time a stage; show a bar (pulsing, or of ``total`` steps) if it runs long.
+    def stage(self, label: str, *, total: int | None = None, detail: str = ""):
+        """Time a stage; show a bar (pulsing, or of ``total`` steps, with an ETA) if it runs long.
+
+        Parameters
+        ----------
+        label : str
+            The stage's name.
+        total : int, optional
+            Steps of the stage (files to write...): the bar then counts them and estimates the
+            time left.
+        detail : str
+            Shown after the name (e.g. ``"1,108 points"``).
 
         Yields
         ------
@@ -116,13 +135,23 @@ class Stages:
             With ``advance(n=1)`` for stages with a ``total``.
         """
         checkpoint()  # Ctrl-C pressed since the last stage: stop before starting this one
+        self._count += 1
+        number = f"[{self._count}/{self.n_stages}] " if self.n_stages else ""
+        shown = number + label + (f" \u00b7 {detail}" if detail else "")
         handle = _Handle(total)
         lock = threading.Lock()
         state = {"progress": None, "stopped": False}
 
         def start():
             from rich.console import Console
-            from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+            from rich.progress import (
+                BarColumn,
+                Progress,
+                SpinnerColumn,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
 
             with lock:
                 if state["stopped"]:
@@ -130,11 +159,11 @@ class Stages:
                 console = Console(file=self.file, force_terminal=_progress_mode() == "always" or None)
                 cols = [SpinnerColumn(), TextColumn("[bold]{task.description}"), BarColumn()]
                 if total is not None:
-                    cols.append(TextColumn("{task.completed}/{task.total}"))
+                    cols += [TextColumn("{task.completed}/{task.total}"), TimeRemainingColumn()]
                 cols.append(TimeElapsedColumn())
                 prog = Progress(*cols, console=console, transient=True)
                 with handle._lock:
-                    task = prog.add_task(label, total=total, completed=handle.done)
+                    task = prog.add_task(shown, total=total, completed=handle.done)
                     handle._progress, handle._task = prog, task
                 prog.start()
                 state["progress"] = prog
@@ -157,6 +186,8 @@ class Stages:
                     state["progress"].stop()
             self.times[label] = self.times.get(label, 0.0) + dt
             self.info(f"  {label}: {dt:.3f} s")
+            if self._log and not self.verbose:
+                print(f"curvenet: {shown}: {dt:.2f} s", file=self.file, flush=True)
 
 
 def _fmt(v) -> str:

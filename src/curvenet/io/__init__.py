@@ -9,7 +9,7 @@ atomically.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -17,10 +17,14 @@ from ..errors import FormatError
 from ..network import CurveNetwork
 from .atomic import all_or_nothing, atomic_write, check_output_path, check_outputs
 from .dxf import network_to_dxf
+from .geojson import network_to_geojson
 from .graphml import network_to_graphml
 from .svg import network_to_svg
+from .swc import network_to_swc
 from .vtp import network_to_vtp
+from .vtu import network_to_vtu
 from .network_io import network_to_json, network_to_obj, network_to_ply, read_network
+from .pcd import read_pcd
 from .points import check_readable, read_las, read_npy, read_obj, read_ply, read_text
 
 __all__ = [
@@ -41,7 +45,9 @@ READERS: dict[str, tuple[Callable[..., np.ndarray], str]] = {
     ".xyz": (read_text, "text, x y [z] per line"),
     ".txt": (read_text, "text, x y [z] per line"),
     ".pts": (read_text, "text, x y [z] per line"),
-    ".csv": (read_text, "comma-separated values, optional header"),
+    ".csv": (read_text, "comma-separated values, optional header; text columns skipped"),
+    ".tsv": (read_text, "tab-separated values, optional header; text columns skipped"),
+    ".pcd": (read_pcd, "PCL/Open3D point cloud, ascii, binary or binary_compressed"),
     ".npy": (read_npy, "NumPy array (N, 2|3)"),
     ".ply": (read_ply, "PLY vertices, ASCII or binary (extra io)"),
     ".obj": (read_obj, "Wavefront OBJ vertices"),
@@ -52,21 +58,26 @@ READERS: dict[str, tuple[Callable[..., np.ndarray], str]] = {
 #: extension -> (writer, description)
 WRITERS: dict[str, tuple[Callable[..., Any], str]] = {
     ".json": (network_to_json, "curvenet JSON network"),
-    ".obj": (network_to_obj, "Wavefront OBJ polylines (l lines)"),
-    ".ply": (network_to_ply, "PLY vertices and edges"),
-    ".dxf": (network_to_dxf, "DXF: 3D polylines or splines (layer CURVES), node points (NODES) (extra io)"),
-    ".svg": (network_to_svg, "SVG drawing of a 2D network or a projection of a 3D one"),
+    ".obj": (network_to_obj, "Wavefront OBJ polylines (l lines: Blender, MeshLab, ParaView)"),
+    ".ply": (network_to_ply, "PLY vertices and edges (a line set in trimesh, Open3D, MeshLab, Blender)"),
+    ".dxf": (network_to_dxf, "DXF: 3D polylines or splines (layer CURVES), node points (NODES); --units (extra io)"),
+    ".svg": (network_to_svg, "SVG drawing of a 2D network or a view of a 3D one (--view top|front|side|iso)"),
     ".vtp": (network_to_vtp, "VTK XML PolyData polylines and node vertices (ParaView)"),
+    ".vtu": (network_to_vtu, "VTK XML UnstructuredGrid line cells with curve ids (meshio, ParaView)"),
     ".graphml": (network_to_graphml, "GraphML graph: nodes with x y z, one edge per curve with its polyline"),
+    ".geojson": (network_to_geojson, "GeoJSON: curves as LineStrings, nodes as Points (QGIS, GDAL, shapely)"),
+    ".swc": (network_to_swc, "SWC tree samples with parent links, fork and end types (navis, NEURON)"),
 }
 
 
-def extension(path) -> str:
+def extension(path: str | Path) -> str:
     """Lower-case extension of ``path`` (e.g. ``".xyz"``)."""
     return Path(path).suffix.lower()
 
 
-def read_points(path, *, columns=None, drop_nonfinite: bool = False) -> np.ndarray:
+def read_points(
+    path: str | Path, *, columns: Sequence[int | str] | None = None, drop_nonfinite: bool = False
+) -> np.ndarray:
     """Read points from a file, choosing the reader by extension.
 
     Parameters
@@ -95,7 +106,7 @@ def read_points(path, *, columns=None, drop_nonfinite: bool = False) -> np.ndarr
     return READERS[ext][0](path, columns=columns, drop_nonfinite=drop_nonfinite)
 
 
-def write_network(net: CurveNetwork, path, *, inputs=(), **options) -> Path:
+def write_network(net: CurveNetwork, path: str | Path, *, inputs: Iterable[str | Path] = (), **options: Any) -> Path:
     """Write a network to ``path`` in the format given by its extension, atomically.
 
     Parameters

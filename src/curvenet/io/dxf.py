@@ -4,17 +4,26 @@ from __future__ import annotations
 
 import io
 
-from ..errors import require
+from ..errors import InputError, require
 from ..network import CurveNetwork
 from ..style import curve_colors
 
-__all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER"]
+__all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
 
 CURVE_LAYER = "CURVES"
 NODE_LAYER = "NODES"
 
+#: ``units`` names -> the DXF ``$INSUNITS`` code (AutoCAD's drawing-units table); 0 is unitless.
+DXF_UNITS = {
+    "unitless": 0, "in": 1, "ft": 2, "mi": 3, "mm": 4, "cm": 5, "m": 6, "km": 7,
+    "um": 13, "dm": 14, "yd": 10, "nm": 12,
+}
 
-def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
+#: Unit names that are metric (``$MEASUREMENT`` 1); the others are imperial (0).
+_METRIC = {"mm", "cm", "m", "km", "um", "dm", "nm"}
+
+
+def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None, units: str | None = None) -> str:
     """The network as an ASCII DXF drawing (AutoCAD R2010).
 
     Each curve is one entity on layer ``CURVES``: a 3D ``POLYLINE`` through its points (closed
@@ -28,6 +37,10 @@ def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
     smooth : bool, optional
         Write splines instead of polylines. By default, splines when the network was made with
         the ``smooth`` parameter set (``net.parameters["smooth"]``).
+    units : str, optional
+        The unit of the coordinates, a key of :data:`DXF_UNITS` (``"mm"``, ``"m"``, ``"in"``...),
+        written as ``$INSUNITS``. By default the drawing is unitless (``$INSUNITS`` 0): the
+        points carry no unit, so a CAD program neither scales them nor claims metres.
 
     Returns
     -------
@@ -37,9 +50,15 @@ def network_to_dxf(net: CurveNetwork, *, smooth: bool | None = None) -> str:
     """
     ezdxf = require("ezdxf", "writing DXF files", "io")
 
+    unit = "unitless" if units is None else str(units).strip().lower()
+    if unit not in DXF_UNITS:
+        raise InputError(f"unknown DXF units {units!r}; expected one of: {', '.join(DXF_UNITS)}")
     if smooth is None:
         smooth = bool(net.parameters.get("smooth", False))
     doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = DXF_UNITS[unit]
+    if unit != "unitless":
+        doc.header["$MEASUREMENT"] = int(unit in _METRIC)
     doc.layers.add(CURVE_LAYER, color=5)
     doc.layers.add(NODE_LAYER, color=1)
     msp = doc.modelspace()

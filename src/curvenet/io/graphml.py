@@ -10,6 +10,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..network import CurveNetwork
+from .numbers import shortest_rows
 
 __all__ = ["network_to_graphml", "format_polyline", "parse_polyline"]
 
@@ -33,8 +34,9 @@ _KEYS = [
 
 
 def format_polyline(points) -> str:
-    """``"x y [z];x y [z];..."``: the points of a polyline as one string (17 significant digits)."""
-    return ";".join(" ".join(f"{float(x):.17g}" for x in p) for p in np.asarray(points, dtype=float))
+    """``"x y [z];x y [z];..."``: the points of a polyline as one string (shortest round-trip
+    decimals)."""
+    return ";".join(shortest_rows(np.asarray(points, dtype=float)))
 
 
 def parse_polyline(text: str, dimension: int) -> np.ndarray:
@@ -71,7 +73,7 @@ def network_to_graphml(net: CurveNetwork) -> str:
         el = ET.SubElement(g, f"{{{_NS}}}node", {"id": str(j)})
         xyz = list(pos) + [0.0] * (3 - len(pos))
         for key, val in zip("xyz", xyz):
-            _data(el, key, f"{float(val):.17g}")
+            _data(el, key, repr(float(val)))
         _data(el, "valence", str(int(valence)))
         _data(el, "kind", kind)
         _data(el, "anchor", "true" if anchor else "false")
@@ -94,7 +96,7 @@ def network_to_graphml(net: CurveNetwork) -> str:
     for i, s, e, c in edges:  # GraphML lists nodes before edges
         el = ET.SubElement(g, f"{{{_NS}}}edge", {"id": f"c{i}", "source": str(s), "target": str(e)})
         _data(el, "curve", str(i))
-        _data(el, "length", f"{c.length:.17g}")
+        _data(el, "length", repr(float(c.length)))
         _data(el, "closed", "true" if c.closed else "false")
         _data(el, "n_points", str(len(c.points)))
         _data(el, "points", format_polyline(c.points))

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import CurveNetwork, _jsonable
+from .numbers import shortest_rows
 from .points import check_readable
 
 __all__ = ["network_to_json", "network_to_obj", "network_to_ply", "read_network", "polyline_vertices"]
@@ -61,8 +62,8 @@ def _json_orjson(net: CurveNetwork) -> str | None:
     return orjson.dumps(doc, option=orjson.OPT_SERIALIZE_NUMPY).decode("utf-8") + "\n"
 
 
-def polyline_vertices(net: CurveNetwork):
-    """One vertex list shared by all curves, with node vertices shared by the curves meeting there.
+def polyline_vertices(net: CurveNetwork) -> tuple[np.ndarray, list[np.ndarray]]:
+    """One vertex list shared by all curves: :meth:`CurveNetwork.polyline_vertices`.
 
     Returns
     -------
@@ -72,65 +73,66 @@ def polyline_vertices(net: CurveNetwork):
     polylines : list of (m,) ndarray of int
         Vertex indices of each curve in order; a closed curve repeats its first vertex at the end.
     """
-    d = net.dimension
-    blocks = [net.nodes.reshape(-1, d)]
-    polylines = []
-    nv = len(net.nodes)
-    for c in net.curves:
-        pts = c.points
-        if c.start is not None:
-            inner = pts[1:-1] if len(pts) >= 2 else pts[:0]
-            ids = np.concatenate([[c.start], nv + np.arange(len(inner)), [c.end]])
-        else:
-            inner = pts
-            ids = nv + np.arange(len(inner))
-            if c.closed and len(ids):
-                ids = np.append(ids, ids[0])
-        blocks.append(inner)
-        nv += len(inner)
-        polylines.append(ids.astype(np.int64))
-    v = np.vstack(blocks) if blocks else np.zeros((0, d))
-    if d == 2:
-        v = np.column_stack([v, np.zeros(len(v))])
-    return v, polylines
+    return net.polyline_vertices()
 
 
 def network_to_obj(net: CurveNetwork) -> str:
     """Wavefront OBJ: ``v`` lines, then one ``l`` polyline per curve (``o curve_<i>``).
 
-    Node vertices come first and are shared by every curve that ends there.
+    Node vertices come first and are shared by every curve that ends there; coordinates are
+    the shortest decimals that read back to the same floats. Blender, MeshLab and VTK
+    (ParaView, PyVista) read the ``l`` lines as edges; trimesh and meshio read OBJ faces only
+    and see the vertices alone: give them the ``.ply`` (trimesh, Open3D) or ``.vtu`` (meshio).
     """
     v, lines = polyline_vertices(net)
     out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves", f"# nodes are vertices 1..{net.n_nodes}"]
-    out.append("\n".join(f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in v))
+    out.append("\n".join(shortest_rows(v, "v ")))
     for i, ids in enumerate(lines):
         out.append(f"o curve_{i}")
         out.append("l " + " ".join(str(j + 1) for j in ids))
     return "\n".join(s for s in out if s) + "\n"
 
 
-def network_to_ply(net: CurveNetwork) -> bytes:
-    """Binary little-endian PLY with ``vertex`` (x, y, z, node flag) and ``edge`` (vertex1, vertex2,
-    curve id) elements."""
-    v, lines = polyline_vertices(net)
-    e = [np.column_stack([ids[:-1], ids[1:], np.full(len(ids) - 1, i)]) for i, ids in enumerate(lines) if len(ids) > 1]
-    e = np.vstack(e) if e else np.zeros((0, 3), dtype=np.int64)
+def network_to_ply(net: CurveNetwork, *, curve_ids: bool = False) -> bytes:
+    """Binary little-endian PLY: ``vertex`` (x, y, z, node flag) and ``edge`` (vertex1, vertex2).
+
+    Vertices are those of :func:`polyline_vertices` (nodes first, flagged ``node = 1``); each
+    curve is a run of edges in polyline order, curve after curve. trimesh (as a ``Path3D``),
+    Open3D (``read_line_set``), MeshLab and Blender read it as a line set. meshio's PLY reader
+    accepts no ``edge`` element: write ``.vtu`` for meshio.
+
+    Parameters
+    ----------
+    net : CurveNetwork
+    curve_ids : bool
+        Also give each edge an ``int curve`` property (its curve id). Off by default: trimesh
+        refuses edges with a third property ("edges are not (n, 2)").
+
+    Returns
+    -------
+    bytes
+    """
+    v, seg, cid = net.segments()
     vert = np.zeros(len(v), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("node", "u1")])
     vert["x"], vert["y"], vert["z"] = v.T
     vert["node"][: net.n_nodes] = 1
-    edge = np.zeros(len(e), dtype=[("vertex1", "<i4"), ("vertex2", "<i4"), ("curve", "<i4")])
-    edge["vertex1"], edge["vertex2"], edge["curve"] = e.T
+    fields = [("vertex1", "<i4"), ("vertex2", "<i4")] + ([("curve", "<i4")] if curve_ids else [])
+    edge = np.zeros(len(seg), dtype=fields)
+    edge["vertex1"], edge["vertex2"] = seg.T
+    if curve_ids:
+        edge["curve"] = cid
     header = (
         "ply\nformat binary_little_endian 1.0\ncomment curvenet network\n"
         f"element vertex {len(v)}\nproperty double x\nproperty double y\nproperty double z\n"
         "property uchar node\n"
-        f"element edge {len(e)}\nproperty int vertex1\nproperty int vertex2\nproperty int curve\n"
-        "end_header\n"
+        f"element edge {len(seg)}\nproperty int vertex1\nproperty int vertex2\n"
+        + ("property int curve\n" if curve_ids else "")
+        + "end_header\n"
     )
     return header.encode("ascii") + vert.tobytes() + edge.tobytes()
 
 
-def read_network(path) -> CurveNetwork:
+def read_network(path: str | Path) -> CurveNetwork:
     """Read a curve network written in the curvenet JSON format.
 
     The whole document is checked first against the format (see

@@ -78,6 +78,15 @@ def _select(path, names: list[str] | None, ncols: int, columns: Columns) -> list
     )
 
 
+def _first_data_row(lines: list[str], skip: int, delim: str | None) -> list[str] | None:
+    """The tokens of the first data line after ``skip`` lines (comments and blanks skipped)."""
+    for line in lines[skip:]:
+        t = line.strip()
+        if t and not t.startswith("#"):
+            return [x.strip() for x in (line.split(delim) if delim else t.split())]
+    return None
+
+
 def _is_number(tok: str) -> bool:
     try:
         float(tok)
@@ -87,12 +96,13 @@ def _is_number(tok: str) -> bool:
 
 
 def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> np.ndarray:
-    """Read points from a delimited text file (``.xyz``, ``.txt``, ``.pts``, ``.csv``).
+    """Read points from a delimited text file (``.xyz``, ``.txt``, ``.pts``, ``.csv``, ``.tsv``).
 
-    Values are separated by commas, semicolons, tabs or spaces; lines starting with ``#`` are
-    comments; an optional header line names the columns. Without a column choice, a file with
-    2 or 3 columns is read whole, a header naming ``x``, ``y`` (and ``z``) picks those columns,
-    and any other column count is an error.
+    Values are separated by commas, semicolons, tabs (always in ``.tsv``) or spaces; lines
+    starting with ``#`` are comments; an optional header line names the columns. Without a
+    column choice, a file with 2 or 3 columns is read whole, a header naming ``x``, ``y`` (and
+    ``z``) picks those columns, and any other column count is an error. Only the chosen columns
+    are read, so other columns may hold text (ids, labels).
 
     Parameters
     ----------
@@ -134,7 +144,10 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         break
     if first is None:
         raise FormatError(f"{p}: no data (only blank or comment lines)")
-    delim = "," if "," in first else (";" if ";" in first else None)
+    if p.suffix.lower() == ".tsv":
+        delim = "\t"
+    else:
+        delim = "," if "," in first else (";" if ";" in first else None)
     toks = [t.strip() for t in (first.split(delim) if delim else first.split())]
     names = None
     if not all(_is_number(t) for t in toks):
@@ -142,9 +155,22 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         skip += 1
     ncols = len(toks)
     cols = _select(p, names, ncols, columns)
-    arr = _read_rows(p, skip, delim, ncols)
+    data_row = _first_data_row(lines, skip, delim)
+    text_cols = [i for i, t in enumerate(data_row or []) if not _is_number(t)]
+    usecols = None
+    if text_cols:  # a text column (an id, a label): read the chosen columns only
+        chosen_text = [i for i in cols if i in text_cols]
+        if chosen_text:
+            i = chosen_text[0]
+            what = repr(names[i]) if names and i < len(names) else str(i)
+            raise FormatError(f"{p}: column {what} is not numeric (first data row has {data_row[i]!r}); "
+                              "choose the coordinate columns with --columns")
+        usecols = list(cols)
+    arr = _read_rows(p, skip, delim, ncols, usecols=usecols)
     if arr.size == 0:
         raise FormatError(f"{p}: a header but no data rows" if names else f"{p}: no data rows")
+    if usecols is not None:
+        return _finite(p, arr, drop_nonfinite)
     return _finite(p, arr[:, cols], drop_nonfinite)
 
 
@@ -152,10 +178,11 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
 TEXT_CHUNK_BYTES = 1 << 23
 
 
-def _read_rows(p: Path, skip: int, delim, ncols: int) -> np.ndarray:
+def _read_rows(p: Path, skip: int, delim, ncols: int, usecols: list[int] | None = None) -> np.ndarray:
     """The numbers of a text point file after its first ``skip`` lines, about
     :data:`TEXT_CHUNK_BYTES` at a time; errors name the data row (counted from 1, blank and
-    comment lines not counted, as in the NaN errors)."""
+    comment lines not counted, as in the NaN errors). ``usecols``: only these columns (the
+    others may hold text)."""
     blocks = []
     done = 0  # data rows parsed so far
     # Latin-1 decodes every byte: a stray byte in a comment is ignored, one in the data fails as
@@ -173,16 +200,17 @@ def _read_rows(p: Path, skip: int, delim, ncols: int) -> np.ndarray:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
-                    arr = np.loadtxt(text, delimiter=delim, comments="#", ndmin=2, dtype=np.float64)
+                    arr = np.loadtxt(text, delimiter=delim, comments="#", ndmin=2, dtype=np.float64,
+                                     usecols=usecols)
             except ValueError as exc:
                 raise FormatError(f"{p}: {_row_message(str(exc), done)}") from None
             if arr.size:
-                if arr.shape[1] != ncols:
+                if usecols is None and arr.shape[1] != ncols:
                     raise FormatError(f"{p}: data row {done + 1} has {arr.shape[1]} values, the first row {ncols}")
                 blocks.append(arr)
                 done += len(arr)
             checkpoint()  # Ctrl-C during a long read: acted on here (see curvenet._sigint)
-    return np.vstack(blocks) if blocks else np.zeros((0, ncols))
+    return np.vstack(blocks) if blocks else np.zeros((0, ncols if usecols is None else len(usecols)))
 
 
 def _row_message(msg: str, done: int) -> str:

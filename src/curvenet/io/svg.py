@@ -11,24 +11,36 @@ from ..errors import InputError
 from ..network import CurveNetwork
 from ..style import NODE_COLORS, curve_colors
 
-__all__ = ["network_to_svg", "PROJECTIONS", "project"]
+__all__ = ["network_to_svg", "PROJECTIONS", "VIEWS", "project"]
 
 #: Projections of 3D networks onto the drawing plane: (u, v) coordinates from (x, y, z).
 PROJECTIONS = ("xy", "xz", "yz", "iso")
 
-_C30, _S30 = np.cos(np.pi / 6), np.sin(np.pi / 6)
+#: View names of the command line (``--view``) and the projection each one is.
+VIEWS = {"top": "xy", "front": "xz", "side": "yz", "iso": "iso"}
+
+#: Unit vectors of the isometric drawing plane: u along (1, -1, 0), v along (-1, -1, 2); the
+#: view looks down the diagonal (1, 1, 1), so the three axes are drawn equally foreshortened
+#: (by sqrt(2/3)) at 120 degrees from each other.
+_ISO_U = np.array([1.0, -1.0, 0.0]) / np.sqrt(2.0)
+_ISO_V = np.array([-1.0, -1.0, 2.0]) / np.sqrt(6.0)
 
 
 def project(points, projection: str = "xy") -> np.ndarray:
     """Project (m, 2|3) points to (m, 2) drawing coordinates.
 
-    ``"xy"``, ``"xz"``, ``"yz"`` keep two coordinates; ``"iso"`` is the isometric view
-    ``u = (x - y) cos 30°``, ``v = z - (x + y) sin 30°`` (x to the lower right, y to the lower
-    left, z up). A 2D network accepts only ``"xy"``.
+    ``"xy"`` (``"top"``), ``"xz"`` (``"front"``), ``"yz"`` (``"side"``) keep two coordinates;
+    ``"iso"`` is the true isometric projection, orthographic along the diagonal (1, 1, 1):
+    ``u = (x - y) / sqrt 2``, ``v = (2 z - x - y) / sqrt 6`` (x to the lower right, y to the
+    lower left, z up), which keeps the lengths of segments parallel to the drawing plane.
+    A 2D network accepts only ``"xy"`` (``"top"``).
     """
     p = np.asarray(points, dtype=float)
+    projection = VIEWS.get(projection, projection)
     if projection not in PROJECTIONS:
-        raise InputError(f"unknown SVG projection {projection!r}; expected one of: {', '.join(PROJECTIONS)}")
+        raise InputError(
+            f"unknown SVG view (projection) {projection!r}; expected one of: {', '.join(VIEWS)} (or {', '.join(PROJECTIONS[:3])})"
+        )
     if p.shape[-1] == 2:
         if projection != "xy":
             raise InputError(f"a 2D network can only be drawn with projection 'xy', got {projection!r}")
@@ -41,13 +53,13 @@ def project(points, projection: str = "xy") -> np.ndarray:
         return np.column_stack([x, z])
     if projection == "yz":
         return np.column_stack([y, z])
-    return np.column_stack([(x - y) * _C30, z - (x + y) * _S30])
+    return np.column_stack([p @ _ISO_U, p @ _ISO_V])
 
 
 def network_to_svg(
     net: CurveNetwork,
     *,
-    projection: Literal["xy", "xz", "yz", "iso"] = "xy",
+    projection: Literal["xy", "xz", "yz", "iso", "top", "front", "side"] = "xy",
     width: int = 800,
     nodes: bool = True,
 ) -> str:
@@ -62,8 +74,9 @@ def network_to_svg(
     Parameters
     ----------
     net : CurveNetwork
-    projection : {"xy", "xz", "yz", "iso"}
-        How to draw a 3D network (see :func:`project`); 2D networks use ``"xy"``.
+    projection : {"xy", "xz", "yz", "iso", "top", "front", "side"}
+        How to draw a 3D network (see :func:`project`; ``top``, ``front`` and ``side`` are
+        ``xy``, ``xz`` and ``yz``); 2D networks use ``"xy"``.
     width : int
         Width in pixels of the drawing; the height follows the aspect ratio.
     nodes : bool
@@ -76,6 +89,7 @@ def network_to_svg(
     if not isinstance(width, (int, np.integer)) or width <= 0:
         raise InputError(f"SVG width must be a positive integer, got {width!r}")
     d = net.dimension
+    projection = VIEWS.get(projection, projection)
     curves_uv = [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
     nodes_uv = project(net.nodes, projection) if len(net.nodes) else np.zeros((0, 2))
     allp = np.vstack([nodes_uv, *curves_uv]) if (len(nodes_uv) or curves_uv) else np.zeros((0, 2))

@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..network import CurveNetwork
 from .network_io import polyline_vertices
+from .numbers import shortest
 
 __all__ = ["network_to_vtp"]
 
@@ -73,7 +74,7 @@ def network_to_vtp(net: CurveNetwork, *, encoding: Literal["ascii", "base64"] = 
         head += f' NumberOfComponents="{ncomp}"' if ncomp > 1 else ""
         if encoding == "ascii":
             if a.dtype.kind == "f":
-                body = " ".join(f"{x:.17g}" for x in a.ravel())
+                body = shortest(a)
             else:
                 body = " ".join(str(int(x)) for x in a.ravel())
             return f'{head} format="ascii">{body}</DataArray>'

@@ -120,10 +120,16 @@ __all__ = [
     "DEFAULT_TAU_FACTOR",
 ]
 
-#: Neighbours per point in Algorithm 1. The paper gives no value. Ten resolves junctions whose
-#: curves are more than about ten spacings long, sees every branch of a junction of valence
-#: up to 5, and keeps the candidate gap around each node small.
-DEFAULT_K = 10
+#: Neighbours per point in Algorithm 1. The paper gives no value; 6 is chosen by a study
+#: (``benchmarks/paper_defaults.py``, docs/paper-defaults.md): on 8 clean 3D wireframe
+#: sketches of about 15,000 points each (the size of the paper's Table 1 models), k = 6 gave
+#: the best mean curve F1 both with ε, τ_S, θ tuned per sketch (0.64, against 0.54 for
+#: k = 10, 0.61 for k = 4, 0.54 for k = 8) and with the defaults (0.63 against 0.51 for
+#: k = 10), and the most sketches with the exact topology (3 of 8 tuned, as k = 4; 2 for k = 10).
+#: Fewer neighbours keep the PCA of eq. (1) local, so candidates stay close to the junctions
+#: and junction regions of nearby nodes do not run into each other; k = 4 is too few for a
+#: stable covariance. The default τ_S scales with k (``DEFAULT_TAU_FACTOR * k * h``, 9 h).
+DEFAULT_K = 6
 
 #: Threshold on the point variation, by dimension. δ is scale-free. On clean, uniformly sampled
 #: curves (k = 10) δ is ~1e-16 on straight parts, ~1e-6 on a helix sampled at 20 points per
@@ -138,8 +144,9 @@ DEFAULT_EPSILON = {2: 2e-2, 3: 1e-3}
 #: candidates, ~h), it picks the starting points of the curves around a node (so it must exceed
 #: the gap left by the removed candidates, which reach about ``k / 2`` spacings along each
 #: curve at a right-angled junction and up to ``k / (2 sin a)`` at a junction of angle ``a``),
-#: and it bounds a step. ``1.5 k h`` (15 h for k = 10) clears the gap for junction angles down
-#: to about 20 degrees; nodes must then be more than about ``2.5 k h`` apart to stay separate.
+#: and it bounds a step. ``1.5 k h`` (9 h for the default k = 6) clears the gap for junction
+#: angles down to about 20 degrees; nodes must then be more than about ``2.5 k h`` apart to stay
+#: separate.
 DEFAULT_TAU_FACTOR = 1.5
 
 _CHUNK = 65536
@@ -704,7 +711,7 @@ def reconstruct_paper(
         Points sampled along the curves, in any order.
     k : int
         Nearest neighbours for the covariance of equation (1). The paper gives no value;
-        default :data:`DEFAULT_K` (10).
+        default :data:`DEFAULT_K` (6, chosen by the study in docs/paper-defaults.md).
     epsilon : float, optional
         Threshold ε on the point variation δ of equation (2); candidates have ``δ > ε``.
         Default :data:`DEFAULT_EPSILON` for the dimension (1e-3 in 3D, 2e-2 in 2D).

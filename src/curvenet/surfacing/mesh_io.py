@@ -41,14 +41,18 @@ def mesh_to_obj(mesh, *, precision: int = 9) -> bytes:
     return out.getvalue().encode("ascii")
 
 
-def mesh_to_ply(mesh, *, binary: bool = True) -> bytes:
-    """PLY with float64 vertices and triangle faces carrying an int ``patch`` property.
+def mesh_to_ply(mesh, *, binary: bool = True, patch: bool = False) -> bytes:
+    """PLY with float64 vertices and triangle faces (optionally with an int ``patch`` property).
 
     Parameters
     ----------
     mesh : SurfaceMesh
     binary : bool
         Binary little-endian (default) or ASCII.
+    patch : bool
+        Give each face an ``int patch`` property (its patch id). Off by default: meshio's PLY
+        reader fails on a binary face element with a property after the vertex list; the OBJ
+        keeps the patches as groups.
 
     Returns
     -------
@@ -65,22 +69,24 @@ def mesh_to_ply(mesh, *, binary: bool = True) -> bytes:
         "property double x\nproperty double y\nproperty double z\n"
         f"element face {len(T)}\n"
         "property list uchar int vertex_indices\n"
-        "property int patch\n"
-        "end_header\n"
+        + ("property int patch\n" if patch else "")
+        + "end_header\n"
     ).encode("ascii")
     if binary:
-        face = np.zeros(len(T), dtype=[("n", "u1"), ("v", "<i4", (3,)), ("patch", "<i4")])
+        fields = [("n", "u1"), ("v", "<i4", (3,))] + ([("patch", "<i4")] if patch else [])
+        face = np.zeros(len(T), dtype=fields)
         face["n"] = 3
         face["v"] = T
-        face["patch"] = P
+        if patch:
+            face["patch"] = P
         return header + V.tobytes() + face.tobytes()
-    lines = ["%.17g %.17g %.17g" % tuple(v) for v in V]
-    lines += [f"3 {t[0]} {t[1]} {t[2]} {p}" for t, p in zip(T, P)]
+    lines = [" ".join(map(repr, v)) for v in V.tolist()]
+    lines += [f"3 {t[0]} {t[1]} {t[2]}" + (f" {p}" if patch else "") for t, p in zip(T, P)]
     return header + ("\n".join(lines) + "\n").encode("ascii")
 
 
 #: extension -> (writer, description)
 MESH_WRITERS = {
     ".obj": (mesh_to_obj, "Wavefront OBJ triangles, one group per patch"),
-    ".ply": (mesh_to_ply, "binary PLY triangles with a patch id per face"),
+    ".ply": (mesh_to_ply, "binary PLY triangles (trimesh, Open3D, meshio, MeshLab, Blender)"),
 }

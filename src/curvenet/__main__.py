@@ -1,0 +1,8 @@
+"""``python -m curvenet``: the command-line tool, as the ``curvenet`` command."""
+
+import sys
+
+from .cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,89 @@
+"""Issue 21, the Python object: equality, allclose, len and iteration, a clearly mutable network
+whose derived values never go stale, save/load at the top level, and typed public API."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import curvenet
+from curvenet import Curve, CurveNetwork
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from test_writers_extra import sample_network  # noqa: E402
+
+
+def test_equality_exact_and_on_canonical_forms():
+    a, b = sample_network(3), sample_network(3)
+    assert a == b and not (a != b)
+    assert a.canonical() == b.canonical()  # the docstring's advice works (it raised ValueError)
+    shuffled = CurveNetwork(a.nodes, a.curves[::-1], dict(a.parameters))
+    assert shuffled != a and shuffled.canonical() == a.canonical()
+    b.curves[2].points[3, 1] += 1e-12
+    assert a != b and a.allclose(b) and not a.allclose(b, rtol=0, atol=1e-13)
+    c = sample_network(3)
+    c.curves[0] = Curve(c.curves[0].points, 1, 0)  # other end nodes: not close at any tolerance
+    assert not a.allclose(c, atol=10)
+    assert a != sample_network(2) and not a.allclose(sample_network(2))
+    assert (a == "network") is False
+    with pytest.raises(TypeError):
+        hash(a)  # mutable, so not hashable
+
+
+def test_len_iter_and_derived_values_follow_changes():
+    net = sample_network(3)
+    assert len(net) == net.n_curves == 6 and list(net) == net.curves
+    assert [len(c) for c in net] == [len(c.points) for c in net.curves]
+    val, betti = net.valence.copy(), net.betti
+    net.curves.append(Curve(np.array([[2.0, 0.5, 1.5], [3, 3, 3]]), 2, 2))  # a loop at the free end
+    assert net.valence[2] == val[2] + 2 and net.betti == (betti[0], betti[1] + 1)  # no stale cache
+    net.curves.pop()
+    assert np.array_equal(net.valence, val)
+
+
+def test_save_and_load_at_the_top_level(tmp_path):
+    net = sample_network(3)
+    path = curvenet.save(net, tmp_path / "n.json")
+    assert curvenet.load(path) == net
+    assert curvenet.save(net, tmp_path / "n.svg", projection="iso").read_text().startswith("<?xml")
+    with pytest.raises(curvenet.FormatError):
+        curvenet.save(net, tmp_path / "n.xyz")
+    with pytest.raises(curvenet.InputError):
+        curvenet.load(tmp_path / "missing.json")
+
+
+def test_py_typed_is_shipped():
+    assert (ROOT / "src" / "curvenet" / "py.typed").exists()
+    text = (ROOT / "pyproject.toml").read_text()
+    assert 'curvenet = ["py.typed"]' in text
+
+
+#: numpy's and scipy's stubs are skipped (their types become Any): checking them takes a minute
+#: and is their business; every function of ours must still be fully annotated and consistent.
+MYPY_INI = """[mypy]
+ignore_missing_imports = True
+follow_imports = skip
+disallow_untyped_defs = True
+disallow_incomplete_defs = True
+
+[mypy-numpy.*,scipy.*]
+follow_imports_for_stubs = True
+"""
+
+
+def test_public_api_type_hints_pass_mypy(tmp_path):
+    pytest.importorskip("mypy")
+    (tmp_path / "mypy.ini").write_text(MYPY_INI)
+    files = ["__init__.py", "network.py", "reconstruct.py", "io/__init__.py", "io/network_io.py", "io/labels.py",
+             "io/numbers.py", "io/stdio.py", "io/geojson.py", "io/swc.py", "io/vtu.py", "io/pcd.py"]
+    args = [sys.executable, "-m", "mypy", "--config-file", str(tmp_path / "mypy.ini"), "--cache-dir",
+            str(tmp_path / "cache"), "--no-error-summary"]
+    r = subprocess.run([*args, *[str(ROOT / "src" / "curvenet" / f) for f in files]],
+                       capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert r.returncode == 0, r.stdout + r.stderr
+    (tmp_path / "untyped.py").write_text("def f(x):\n    return x\n")  # the check can fail
+    r = subprocess.run([*args, str(tmp_path / "untyped.py")], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1 and "missing a type annotation" in r.stdout
