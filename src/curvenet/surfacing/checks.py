@@ -1,0 +1,246 @@
+"""Checks of a surfaced mesh: self-intersections, non-manifold edges, boundary loops, genus, overlap.
+
+:func:`check_mesh` measures a :class:`~curvenet.surfacing.SurfaceMesh` and names the patches
+involved in each failed check. The self-intersection test is MeshLab's
+(``compute_selection_by_self_intersections_per_face`` of ``pymeshlab``, extra ``surface``); the
+other checks are counted here with numpy/scipy from the triangle list.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "MeshChecks",
+    "check_mesh",
+    "self_intersecting_faces",
+    "OVERLAP_DISTANCE",
+    "OVERLAP_CURVE_MARGIN",
+    "OVERLAP_MIN_TRIANGLES",
+    "OVERLAP_NEIGHBOURS",
+]
+
+#: Two patches overlap where a triangle of one has its centroid within this distance (in units
+#: of the mesh's target edge length) of a point of the other: sheets this close cover the same
+#: region twice.
+OVERLAP_DISTANCE = 0.5
+
+#: Triangles whose centroid lies within this distance (in target edge lengths) of a curve point
+#: are left out of the overlap test: two patches meet along their common curves.
+OVERLAP_CURVE_MARGIN = 2.0
+
+#: Nearest sheet points looked at per triangle in the overlap test (its own centroid and
+#: vertices included).
+OVERLAP_NEIGHBOURS = 12
+
+#: A pair of patches counts as overlapping from this many overlapping triangles on.
+OVERLAP_MIN_TRIANGLES = 3
+
+
+@dataclass(frozen=True)
+class MeshChecks:
+    """What :func:`check_mesh` measured.
+
+    Attributes
+    ----------
+    self_intersecting_faces : int or None
+        Triangles that cross another triangle (MeshLab's test); ``None`` when ``pymeshlab`` is
+        not installed.
+    non_manifold_edges : int
+        Edges used by more than two triangles.
+    boundary_loops : int
+        Closed loops of edges used by one triangle (0 for a closed mesh).
+    components : int
+        Connected pieces (triangles joined by edges).
+    genus : int or None
+        ``(2 C - B - chi) / 2`` for ``C`` components, ``B`` boundary loops and Euler
+        characteristic ``chi``; ``None`` when the mesh is not edge-manifold (undefined).
+    overlaps : list of tuple of int
+        Pairs of patches that cover the same region (see :data:`OVERLAP_DISTANCE`).
+    overlap_triangles : int
+        Triangles that lie on another patch's sheet.
+    patches : dict
+        Check name (``"self_intersections"``, ``"non_manifold_edges"``, ``"overlaps"``) -> sorted
+        list of the patch ids involved, for the checks that failed.
+    """
+
+    self_intersecting_faces: int | None
+    non_manifold_edges: int
+    boundary_loops: int
+    components: int
+    genus: int | None
+    overlaps: list = field(default_factory=list)
+    overlap_triangles: int = 0
+    patches: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """True when no triangle crosses another, every edge is manifold and no patches overlap."""
+        return not self.patches
+
+    def summary(self) -> str:
+        """One line of the figures, e.g. ``0 self-intersecting faces, 0 non-manifold edges, ...``."""
+        si = "self-intersections not tested" if self.self_intersecting_faces is None else (
+            f"{self.self_intersecting_faces} self-intersecting faces")
+        genus = "genus undefined" if self.genus is None else f"genus {self.genus}"
+        return (f"{si}, {self.non_manifold_edges} non-manifold edges, {self.boundary_loops} boundary "
+                f"loops, {genus}, {len(self.overlaps)} overlapping patch pairs")
+
+    def warning(self) -> str | None:
+        """A one-line warning naming the patches of each failed check, or ``None``."""
+        if self.ok:
+            return None
+        what = {"self_intersections": "self-intersecting faces", "non_manifold_edges": "non-manifold edges",
+                "overlaps": "overlapping patches"}
+        parts = [f"{what[k]} in patches {', '.join(map(str, v))}" for k, v in self.patches.items()]
+        return "surface check failed: " + "; ".join(parts)
+
+
+def self_intersecting_faces(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Mask of the triangles that intersect another triangle (MeshLab's test).
+
+    Parameters
+    ----------
+    vertices : (V, 3) ndarray
+    triangles : (T, 3) ndarray of int
+
+    Returns
+    -------
+    (T,) ndarray of bool
+
+    Raises
+    ------
+    MissingDependencyError
+        If ``pymeshlab`` (extra ``surface``) is missing.
+    """
+    from ..errors import require
+
+    ml = require("pymeshlab", "the self-intersection test of surfaces", "surface")
+    T = np.asarray(triangles, dtype=np.int32).reshape(-1, 3)
+    if not len(T):
+        return np.zeros(0, dtype=bool)
+    ms = ml.MeshSet()
+    ms.add_mesh(ml.Mesh(vertex_matrix=np.asarray(vertices, dtype=np.float64), face_matrix=T))
+    ms.compute_selection_by_self_intersections_per_face()
+    return np.asarray(ms.current_mesh().face_selection_array(), dtype=bool)
+
+
+def _edges(T: np.ndarray):
+    """Unique sorted edges, the edge of each (triangle, side) slot and the use counts."""
+    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+    u, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+    return u, inv.ravel(), cnt
+
+
+def _components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    g = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    return connected_components(g, directed=False)
+
+
+def _overlaps(V, T, P, curve_points, h):
+    """Pairs of patches whose sheets lie within ``OVERLAP_DISTANCE * h`` of each other."""
+    from scipy.spatial import cKDTree
+
+    cen = V[T].mean(axis=1)
+    far = np.ones(len(T), dtype=bool)
+    if len(curve_points):
+        d, _ = cKDTree(curve_points).query(cen, distance_upper_bound=OVERLAP_CURVE_MARGIN * h)
+        far = ~np.isfinite(d)
+    # points of every sheet: its vertices and triangle centroids (spacing about h / 2)
+    pts = np.vstack([cen, V[T].reshape(-1, 3)])
+    owner = np.concatenate([P, np.repeat(P, 3)])
+    tree = cKDTree(pts)
+    idx = np.flatnonzero(far)
+    d, j = tree.query(cen[idx], k=OVERLAP_NEIGHBOURS, distance_upper_bound=OVERLAP_DISTANCE * h)
+    ok = np.isfinite(d)
+    other = np.where(ok, owner[np.minimum(j, len(pts) - 1)], -1)
+    mine = P[idx][:, None]
+    cross = ok & (other != mine)
+    count = {}
+    hit = cross.any(axis=1)
+    for t, row, flags in zip(P[idx][hit], other[hit], cross[hit]):
+        for q in set(row[flags].tolist()):
+            key = (min(int(t), q), max(int(t), q))
+            count[key] = count.get(key, 0) + 1
+    pairs = sorted(k for k, c in count.items() if c >= OVERLAP_MIN_TRIANGLES)
+    return pairs, int(hit.sum())
+
+
+def check_mesh(mesh, *, self_intersections: bool = True) -> MeshChecks:
+    """Measure a surfaced mesh.
+
+    Parameters
+    ----------
+    mesh : SurfaceMesh
+    self_intersections : bool
+        Run MeshLab's self-intersection test (needs ``pymeshlab``); when ``False`` or when
+        ``pymeshlab`` is missing, ``self_intersecting_faces`` is ``None``.
+
+    Returns
+    -------
+    MeshChecks
+
+    Notes
+    -----
+    Overlap: the centroid of each triangle farther than ``OVERLAP_CURVE_MARGIN`` target edges
+    from every curve point is tested against the vertices and centroids of the other patches;
+    about :math:`O(T \\log T)`.
+    """
+    from ..errors import MissingDependencyError
+
+    V = np.asarray(mesh.vertices, dtype=float)
+    T = np.asarray(mesh.triangles, dtype=np.int64).reshape(-1, 3)
+    P = np.asarray(mesh.patch, dtype=np.int64)
+    if not len(T):
+        return MeshChecks(0 if self_intersections else None, 0, 0, 0, 0)
+    u, inv, cnt = _edges(T)
+    face_of = np.tile(np.arange(len(T)), 3)
+    patches = {}
+
+    si = None
+    if self_intersections:
+        try:
+            mask = self_intersecting_faces(V, T)
+        except MissingDependencyError:
+            mask = None
+        if mask is not None:
+            si = int(mask.sum())
+            if si:
+                patches["self_intersections"] = sorted({int(p) for p in P[mask]})
+
+    nm = cnt > 2
+    if nm.any():
+        patches["non_manifold_edges"] = sorted({int(P[f]) for f in face_of[nm[inv]]})
+
+    be = u[cnt == 1]
+    if len(be):
+        ids, lab = np.unique(be, return_inverse=True)
+        lab = lab.reshape(-1, 2)
+        loops, _ = _components(len(ids), lab[:, 0], lab[:, 1])
+    else:
+        loops = 0
+
+    # triangles joined by a shared edge
+    order = np.argsort(inv, kind="stable")
+    si_, sf = inv[order], face_of[order]
+    same = si_[1:] == si_[:-1]
+    ncomp, _ = _components(len(T), sf[:-1][same], sf[1:][same])
+
+    used = len(np.unique(T))
+    chi = used - len(u) + len(T)
+    genus = None if nm.any() else (2 * ncomp - loops - chi) // 2
+
+    curve_ids = [np.asarray(c) for c in (mesh.curve_vertices or []) if c is not None]
+    curve_points = V[np.unique(np.concatenate(curve_ids))] if curve_ids else np.zeros((0, 3))
+    h = float(mesh.stats.get("target_edge", 0.0)) if mesh.stats else 0.0
+    if h <= 0:
+        h = float(np.median(np.linalg.norm(V[u[:, 0]] - V[u[:, 1]], axis=1)))
+    pairs, n_over = _overlaps(V, T, P, curve_points, h)
+    if pairs:
+        patches["overlaps"] = sorted({k for pr in pairs for k in pr})
+    return MeshChecks(si, int(nm.sum()), int(loops), int(ncomp), genus, pairs, n_over, patches)
