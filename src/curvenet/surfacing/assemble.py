@@ -10,10 +10,14 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
-from .cycles import find_cycles
+from .cycles import candidate_cycles, select_cycles
 from .patches import triangulate_patch
 
-__all__ = ["SurfaceMesh", "surface"]
+__all__ = ["SurfaceMesh", "surface", "MAX_SELECTION_ROUNDS"]
+
+#: Times the cycle selection is solved again with the pairs of patches found crossing or lying
+#: on each other forbidden; patches still in conflict after the last round are dropped.
+MAX_SELECTION_ROUNDS = 30
 
 
 @dataclass
@@ -197,7 +201,8 @@ def surface(
     edges = network.edges
     seg = np.concatenate([np.linalg.norm(np.diff(ch, axis=0), axis=1) for ch in chains] or [np.zeros(0)])
     seg = seg[seg > 0]
-    cs = find_cycles(chains, edges, nodes, fold_angle=fold_angle, time_limit=time_limit)
+    cand = candidate_cycles(chains, edges, nodes)
+    cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit)
     area = float(sum(cs.costs or []))
     if target_edge is not None:
         h = float(target_edge)
@@ -217,8 +222,8 @@ def surface(
     verts = [nodes]
     nv = len(nodes)
     curve_vertices = [None] * len(chains)
-    used_curves = sorted({c for cyc in cs.cycles for c in cyc})
-    for c in used_curves:
+    cand_curves = sorted({d // 2 for cyc in cand.cycles for d in cyc})
+    for c in cand_curves:
         ch = chains[c]
         if edges[c, 0] < 0:
             ids = nv + np.arange(len(ch))
@@ -230,55 +235,58 @@ def surface(
             verts.append(inner)
             nv += len(inner)
         curve_vertices[c] = ids.astype(np.int64)
-
-    # ------------------------------------------------------------------ patches
-    tris, pids, domains = [], [], {"plane": 0, "circle": 0}
     Vb = np.vstack(verts)
-    rings = []
-    for cyc, dirs in zip(cs.cycles, cs.directions):
-        ring = []
-        for c, s in zip(cyc, dirs):
-            ids = curve_vertices[c]
-            if edges[c, 0] < 0:
-                ring.append(ids if s > 0 else ids[::-1])
-            else:
-                ring.append(ids[:-1] if s > 0 else ids[::-1][:-1])
-        rings.append(np.concatenate(ring))
-    holes = _find_holes(cs.cycles, rings, Vb, edges)
-    # at each node, the direction of every surfaced curve leaving it (for cross-boundary slopes)
+    # at each node, the direction of every curve leaving it (for cross-boundary slopes)
     leaving = {}
-    for c in used_curves:
+    for c in cand_curves:
         if edges[c, 0] >= 0:
             ch = chains[c]
             for v, d in ((edges[c, 0], _tangent(ch)), (edges[c, 1], _tangent(ch[::-1]))):
                 leaving.setdefault(int(v), []).append((c, d))
-    for k, ring in enumerate(rings):
-        if len(ring) < 3:
+
+    # ------------------------------------------------------------------ patches, conflicts
+    # each candidate is meshed once, in its own orientation; a selection whose patches cross or
+    # lie on each other gets those pairs forbidden and is solved again
+    patches = _PatchCache(cand, curve_vertices, edges, Vb, len(nodes), leaving, nv,
+                          dict(target_edge=h, fair=fair, min_angle=min_angle))
+    conflicts, banned = set(), set()
+    rounds = 0
+    while True:
+        rounds += 1
+        rings = [patches.ring(k) for k in cs.index]
+        holes = _find_holes(cs.cycles, rings, Vb, edges)
+        skip = {(min(cs.index[j], cs.index[k]), max(cs.index[j], cs.index[k])) for j, ks in holes.items() for k in ks}
+        new_pairs, new_banned = patches.conflicts(cs.index, skip, h)
+        new_pairs -= conflicts
+        new_banned -= banned
+        if not new_pairs and not new_banned:
+            break
+        conflicts |= new_pairs
+        banned |= new_banned
+        if rounds >= MAX_SELECTION_ROUNDS:
+            cs = _drop_conflicting(cs, cand, conflicts, banned)
+            break
+        cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit, conflicts=conflicts, banned=banned)
+
+    # ------------------------------------------------------------------ final patches
+    rings = [patches.ring(k) for k in cs.index]
+    holes = _find_holes(cs.cycles, rings, Vb, edges)
+    rings = [r if patches.same_direction(k, c, d) else r[::-1]
+             for r, k, c, d in zip(rings, cs.index, cs.cycles, cs.directions)]
+    tris, pids, domains = [], [], {"plane": 0, "circle": 0}
+    for pos, (k, dirs) in enumerate(zip(cs.index, cs.directions)):
+        hole_ks = [cs.index[j] for j in holes.get(pos, [])]
+        gT, kind = patches.mesh(k, hole_ks)
+        if kind is None:
             continue
-        poly = Vb[ring]
-        hole_rings = [rings[j] for j in holes.get(k, [])]
-        interior, T, kind = triangulate_patch(
-            poly, target_edge=h, fair=fair, min_angle=min_angle, holes=[Vb[r] for r in hole_rings],
-            corners=ring < len(nodes),
-            cross=[
-                (i, -d)
-                for i, v in enumerate(ring)
-                if v < len(nodes)
-                for c, d in leaving.get(int(v), [])
-                if c not in cs.cycles[k]
-            ],
-        )
-        domains[kind] += 1
         if kind != "plane":
-            hole_rings = []
-            holes.pop(k, None)
-        ring = np.concatenate([ring, *hole_rings]) if hole_rings else ring
-        gid = np.concatenate([ring, nv + np.arange(len(interior))])
-        verts.append(interior)
-        nv += len(interior)
-        tris.append(gid[T])
-        pids.append(np.full(len(T), k, dtype=np.int64))
-    V = np.vstack(verts)
+            holes.pop(pos, None)
+        if not patches.same_direction(k, cs.cycles[pos], dirs):
+            gT = gT[:, ::-1]
+        domains[kind] += 1
+        tris.append(gT)
+        pids.append(np.full(len(gT), pos, dtype=np.int64))
+    V = patches.vertices()
     T = np.vstack(tris) if tris else np.zeros((0, 3), dtype=np.int64)
     P = np.concatenate(pids) if pids else np.zeros(0, dtype=np.int64)
     t2 = time.perf_counter()
@@ -305,6 +313,8 @@ def surface(
     _orient_outward(V, T, P, cycles, directions)
 
     # ------------------------------------------------------------------ drop unused vertices
+    final_curves = {c for cyc in cycles for c in cyc}
+    curve_vertices = [ids if c in final_curves else None for c, ids in enumerate(curve_vertices)]
     used = np.zeros(len(V), dtype=bool)
     used[T.ravel()] = True
     new = np.cumsum(used) - 1
@@ -324,8 +334,114 @@ def surface(
             "domains": domains,
             "target_edge": h,
             "chord_splits": n_split,
+            "selection_rounds": rounds,
+            "conflicts": len(conflicts),
+            "folded": len(banned),
         },
     )
+
+
+class _PatchCache:
+    """Each candidate cycle meshed at most once (in its own orientation), in global vertex ids.
+
+    Boundary vertices (nodes and curve points) are shared by all candidates; the interior
+    vertices of each meshed candidate are appended to one growing list.
+    """
+
+    def __init__(self, cand, curve_vertices, edges, Vb, n_nodes, leaving, nv, options):
+        self.cand = cand
+        self.curve_vertices = curve_vertices
+        self.edges = edges
+        self.Vb = Vb
+        self.n_nodes = n_nodes
+        self.leaving = leaving
+        self.nv = nv
+        self.options = options
+        self.extra = []
+        self.meshes = {}  # (k, holes) -> (global triangles, kind)
+
+    def ring(self, k):
+        """Boundary vertex ids of candidate ``k``, along its darts."""
+        ring = []
+        for d in self.cand.cycles[k]:
+            c, s = d // 2, d % 2 == 0
+            ids = self.curve_vertices[c]
+            if self.edges[c, 0] < 0:
+                ring.append(ids if s else ids[::-1])
+            else:
+                ring.append(ids[:-1] if s else ids[::-1][:-1])
+        return np.concatenate(ring)
+
+    def same_direction(self, k, cycle, directions) -> bool:
+        """Whether an oriented cycle runs like candidate ``k``'s darts."""
+        d = 2 * cycle[0] + (0 if directions[0] > 0 else 1)
+        return d in self.cand.cycles[k]
+
+    def mesh(self, k, holes=()):
+        """(global triangles, domain kind) of candidate ``k`` (``kind`` None: too short)."""
+        key = (k, tuple(holes))
+        if key in self.meshes:
+            return self.meshes[key]
+        ring = self.ring(k)
+        if len(ring) < 3:
+            self.meshes[key] = (np.zeros((0, 3), dtype=np.int64), None)
+            return self.meshes[key]
+        curves = {d // 2 for d in self.cand.cycles[k]}
+        hole_rings = [self.ring(j) for j in holes]
+        interior, T, kind = triangulate_patch(
+            self.Vb[ring], holes=[self.Vb[r] for r in hole_rings], corners=ring < self.n_nodes,
+            cross=[(i, -d) for i, v in enumerate(ring) if v < self.n_nodes
+                   for c, d in self.leaving.get(int(v), []) if c not in curves],
+            **self.options,
+        )
+        if kind != "plane":
+            hole_rings = []
+        full = np.concatenate([ring, *hole_rings]) if hole_rings else ring
+        gid = np.concatenate([full, self.nv + np.arange(len(interior))])
+        self.extra.append(interior)
+        self.nv += len(interior)
+        self.meshes[key] = (gid[T], kind)
+        return self.meshes[key]
+
+    def vertices(self):
+        return np.vstack([self.Vb, *self.extra]) if self.extra else self.Vb
+
+    def conflicts(self, chosen, skip, h):
+        """Pairs of chosen candidates that cross or lie on each other, and those that fold.
+
+        ``skip``: candidate pairs not to report (a loop cut out of the patch it lies on).
+        """
+        from .checks import OVERLAP_CURVE_MARGIN, OVERLAP_DISTANCE, OVERLAP_MIN_TRIANGLES
+        from .crossings import crossing_patches, curve_samples, overlapping_patches
+
+        parts = [(pos, self.mesh(k)[0]) for pos, k in enumerate(chosen)]
+        T = np.vstack([t for _, t in parts]) if parts else np.zeros((0, 3), dtype=np.int64)
+        P = np.concatenate([np.full(len(t), pos, dtype=np.int64) for pos, t in parts]) if parts else np.zeros(0, np.int64)
+        if not len(T):
+            return set(), set()
+        V = self.vertices()
+        pairs, folded = crossing_patches(V, T, P)
+        curve_pts = curve_samples(self.Vb, self.curve_vertices, h / 2)
+        over, _ = overlapping_patches(V, T, P, curve_pts, distance=OVERLAP_DISTANCE * h,
+                                      margin=OVERLAP_CURVE_MARGIN * h, min_triangles=OVERLAP_MIN_TRIANGLES)
+        out = set()
+        for a, b in set(pairs) | set(over):
+            key = (min(chosen[a], chosen[b]), max(chosen[a], chosen[b]))
+            if key not in skip:
+                out.add(key)
+        return out, {chosen[a] for a in folded}
+
+
+def _drop_conflicting(cs, cand, conflicts, banned):
+    """The selection less its banned patches and, per conflicting pair, the costlier per curve."""
+    keep = [k for k in cs.index if k not in banned]
+    per = {k: cand.costs[k] / max(len(cand.cycles[k]), 1) for k in keep}
+    for a, b in sorted(conflicts):
+        if a in per and b in per and a in keep and b in keep:
+            keep.remove(max((a, b), key=lambda k: (per[k], k)))
+    pos = [i for i, k in enumerate(cs.index) if k in keep]
+    return type(cs)([cs.cycles[i] for i in pos], [cs.directions[i] for i in pos], cs.n_candidates,
+                    [cs.costs[i] for i in pos], [cs.index[i] for i in pos])
 
 
 def _orient_outward(V, T, P, cycles, directions):

@@ -19,21 +19,16 @@ __all__ = [
     "OVERLAP_DISTANCE",
     "OVERLAP_CURVE_MARGIN",
     "OVERLAP_MIN_TRIANGLES",
-    "OVERLAP_NEIGHBOURS",
 ]
 
-#: Two patches overlap where a triangle of one has its centroid within this distance (in units
-#: of the mesh's target edge length) of a point of the other: sheets this close cover the same
-#: region twice.
+#: Two patches overlap where the centroid of a triangle of one projects inside a triangle of the
+#: other at less than this distance (in units of the mesh's target edge length) from its plane:
+#: sheets this close cover the same region twice.
 OVERLAP_DISTANCE = 0.5
 
 #: Triangles whose centroid lies within this distance (in target edge lengths) of a curve point
 #: are left out of the overlap test: two patches meet along their common curves.
 OVERLAP_CURVE_MARGIN = 2.0
-
-#: Nearest sheet points looked at per triangle in the overlap test (its own centroid and
-#: vertices included).
-OVERLAP_NEIGHBOURS = 12
 
 #: A pair of patches counts as overlapping from this many overlapping triangles on.
 OVERLAP_MIN_TRIANGLES = 3
@@ -142,35 +137,6 @@ def _components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
     return connected_components(g, directed=False)
 
 
-def _overlaps(V, T, P, curve_points, h):
-    """Pairs of patches whose sheets lie within ``OVERLAP_DISTANCE * h`` of each other."""
-    from scipy.spatial import cKDTree
-
-    cen = V[T].mean(axis=1)
-    far = np.ones(len(T), dtype=bool)
-    if len(curve_points):
-        d, _ = cKDTree(curve_points).query(cen, distance_upper_bound=OVERLAP_CURVE_MARGIN * h)
-        far = ~np.isfinite(d)
-    # points of every sheet: its vertices and triangle centroids (spacing about h / 2)
-    pts = np.vstack([cen, V[T].reshape(-1, 3)])
-    owner = np.concatenate([P, np.repeat(P, 3)])
-    tree = cKDTree(pts)
-    idx = np.flatnonzero(far)
-    d, j = tree.query(cen[idx], k=OVERLAP_NEIGHBOURS, distance_upper_bound=OVERLAP_DISTANCE * h)
-    ok = np.isfinite(d)
-    other = np.where(ok, owner[np.minimum(j, len(pts) - 1)], -1)
-    mine = P[idx][:, None]
-    cross = ok & (other != mine)
-    count = {}
-    hit = cross.any(axis=1)
-    for t, row, flags in zip(P[idx][hit], other[hit], cross[hit]):
-        for q in set(row[flags].tolist()):
-            key = (min(int(t), q), max(int(t), q))
-            count[key] = count.get(key, 0) + 1
-    pairs = sorted(k for k, c in count.items() if c >= OVERLAP_MIN_TRIANGLES)
-    return pairs, int(hit.sum())
-
-
 def check_mesh(mesh, *, self_intersections: bool = True) -> MeshChecks:
     """Measure a surfaced mesh.
 
@@ -187,11 +153,11 @@ def check_mesh(mesh, *, self_intersections: bool = True) -> MeshChecks:
 
     Notes
     -----
-    Overlap: the centroid of each triangle farther than ``OVERLAP_CURVE_MARGIN`` target edges
-    from every curve point is tested against the vertices and centroids of the other patches;
-    about :math:`O(T \\log T)`.
+    Overlap: see :func:`curvenet.surfacing.crossings.overlapping_patches`, with the constants
+    of this module; about :math:`O(T \\log T)`.
     """
     from ..errors import MissingDependencyError
+    from .crossings import curve_samples, overlapping_patches
 
     V = np.asarray(mesh.vertices, dtype=float)
     T = np.asarray(mesh.triangles, dtype=np.int64).reshape(-1, 3)
@@ -235,12 +201,12 @@ def check_mesh(mesh, *, self_intersections: bool = True) -> MeshChecks:
     chi = used - len(u) + len(T)
     genus = None if nm.any() else (2 * ncomp - loops - chi) // 2
 
-    curve_ids = [np.asarray(c) for c in (mesh.curve_vertices or []) if c is not None]
-    curve_points = V[np.unique(np.concatenate(curve_ids))] if curve_ids else np.zeros((0, 3))
     h = float(mesh.stats.get("target_edge", 0.0)) if mesh.stats else 0.0
     if h <= 0:
         h = float(np.median(np.linalg.norm(V[u[:, 0]] - V[u[:, 1]], axis=1)))
-    pairs, n_over = _overlaps(V, T, P, curve_points, h)
+    curve_points = curve_samples(V, mesh.curve_vertices or [], h / 2)
+    pairs, n_over = overlapping_patches(V, T, P, curve_points, distance=OVERLAP_DISTANCE * h,
+                                        margin=OVERLAP_CURVE_MARGIN * h, min_triangles=OVERLAP_MIN_TRIANGLES)
     if pairs:
         patches["overlaps"] = sorted({k for pr in pairs for k in pr})
     return MeshChecks(si, int(nm.sum()), int(loops), int(ncomp), genus, pairs, n_over, patches)
