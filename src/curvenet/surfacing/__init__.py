@@ -6,7 +6,7 @@ patches into one :class:`SurfaceMesh` with shared, consistently oriented boundar
 """
 
 from .assemble import SurfaceMesh, surface
-from .checks import MeshChecks, check_mesh
+from .checks import MeshChecks, SurfaceCheckWarning, check_mesh
 from .cycles import CycleSet, find_cycles
 from .mesh_io import MESH_WRITERS, mesh_to_obj, mesh_to_ply
 from .patches import min_area_triangulation, triangulate_patch
@@ -16,6 +16,7 @@ __all__ = [
     "SurfaceMesh",
     "MeshChecks",
     "check_mesh",
+    "SurfaceCheckWarning",
     "find_cycles",
     "CycleSet",
     "triangulate_patch",

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
+from .checks import MeshChecks, SurfaceCheckWarning, check_mesh
 from .cycles import candidate_cycles, select_cycles
 from .patches import triangulate_patch
 
@@ -45,7 +46,13 @@ class SurfaceMesh:
     stats : dict
         ``time`` (seconds per stage), ``candidates`` (cycles scored), ``domains`` (count of
         patches laid out on their best-fit plane or on a circle), ``target_edge``,
-        ``chord_splits`` (interior edges split because two patches shared them).
+        ``chord_splits`` (interior edges split because two patches shared them),
+        ``selection_rounds`` (times the cycle selection was solved), ``conflicts`` (pairs of
+        candidate patches found crossing or lying on each other, forbidden), ``folded``
+        (candidates found crossing themselves, banned).
+    checks : MeshChecks or None
+        Self-intersections, non-manifold edges, boundary loops, genus and overlapping patches
+        of the mesh (see :func:`curvenet.surfacing.check_mesh`); ``None`` when not checked.
     """
 
     vertices: np.ndarray
@@ -55,6 +62,7 @@ class SurfaceMesh:
     directions: list
     curve_vertices: list = field(default_factory=list)
     stats: dict[str, Any] = field(default_factory=dict)
+    checks: MeshChecks | None = None
 
     @property
     def n_patches(self) -> int:
@@ -130,6 +138,7 @@ def surface(
     min_angle: float = 25.0,
     time_limit: float = 60.0,
     max_triangles: int = 200_000,
+    check: bool = True,
 ) -> SurfaceMesh:
     """Surface a curve network: find its patch boundaries and fill each with a triangle mesh.
 
@@ -155,6 +164,12 @@ def surface(
         Seconds allowed to the integer program choosing the cycles.
     max_triangles : int
         Budget used for the default ``target_edge`` (ignored when ``target_edge`` is given).
+    check : bool
+        Check the mesh (:func:`curvenet.surfacing.check_mesh`: self-intersections with
+        MeshLab's and libigl's tests when ``pymeshlab`` and ``libigl`` are installed,
+        non-manifold edges, boundary loops, genus, overlapping patches), store the result in
+        ``checks`` and warn (:class:`~curvenet.surfacing.checks.SurfaceCheckWarning`, naming the
+        patches) when a check fails.
 
     Returns
     -------
@@ -166,6 +181,11 @@ def surface(
     ------
     InputError
         If the network is not a CurveNetwork or ``target_edge`` is not positive.
+
+    Warns
+    -----
+    SurfaceCheckWarning
+        When ``check`` finds crossing faces, non-manifold edges or overlapping patches.
 
     Notes
     -----
@@ -321,7 +341,7 @@ def surface(
     V, T = V[used], new[T]
     curve_vertices = [None if ids is None else new[ids] for ids in curve_vertices]
     t3 = time.perf_counter()
-    return SurfaceMesh(
+    mesh = SurfaceMesh(
         V,
         T,
         P,
@@ -339,6 +359,15 @@ def surface(
             "folded": len(banned),
         },
     )
+    if check:
+        mesh.checks = check_mesh(mesh)
+        mesh.stats["time"]["checks"] = time.perf_counter() - t3
+        msg = mesh.checks.warning()
+        if msg:
+            import warnings
+
+            warnings.warn(msg, SurfaceCheckWarning, stacklevel=2)
+    return mesh
 
 
 class _PatchCache:
@@ -359,6 +388,8 @@ class _PatchCache:
         self.options = options
         self.extra = []
         self.meshes = {}  # (k, holes) -> (global triangles, kind)
+        self.tested = []  # selections tested (sets of candidates): their pairs are known
+        self.curve_pts = None
 
     def ring(self, k):
         """Boundary vertex ids of candidate ``k``, along its darts."""
@@ -409,21 +440,31 @@ class _PatchCache:
     def conflicts(self, chosen, skip, h):
         """Pairs of chosen candidates that cross or lie on each other, and those that fold.
 
-        ``skip``: candidate pairs not to report (a loop cut out of the patch it lies on).
+        ``skip``: candidate pairs not to report (a loop cut out of the patch it lies on). Pairs
+        of candidates both tested in an earlier call are not tested again.
         """
         from .checks import OVERLAP_CURVE_MARGIN, OVERLAP_DISTANCE, OVERLAP_MIN_TRIANGLES
         from .crossings import crossing_patches, curve_samples, overlapping_patches
 
-        parts = [(pos, self.mesh(k)[0]) for pos, k in enumerate(chosen)]
-        T = np.vstack([t for _, t in parts]) if parts else np.zeros((0, 3), dtype=np.int64)
-        P = np.concatenate([np.full(len(t), pos, dtype=np.int64) for pos, t in parts]) if parts else np.zeros(0, np.int64)
-        if not len(T):
+        parts = [(pos, self.mesh(k)) for pos, k in enumerate(chosen)]
+        parts = [(pos, t, kind) for pos, (t, kind) in parts if len(t)]
+        if not parts:
             return set(), set()
+        T = np.vstack([t for _, t, _ in parts])
+        P = np.concatenate([np.full(len(t), pos, dtype=np.int64) for pos, t, _ in parts])
+        # pairs inside the largest earlier tested selection (restricted to this one) are known
+        ids = {chosen[pos] for pos, _, _ in parts}
+        known = max((ids & s for s in self.tested), key=len, default=set())
+        only = {pos for pos, _, _ in parts if chosen[pos] not in known} if known else None
+        folds = {pos for pos, _, kind in parts if kind != "plane" and chosen[pos] not in known}
         V = self.vertices()
-        pairs, folded = crossing_patches(V, T, P)
-        curve_pts = curve_samples(self.Vb, self.curve_vertices, h / 2)
-        over, _ = overlapping_patches(V, T, P, curve_pts, distance=OVERLAP_DISTANCE * h,
-                                      margin=OVERLAP_CURVE_MARGIN * h, min_triangles=OVERLAP_MIN_TRIANGLES)
+        pairs, folded = crossing_patches(V, T, P, only=only, folds=folds)
+        if self.curve_pts is None:
+            self.curve_pts = curve_samples(self.Vb, self.curve_vertices, h / 2)
+        over, _ = overlapping_patches(V, T, P, self.curve_pts, distance=OVERLAP_DISTANCE * h,
+                                      margin=OVERLAP_CURVE_MARGIN * h, min_triangles=OVERLAP_MIN_TRIANGLES,
+                                      only=only)
+        self.tested.append(ids)
         out = set()
         for a, b in set(pairs) | set(over):
             key = (min(chosen[a], chosen[b]), max(chosen[a], chosen[b]))

@@ -2,7 +2,8 @@
 
 :func:`check_mesh` measures a :class:`~curvenet.surfacing.SurfaceMesh` and names the patches
 involved in each failed check. The self-intersection test is MeshLab's
-(``compute_selection_by_self_intersections_per_face`` of ``pymeshlab``, extra ``surface``); the
+(``compute_selection_by_self_intersections_per_face`` of ``pymeshlab``, extra ``surface``), each
+face it selects confirmed by libigl's exact triangle-triangle test; the
 other checks are counted here with numpy/scipy from the triangle list.
 """
 
@@ -14,6 +15,7 @@ import numpy as np
 
 __all__ = [
     "MeshChecks",
+    "SurfaceCheckWarning",
     "check_mesh",
     "self_intersecting_faces",
     "OVERLAP_DISTANCE",
@@ -34,6 +36,10 @@ OVERLAP_CURVE_MARGIN = 2.0
 OVERLAP_MIN_TRIANGLES = 3
 
 
+class SurfaceCheckWarning(UserWarning):
+    """A surfaced mesh failed a check (crossing faces, non-manifold edges, overlapping patches)."""
+
+
 @dataclass(frozen=True)
 class MeshChecks:
     """What :func:`check_mesh` measured.
@@ -41,8 +47,8 @@ class MeshChecks:
     Attributes
     ----------
     self_intersecting_faces : int or None
-        Triangles that cross another triangle (MeshLab's test); ``None`` when ``pymeshlab`` is
-        not installed.
+        Triangles that cross another triangle (MeshLab's test confirmed by libigl's, see
+        :func:`self_intersecting_faces`); ``None`` when those packages are not installed.
     non_manifold_edges : int
         Edges used by more than two triangles.
     boundary_loops : int
@@ -93,13 +99,19 @@ class MeshChecks:
         return "surface check failed: " + "; ".join(parts)
 
 
-def self_intersecting_faces(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Mask of the triangles that intersect another triangle (MeshLab's test).
+def self_intersecting_faces(vertices: np.ndarray, triangles: np.ndarray, *, confirm: bool = True) -> np.ndarray:
+    """Mask of the triangles that intersect another triangle.
+
+    MeshLab's test (``compute_selection_by_self_intersections_per_face`` of ``pymeshlab``)
+    selects the faces; with ``confirm``, each selected face is kept only if libigl's exact test
+    (``igl.tri_tri_intersection_test_3d``) finds it crossing another selected face (MeshLab also
+    selects exactly coplanar triangles whose bounding boxes meet but that do not touch).
 
     Parameters
     ----------
     vertices : (V, 3) ndarray
     triangles : (T, 3) ndarray of int
+    confirm : bool
 
     Returns
     -------
@@ -108,25 +120,61 @@ def self_intersecting_faces(vertices: np.ndarray, triangles: np.ndarray) -> np.n
     Raises
     ------
     MissingDependencyError
-        If ``pymeshlab`` (extra ``surface``) is missing.
+        If ``pymeshlab`` or (with ``confirm``) ``libigl`` (extra ``surface``) is missing.
     """
     from ..errors import require
 
     ml = require("pymeshlab", "the self-intersection test of surfaces", "surface")
+    V = np.asarray(vertices, dtype=np.float64)
     T = np.asarray(triangles, dtype=np.int32).reshape(-1, 3)
     if not len(T):
         return np.zeros(0, dtype=bool)
     ms = ml.MeshSet()
-    ms.add_mesh(ml.Mesh(vertex_matrix=np.asarray(vertices, dtype=np.float64), face_matrix=T))
+    ms.add_mesh(ml.Mesh(vertex_matrix=V, face_matrix=T))
     ms.compute_selection_by_self_intersections_per_face()
-    return np.asarray(ms.current_mesh().face_selection_array(), dtype=bool)
+    mask = np.asarray(ms.current_mesh().face_selection_array(), dtype=bool)
+    if confirm and mask.any():
+        mask = _confirm(V, T, mask, require("igl", "the self-intersection test of surfaces", "surface", "libigl"))
+    return mask
+
+
+def _confirm(V, T, mask, igl):
+    """The selected faces that libigl finds crossing another selected face (touching excluded)."""
+    from scipy.spatial import cKDTree
+
+    F = np.flatnonzero(mask)
+    cen = V[T[F]].mean(axis=1)
+    rad = np.linalg.norm(V[T[F]] - cen[:, None, :], axis=2).max(axis=1)
+    pairs = cKDTree(cen).query_pairs(2 * float(rad.max()) * (1 + 1e-9), output_type="ndarray")
+    out = np.zeros(len(T), dtype=bool)
+    scale = float(np.ptp(V, axis=0).max()) or 1.0
+    for i, j in pairs:
+        a, b = T[F[i]], T[F[j]]
+        shared = set(a.tolist()) & set(b.tolist())
+        if len(shared) >= 2 or np.linalg.norm(cen[i] - cen[j]) > rad[i] + rad[j]:
+            continue
+        A, B = V[a], V[b]
+        hit, coplanar, p, q = igl.tri_tri_intersection_test_3d(A[0:1], A[1:2], A[2:3], B[0:1], B[1:2], B[2:3])
+        if not hit:
+            continue
+        if shared:  # touching at the shared vertex only is not a crossing
+            if coplanar:  # no segment is returned then: a fan around the vertex, taken as touching
+                continue
+            v = V[next(iter(shared))]
+            p, q = np.asarray(p).ravel(), np.asarray(q).ravel()
+            if len(p) == 3 and len(q) == 3 and max(np.linalg.norm(p - v), np.linalg.norm(q - v)) <= 1e-9 * scale:
+                continue
+        out[F[i]] = out[F[j]] = True
+    return out
 
 
 def _edges(T: np.ndarray):
     """Unique sorted edges, the edge of each (triangle, side) slot and the use counts."""
     e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-    u, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
-    return u, inv.ravel(), cnt
+    nv = int(T.max()) + 1
+    k, first, inv, cnt = np.unique(e[:, 0] * nv + e[:, 1], return_index=True, return_inverse=True,
+                                   return_counts=True)
+    return e[first], inv.ravel(), cnt
 
 
 def _components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:

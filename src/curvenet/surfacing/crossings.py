@@ -40,35 +40,53 @@ def _pierce(p0, p1, a, b, c):
     return ok & (u > e) & (v > e) & (u + v < 1 - e) & (t > e) & (t < 1 - e)
 
 
-def _candidate_pairs(ep, tp, er, tr):
-    """(edge, triangle) index pairs whose bounding spheres meet.
+def _near_pairs(pa, ra, pb, rb):
+    """Index pairs ``(i, j)`` of balls ``(pa[i], ra[i])`` and ``(pb[j], rb[j])`` that meet.
 
-    Elements are grouped by size (factors of :data:`SIZE_STEP`) and each pair of groups is
-    searched with a k-d tree at the radius of its largest elements, so that a few large
-    triangles do not widen the search of the many small ones.
+    Balls are grouped by radius (factors of :data:`SIZE_STEP`) and each pair of groups is
+    searched with a k-d tree at the radius of its largest balls, so that a few large triangles
+    do not widen the search of the many small ones.
     """
     from scipy.spatial import cKDTree
 
-    rmin = max(float(min(er.min(), tr.min())), 1e-300)
-    le = np.floor(np.log(np.maximum(er, rmin) / rmin) / np.log(SIZE_STEP)).astype(np.int64)
-    lt = np.floor(np.log(np.maximum(tr, rmin) / rmin) / np.log(SIZE_STEP)).astype(np.int64)
-    ge = {k: np.flatnonzero(le == k) for k in np.unique(le)}
-    gt = {k: np.flatnonzero(lt == k) for k in np.unique(lt)}
-    te = {k: cKDTree(ep[v]) for k, v in ge.items()}
-    tt = {k: cKDTree(tp[v]) for k, v in gt.items()}
-    out_i, out_j = [], []
-    for ke, ie in ge.items():
-        for kt, it in gt.items():
-            r = float(er[ie].max() + tr[it].max())
-            m = te[ke].sparse_distance_matrix(tt[kt], r, output_type="ndarray")
-            i, j = ie[m["i"]], it[m["j"]]
-            keep = m["v"] <= er[i] + tr[j]
+    if not len(pa) or not len(pb):
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    rmin = max(float(min(ra.min(), rb.min())), 1e-12 * float(max(ra.max(), rb.max())), 1e-300)
+
+    def groups(r):
+        lv = np.floor(np.log(np.maximum(r, rmin) / rmin) / np.log(SIZE_STEP)).astype(np.int64)
+        return {k: np.flatnonzero(lv == k) for k in np.unique(lv)}
+
+    ga, gb = groups(ra), groups(rb)
+    ta = {k: cKDTree(pa[v]) for k, v in ga.items()}
+    tb = {k: cKDTree(pb[v]) for k, v in gb.items()}
+    out_i, out_j = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+    for ka, ia in ga.items():
+        for kb, ib in gb.items():
+            r = float(ra[ia].max() + rb[ib].max())
+            m = ta[ka].sparse_distance_matrix(tb[kb], r, output_type="ndarray")
+            i, j = ia[m["i"]], ib[m["j"]]
+            keep = m["v"] <= ra[i] + rb[j]
             out_i.append(i[keep])
             out_j.append(j[keep])
     return np.concatenate(out_i), np.concatenate(out_j)
 
 
-def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> tuple[set, set]:
+def _pairs_touching(pa, ra, ga, pb, rb, gb, only):
+    """:func:`_near_pairs` restricted to pairs with a side in the groups ``only`` (all if None)."""
+    if only is None:
+        return _near_pairs(pa, ra, pb, rb)
+    oa, ob = np.isin(ga, list(only)), np.isin(gb, list(only))
+    ia = np.flatnonzero(oa)
+    i1, j1 = _near_pairs(pa[ia], ra[ia], pb, rb)
+    i1 = ia[i1]
+    ib = np.flatnonzero(ob)
+    rest = np.flatnonzero(~oa)
+    i2, j2 = _near_pairs(pa[rest], ra[rest], pb[ib], rb[ib])
+    return np.concatenate([i1, rest[i2]]), np.concatenate([j1, ib[j2]])
+
+
+def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray, *, only=None, folds=None) -> tuple[set, set]:
     """Pairs of patches whose triangles cross, and patches that cross themselves.
 
     Parameters
@@ -79,6 +97,11 @@ def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> tuple[set, 
         Triangles.
     P : (t,) ndarray of int
         Patch of each triangle.
+    only : set of int, optional
+        Test only the pairs that involve one of these patches (the others were tested before).
+    folds : set of int, optional
+        Test only these patches against themselves (default: all; a height field over a simple
+        planar domain cannot cross itself).
 
     Returns
     -------
@@ -101,14 +124,19 @@ def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> tuple[set, 
     # edges with the patch they belong to (an edge on a shared curve once per patch)
     E = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
     EP = np.tile(P, 3)
-    key = np.column_stack([np.sort(E, axis=1), EP])
-    key, first = np.unique(key, axis=0, return_index=True)
-    E, EP = key[:, :2], key[:, 2]
+    E = np.sort(E, axis=1)
+    nv, npatch = int(T.max()) + 1, int(P.max()) + 1
+    _, first = np.unique((E[:, 0] * nv + E[:, 1]) * npatch + EP, return_index=True)
+    E, EP = E[first], EP[first]
     ep = V[E].mean(axis=1)
     er = 0.5 * np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1)
     tp = V[T].mean(axis=1)
     tr = np.linalg.norm(V[T] - tp[:, None, :], axis=2).max(axis=1)
-    i, j = _candidate_pairs(ep, tp, er, tr)
+    i, j = _pairs_touching(ep, er, EP, tp, tr, P, only)
+    same = EP[i] == P[j]
+    if folds is not None:
+        keep = ~same | np.isin(EP[i], list(folds))
+        i, j = i[keep], j[keep]
     pairs, folded = set(), set()
     for lo in range(0, len(i), _CHUNK):
         a, b = i[lo:lo + _CHUNK], j[lo:lo + _CHUNK]
@@ -123,7 +151,8 @@ def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> tuple[set, 
     return pairs, folded
 
 
-def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float, min_triangles: int = 1):
+def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float, min_triangles: int = 1,
+                        only=None):
     """Pairs of patches whose sheets lie on each other (closer than ``distance``).
 
     Parameters
@@ -141,6 +170,8 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
     margin : float
     min_triangles : int
         A pair counts from this many such triangles on.
+    only : set of int, optional
+        Test only the pairs that involve one of these patches.
 
     Returns
     -------
@@ -165,9 +196,9 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
     if not len(idx):
         return [], 0
     tr = np.linalg.norm(V[T] - cen[:, None, :], axis=2).max(axis=1)
-    m = cKDTree(cen[idx]).sparse_distance_matrix(cKDTree(cen), float(tr.max()) + distance, output_type="ndarray")
-    i, j = idx[m["i"]], m["j"]
-    sel = (P[i] != P[j]) & (m["v"] <= tr[j] + distance)
+    i, j = _pairs_touching(cen[idx], np.full(len(idx), float(distance)), P[idx], cen, tr, P, only)
+    i = idx[i]
+    sel = P[i] != P[j]
     i, j = i[sel], j[sel]
     a, b, c = V[T[j, 0]], V[T[j, 1]], V[T[j, 2]]
     n = np.cross(b - a, c - a)
