@@ -463,10 +463,11 @@ class _PatchCache:
             self.curve_pts = curve_samples(self.Vb, self.curve_vertices, h / 2)
         over, _ = overlapping_patches(V, T, P, self.curve_pts, distance=OVERLAP_DISTANCE * h,
                                       margin=OVERLAP_CURVE_MARGIN * h, min_triangles=OVERLAP_MIN_TRIANGLES,
-                                      only=only)
+                                      only=only, folds=folds)
         self.tested.append(ids)
+        folded |= {a for a, b in over if a == b}
         out = set()
-        for a, b in set(pairs) | set(over):
+        for a, b in (set(pairs) | set(over)) - {(a, a) for a in folded}:
             key = (min(chosen[a], chosen[b]), max(chosen[a], chosen[b]))
             if key not in skip:
                 out.add(key)

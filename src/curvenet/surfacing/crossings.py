@@ -24,7 +24,10 @@ _CHUNK = 200_000
 
 
 def _pierce(p0, p1, a, b, c):
-    """Whether segments ``p0 p1`` cross triangles ``a b c`` (rows paired), Moeller-Trumbore."""
+    """Whether segments ``p0 p1`` cross triangles ``a b c`` (rows paired), Moeller-Trumbore.
+
+    Segments parallel to their triangle are tested in its plane (:func:`_coplanar_cross`).
+    """
     e1, e2, d = b - a, c - a, p1 - p0
     pv = np.cross(d, e2)
     det = np.einsum("ij,ij->i", e1, pv)
@@ -37,7 +40,50 @@ def _pierce(p0, p1, a, b, c):
     v = np.einsum("ij,ij->i", d, q) / det
     t = np.einsum("ij,ij->i", e2, q) / det
     e = PIERCE_EPS
-    return ok & (u > e) & (v > e) & (u + v < 1 - e) & (t > e) & (t < 1 - e)
+    hit = ok & (u > e) & (v > e) & (u + v < 1 - e) & (t > e) & (t < 1 - e)
+    flat = ~ok
+    if flat.any():
+        hit[flat] = _coplanar_cross(p0[flat], p1[flat], a[flat], b[flat], c[flat])
+    return hit
+
+
+def _coplanar_cross(p0, p1, a, b, c):
+    """Segments lying in their triangle's plane that enter the triangle's interior.
+
+    A segment enters when it properly crosses one of the triangle's edges or has an end strictly
+    inside; segments off the plane (parallel, not coplanar) do not.
+    """
+    n = np.cross(b - a, c - a)
+    nn = np.linalg.norm(n, axis=1)
+    size = np.maximum(np.linalg.norm(b - a, axis=1) + np.linalg.norm(c - a, axis=1), 1e-300)
+    good = nn > PIERCE_EPS * size * size
+    nu = n / np.maximum(nn, 1e-300)[:, None]
+    off = np.maximum(np.abs(np.einsum("ij,ij->i", p0 - a, nu)), np.abs(np.einsum("ij,ij->i", p1 - a, nu)))
+    good &= off <= PIERCE_EPS * size
+    # 2D frame of each triangle's plane
+    e1 = (b - a) / np.maximum(np.linalg.norm(b - a, axis=1), 1e-300)[:, None]
+    e2 = np.cross(nu, e1)
+
+    def flat2(x):
+        return np.column_stack([np.einsum("ij,ij->i", x - a, e1), np.einsum("ij,ij->i", x - a, e2)])
+
+    P0, P1, A, B, C = flat2(p0), flat2(p1), flat2(a), flat2(b), flat2(c)
+    tol = PIERCE_EPS * size * size
+
+    def orient(p, q, r):
+        return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
+
+    hit = np.zeros(len(p0), dtype=bool)
+    for X, Y in ((A, B), (B, C), (C, A)):
+        d1, d2 = orient(X, Y, P0), orient(X, Y, P1)
+        d3, d4 = orient(P0, P1, X), orient(P0, P1, Y)
+        hit |= (((d1 > tol) & (d2 < -tol)) | ((d1 < -tol) & (d2 > tol))) & (
+            ((d3 > tol) & (d4 < -tol)) | ((d3 < -tol) & (d4 > tol)))
+    sgn = np.sign(orient(A, B, C))
+    for Q in (P0, P1):
+        inside = (orient(A, B, Q) * sgn > tol) & (orient(B, C, Q) * sgn > tol) & (orient(C, A, Q) * sgn > tol)
+        hit |= inside
+    return hit & good
 
 
 def _near_pairs(pa, ra, pb, rb):
@@ -152,7 +198,7 @@ def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray, *, only=None, 
 
 
 def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float, min_triangles: int = 1,
-                        only=None):
+                        only=None, folds=()):
     """Pairs of patches whose sheets lie on each other (closer than ``distance``).
 
     Parameters
@@ -172,6 +218,9 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
         A pair counts from this many such triangles on.
     only : set of int, optional
         Test only the pairs that involve one of these patches.
+    folds : set of int
+        Patches also tested against themselves: a triangle whose centroid lies on another
+        triangle of its own patch (sharing no vertex) is a fold, reported as the pair ``(k, k)``.
 
     Returns
     -------
@@ -198,7 +247,8 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
     tr = np.linalg.norm(V[T] - cen[:, None, :], axis=2).max(axis=1)
     i, j = _pairs_touching(cen[idx], np.full(len(idx), float(distance)), P[idx], cen, tr, P, only)
     i = idx[i]
-    sel = P[i] != P[j]
+    sel = (P[i] != P[j]) | (np.isin(P[i], list(folds)) & (i != j)
+                            & ~(T[i][:, :, None] == T[j][:, None, :]).any(axis=(1, 2)))
     i, j = i[sel], j[sel]
     a, b, c = V[T[j, 0]], V[T[j, 1]], V[T[j, 2]]
     n = np.cross(b - a, c - a)
