@@ -389,6 +389,7 @@ class _PatchCache:
         self.extra = []
         self.meshes = {}  # (k, holes) -> (global triangles, kind)
         self.tested = []  # selections tested (sets of candidates): their pairs are known
+        self.curve_keys = None
         self.curve_pts = None
 
     def ring(self, k):
@@ -466,12 +467,33 @@ class _PatchCache:
                                       only=only, folds=folds)
         self.tested.append(ids)
         folded |= {a for a, b in over if a == b}
+        pairs = set(pairs) | self._shared_chords(T, P)
         out = set()
         for a, b in (set(pairs) | set(over)) - {(a, a) for a in folded}:
             key = (min(chosen[a], chosen[b]), max(chosen[a], chosen[b]))
             if key not in skip:
                 out.add(key)
         return out, {chosen[a] for a in folded}
+
+
+    def _shared_chords(self, T, P):
+        """Pairs of patches that both hold an edge not on a curve (folded onto each other there)."""
+        nv = 1 << 31  # fixed, so that the curve keys of the first call stay valid
+        if self.curve_keys is None:
+            keys = []
+            for c, ids in enumerate(self.curve_vertices):
+                if ids is None or len(ids) < 2:
+                    continue
+                ring = np.append(ids, ids[0]) if self.edges[c, 0] < 0 else ids
+                e = np.sort(np.column_stack([ring[:-1], ring[1:]]), axis=1)
+                keys.append(e[:, 0] * nv + e[:, 1])
+            self.curve_keys = np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
+        e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+        key = e[:, 0] * nv + e[:, 1]
+        pk = np.unique(np.column_stack([key, np.tile(P, 3)]), axis=0)
+        pk = pk[~np.isin(pk[:, 0], self.curve_keys)]
+        dup = np.flatnonzero(pk[1:, 0] == pk[:-1, 0])
+        return {(int(min(pk[i, 1], pk[i + 1, 1])), int(max(pk[i, 1], pk[i + 1, 1]))) for i in dup}
 
 
 def _drop_conflicting(cs, cand, conflicts, banned):
