@@ -15,6 +15,9 @@ so the cycles here are chosen globally:
    total area. Two candidates that meet a common curve from the same side (folded onto each other,
    e.g. the outer boundary of an open sheet against the sheet's own cells) may not both be chosen;
    this is what keeps an open network open while a closed network gets every curve used twice.
+   :func:`curvenet.surfacing.surface` adds geometric conflicts: pairs of chosen patches whose
+   meshes cross or lie on each other are forbidden and the program is solved again
+   (:func:`select_cycles` with ``conflicts`` and ``banned``).
 4. *Orientation*: the chosen cycles are oriented so that two patches run through a shared curve in
    opposite directions. Should the choice be non-orientable (an odd ring of patches), the patch
    whose removal leaves the fewest conflicts is dropped, until none is left.

@@ -5,9 +5,10 @@ out in a 2D domain (its projection on the best-fit plane when that projection is
 otherwise a circle parametrised by arc length), triangulated there by a constrained, quality
 Delaunay triangulation without boundary Steiner points (Shewchuk's Triangle, flags ``pYq``), and the
 interior vertices are placed in 3D as a height field over the domain: harmonic, or (fairing) the
-solution of a Poisson equation whose constant right-hand side is twice the mean normal curvature
-of the boundary curves, i.e. a patch of about constant mean curvature (cotangent weights of the
-domain mesh; Pinkall and Polthier 1993). A biharmonic extension with positional boundary
+solution of a Poisson equation whose right-hand side, the Laplacian of the heights, is read off
+the boundary curves (:mod:`curvenet.surfacing.fairing`; where the boundary has no corners, twice
+the mean normal curvature of the curves, i.e. a patch of about constant mean curvature), with
+the cotangent weights of the domain mesh (Pinkall and Polthier 1993). A biharmonic extension with positional boundary
 conditions only was tried and stays much flatter (sphere quads off the sphere by 0.11 radius
 against 0.013 here).
 
@@ -399,10 +400,12 @@ def triangulate_patch(
         triangle with this side).
     fair : bool
         When the polygon projects simply on its best-fit plane, the patch is a height field over
-        the domain mesh. With ``fair``, the heights solve ``Laplacian(h) = 2 H`` with ``H`` the
-        mean normal curvature of the boundary curves (away from corners): a patch of about
-        constant mean curvature, which bulges like the surface the curves were drawn on (a
-        sphere's quads, a torus's cells); without, they are harmonic (a membrane). Otherwise
+        the domain mesh. With ``fair``, the heights solve ``Laplacian(h) = f`` with ``f`` read
+        off the boundary curves between their corners (see
+        :func:`curvenet.surfacing.fairing.boundary_laplacian`; a quarter cylinder keeps its
+        arcs' curvature across), interpolated inside (Coons on four sides, harmonic otherwise);
+        without corners, ``f = 2 H`` with ``H`` the mean normal curvature of the boundary curves.
+        Without ``fair``, the heights are harmonic (a membrane). Otherwise
         (no simple projection) the interior is the harmonic extension of the 3D boundary over a
         disk.
     corners : (n,) ndarray of bool, optional
