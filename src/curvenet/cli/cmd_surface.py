@@ -50,14 +50,26 @@ def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=T
     """Surface ``net`` and write the mesh files (format by extension) and an optional PNG.
 
     For ``curvenet surface`` and for ``curvenet reconstruct --surface MESH``: call
-    :func:`check_outputs` before the work, then this. Returns ``(mesh, seconds)``.
+    :func:`check_outputs` before the work, then this. Returns ``(mesh, seconds)``. A failed
+    check of the mesh is printed as one ``curvenet: warning:`` line on stderr naming the
+    patches (the mesh is still written).
     """
+    import sys
+    import warnings
+
     from ..io import atomic_write, extension
-    from ..surfacing import MESH_WRITERS, surface
+    from ..surfacing import MESH_WRITERS, SurfaceCheckWarning, surface
 
     t0 = time.perf_counter()
-    mesh = surface(net, target_edge=target_edge, fair=fair)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SurfaceCheckWarning)
+        mesh = surface(net, target_edge=target_edge, fair=fair)
     dt = time.perf_counter() - t0
+    for w in caught:
+        if issubclass(w.category, SurfaceCheckWarning):
+            print(f"curvenet: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     for out in outputs:
         atomic_write(out, MESH_WRITERS[extension(out)][0](mesh), inputs=inputs)
     if png:
@@ -68,10 +80,15 @@ def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=T
 
 
 def summary(mesh, seconds: float) -> str:
-    """One line: patches, vertices, triangles, Euler characteristic, closed or not, time."""
+    """Patches, vertices, triangles, Euler characteristic, closed or not, time; then, on a second
+    line, the checks (self-intersecting faces, non-manifold edges, boundary loops, genus,
+    overlapping patch pairs) when the mesh was checked."""
     closed = len(mesh.triangles) > 0 and len(mesh.boundary_edges()) == 0
-    return (f"{mesh.n_patches} patches, {len(mesh.vertices)} vertices, {len(mesh.triangles)} triangles, "
+    line = (f"{mesh.n_patches} patches, {len(mesh.vertices)} vertices, {len(mesh.triangles)} triangles, "
             f"Euler characteristic {mesh.euler_characteristic}{', closed' if closed else ''} ({seconds:.2f} s)")
+    if mesh.checks is not None:
+        line += "\n  checks: " + mesh.checks.summary()
+    return line
 
 
 def run(args) -> int:

@@ -6,6 +6,7 @@ patches into one :class:`SurfaceMesh` with shared, consistently oriented boundar
 """
 
 from .assemble import SurfaceMesh, surface
+from .checks import MeshChecks, SurfaceCheckWarning, check_mesh
 from .cycles import CycleSet, find_cycles
 from .mesh_io import MESH_WRITERS, mesh_to_obj, mesh_to_ply
 from .patches import min_area_triangulation, triangulate_patch
@@ -13,6 +14,9 @@ from .patches import min_area_triangulation, triangulate_patch
 __all__ = [
     "surface",
     "SurfaceMesh",
+    "MeshChecks",
+    "check_mesh",
+    "SurfaceCheckWarning",
     "find_cycles",
     "CycleSet",
     "triangulate_patch",

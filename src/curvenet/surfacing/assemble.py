@@ -10,10 +10,15 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
-from .cycles import find_cycles
+from .checks import MeshChecks, SurfaceCheckWarning, check_mesh
+from .cycles import candidate_cycles, select_cycles
 from .patches import triangulate_patch
 
-__all__ = ["SurfaceMesh", "surface"]
+__all__ = ["SurfaceMesh", "surface", "MAX_SELECTION_ROUNDS"]
+
+#: Times the cycle selection is solved again with the pairs of patches found crossing or lying
+#: on each other forbidden; patches still in conflict after the last round are dropped.
+MAX_SELECTION_ROUNDS = 30
 
 
 @dataclass
@@ -41,7 +46,13 @@ class SurfaceMesh:
     stats : dict
         ``time`` (seconds per stage), ``candidates`` (cycles scored), ``domains`` (count of
         patches laid out on their best-fit plane or on a circle), ``target_edge``,
-        ``chord_splits`` (interior edges split because two patches shared them).
+        ``chord_splits`` (interior edges split because two patches shared them),
+        ``selection_rounds`` (times the cycle selection was solved), ``conflicts`` (pairs of
+        candidate patches found crossing or lying on each other, forbidden), ``folded``
+        (candidates found crossing themselves, banned).
+    checks : MeshChecks or None
+        Self-intersections, non-manifold edges, boundary loops, genus and overlapping patches
+        of the mesh (see :func:`curvenet.surfacing.check_mesh`); ``None`` when not checked.
     """
 
     vertices: np.ndarray
@@ -51,6 +62,7 @@ class SurfaceMesh:
     directions: list
     curve_vertices: list = field(default_factory=list)
     stats: dict[str, Any] = field(default_factory=dict)
+    checks: MeshChecks | None = None
 
     @property
     def n_patches(self) -> int:
@@ -126,6 +138,7 @@ def surface(
     min_angle: float = 25.0,
     time_limit: float = 60.0,
     max_triangles: int = 200_000,
+    check: bool = True,
 ) -> SurfaceMesh:
     """Surface a curve network: find its patch boundaries and fill each with a triangle mesh.
 
@@ -151,6 +164,12 @@ def surface(
         Seconds allowed to the integer program choosing the cycles.
     max_triangles : int
         Budget used for the default ``target_edge`` (ignored when ``target_edge`` is given).
+    check : bool
+        Check the mesh (:func:`curvenet.surfacing.check_mesh`: self-intersections with
+        MeshLab's and libigl's tests when ``pymeshlab`` and ``libigl`` are installed,
+        non-manifold edges, boundary loops, genus, overlapping patches), store the result in
+        ``checks`` and warn (:class:`~curvenet.surfacing.checks.SurfaceCheckWarning`, naming the
+        patches) when a check fails.
 
     Returns
     -------
@@ -162,6 +181,11 @@ def surface(
     ------
     InputError
         If the network is not a CurveNetwork or ``target_edge`` is not positive.
+
+    Warns
+    -----
+    SurfaceCheckWarning
+        When ``check`` finds crossing faces, non-manifold edges or overlapping patches.
 
     Notes
     -----
@@ -197,7 +221,8 @@ def surface(
     edges = network.edges
     seg = np.concatenate([np.linalg.norm(np.diff(ch, axis=0), axis=1) for ch in chains] or [np.zeros(0)])
     seg = seg[seg > 0]
-    cs = find_cycles(chains, edges, nodes, fold_angle=fold_angle, time_limit=time_limit)
+    cand = candidate_cycles(chains, edges, nodes)
+    cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit)
     area = float(sum(cs.costs or []))
     if target_edge is not None:
         h = float(target_edge)
@@ -217,8 +242,8 @@ def surface(
     verts = [nodes]
     nv = len(nodes)
     curve_vertices = [None] * len(chains)
-    used_curves = sorted({c for cyc in cs.cycles for c in cyc})
-    for c in used_curves:
+    cand_curves = sorted({d // 2 for cyc in cand.cycles for d in cyc})
+    for c in cand_curves:
         ch = chains[c]
         if edges[c, 0] < 0:
             ids = nv + np.arange(len(ch))
@@ -230,55 +255,58 @@ def surface(
             verts.append(inner)
             nv += len(inner)
         curve_vertices[c] = ids.astype(np.int64)
-
-    # ------------------------------------------------------------------ patches
-    tris, pids, domains = [], [], {"plane": 0, "circle": 0}
     Vb = np.vstack(verts)
-    rings = []
-    for cyc, dirs in zip(cs.cycles, cs.directions):
-        ring = []
-        for c, s in zip(cyc, dirs):
-            ids = curve_vertices[c]
-            if edges[c, 0] < 0:
-                ring.append(ids if s > 0 else ids[::-1])
-            else:
-                ring.append(ids[:-1] if s > 0 else ids[::-1][:-1])
-        rings.append(np.concatenate(ring))
-    holes = _find_holes(cs.cycles, rings, Vb, edges)
-    # at each node, the direction of every surfaced curve leaving it (for cross-boundary slopes)
+    # at each node, the direction of every curve leaving it (for cross-boundary slopes)
     leaving = {}
-    for c in used_curves:
+    for c in cand_curves:
         if edges[c, 0] >= 0:
             ch = chains[c]
             for v, d in ((edges[c, 0], _tangent(ch)), (edges[c, 1], _tangent(ch[::-1]))):
                 leaving.setdefault(int(v), []).append((c, d))
-    for k, ring in enumerate(rings):
-        if len(ring) < 3:
+
+    # ------------------------------------------------------------------ patches, conflicts
+    # each candidate is meshed once, in its own orientation; a selection whose patches cross or
+    # lie on each other gets those pairs forbidden and is solved again
+    patches = _PatchCache(cand, curve_vertices, edges, Vb, len(nodes), leaving, nv,
+                          dict(target_edge=h, fair=fair, min_angle=min_angle))
+    conflicts, banned = set(), set()
+    rounds = 0
+    while True:
+        rounds += 1
+        rings = [patches.ring(k) for k in cs.index]
+        holes = _find_holes(cs.cycles, rings, Vb, edges)
+        skip = {(min(cs.index[j], cs.index[k]), max(cs.index[j], cs.index[k])) for j, ks in holes.items() for k in ks}
+        new_pairs, new_banned = patches.conflicts(cs.index, skip, h)
+        new_pairs -= conflicts
+        new_banned -= banned
+        if not new_pairs and not new_banned:
+            break
+        conflicts |= new_pairs
+        banned |= new_banned
+        if rounds >= MAX_SELECTION_ROUNDS:
+            cs = _drop_conflicting(cs, cand, conflicts, banned)
+            break
+        cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit, conflicts=conflicts, banned=banned)
+
+    # ------------------------------------------------------------------ final patches
+    rings = [patches.ring(k) for k in cs.index]
+    holes = _find_holes(cs.cycles, rings, Vb, edges)
+    rings = [r if patches.same_direction(k, c, d) else r[::-1]
+             for r, k, c, d in zip(rings, cs.index, cs.cycles, cs.directions)]
+    tris, pids, domains = [], [], {"plane": 0, "circle": 0}
+    for pos, (k, dirs) in enumerate(zip(cs.index, cs.directions)):
+        hole_ks = [cs.index[j] for j in holes.get(pos, [])]
+        gT, kind = patches.mesh(k, hole_ks)
+        if kind is None:
             continue
-        poly = Vb[ring]
-        hole_rings = [rings[j] for j in holes.get(k, [])]
-        interior, T, kind = triangulate_patch(
-            poly, target_edge=h, fair=fair, min_angle=min_angle, holes=[Vb[r] for r in hole_rings],
-            corners=ring < len(nodes),
-            cross=[
-                (i, -d)
-                for i, v in enumerate(ring)
-                if v < len(nodes)
-                for c, d in leaving.get(int(v), [])
-                if c not in cs.cycles[k]
-            ],
-        )
-        domains[kind] += 1
         if kind != "plane":
-            hole_rings = []
-            holes.pop(k, None)
-        ring = np.concatenate([ring, *hole_rings]) if hole_rings else ring
-        gid = np.concatenate([ring, nv + np.arange(len(interior))])
-        verts.append(interior)
-        nv += len(interior)
-        tris.append(gid[T])
-        pids.append(np.full(len(T), k, dtype=np.int64))
-    V = np.vstack(verts)
+            holes.pop(pos, None)
+        if not patches.same_direction(k, cs.cycles[pos], dirs):
+            gT = gT[:, ::-1]
+        domains[kind] += 1
+        tris.append(gT)
+        pids.append(np.full(len(gT), pos, dtype=np.int64))
+    V = patches.vertices()
     T = np.vstack(tris) if tris else np.zeros((0, 3), dtype=np.int64)
     P = np.concatenate(pids) if pids else np.zeros(0, dtype=np.int64)
     t2 = time.perf_counter()
@@ -305,13 +333,15 @@ def surface(
     _orient_outward(V, T, P, cycles, directions)
 
     # ------------------------------------------------------------------ drop unused vertices
+    final_curves = {c for cyc in cycles for c in cyc}
+    curve_vertices = [ids if c in final_curves else None for c, ids in enumerate(curve_vertices)]
     used = np.zeros(len(V), dtype=bool)
     used[T.ravel()] = True
     new = np.cumsum(used) - 1
     V, T = V[used], new[T]
     curve_vertices = [None if ids is None else new[ids] for ids in curve_vertices]
     t3 = time.perf_counter()
-    return SurfaceMesh(
+    mesh = SurfaceMesh(
         V,
         T,
         P,
@@ -324,8 +354,158 @@ def surface(
             "domains": domains,
             "target_edge": h,
             "chord_splits": n_split,
+            "selection_rounds": rounds,
+            "conflicts": len(conflicts),
+            "folded": len(banned),
         },
     )
+    if check:
+        mesh.checks = check_mesh(mesh)
+        mesh.stats["time"]["checks"] = time.perf_counter() - t3
+        msg = mesh.checks.warning()
+        if msg:
+            import warnings
+
+            warnings.warn(msg, SurfaceCheckWarning, stacklevel=2)
+    return mesh
+
+
+class _PatchCache:
+    """Each candidate cycle meshed at most once (in its own orientation), in global vertex ids.
+
+    Boundary vertices (nodes and curve points) are shared by all candidates; the interior
+    vertices of each meshed candidate are appended to one growing list.
+    """
+
+    def __init__(self, cand, curve_vertices, edges, Vb, n_nodes, leaving, nv, options):
+        self.cand = cand
+        self.curve_vertices = curve_vertices
+        self.edges = edges
+        self.Vb = Vb
+        self.n_nodes = n_nodes
+        self.leaving = leaving
+        self.nv = nv
+        self.options = options
+        self.extra = []
+        self.meshes = {}  # (k, holes) -> (global triangles, kind)
+        self.tested = []  # selections tested (sets of candidates): their pairs are known
+        self.curve_keys = None
+        self.curve_pts = None
+
+    def ring(self, k):
+        """Boundary vertex ids of candidate ``k``, along its darts."""
+        ring = []
+        for d in self.cand.cycles[k]:
+            c, s = d // 2, d % 2 == 0
+            ids = self.curve_vertices[c]
+            if self.edges[c, 0] < 0:
+                ring.append(ids if s else ids[::-1])
+            else:
+                ring.append(ids[:-1] if s else ids[::-1][:-1])
+        return np.concatenate(ring)
+
+    def same_direction(self, k, cycle, directions) -> bool:
+        """Whether an oriented cycle runs like candidate ``k``'s darts."""
+        d = 2 * cycle[0] + (0 if directions[0] > 0 else 1)
+        return d in self.cand.cycles[k]
+
+    def mesh(self, k, holes=()):
+        """(global triangles, domain kind) of candidate ``k`` (``kind`` None: too short)."""
+        key = (k, tuple(holes))
+        if key in self.meshes:
+            return self.meshes[key]
+        ring = self.ring(k)
+        if len(ring) < 3:
+            self.meshes[key] = (np.zeros((0, 3), dtype=np.int64), None)
+            return self.meshes[key]
+        curves = {d // 2 for d in self.cand.cycles[k]}
+        hole_rings = [self.ring(j) for j in holes]
+        interior, T, kind = triangulate_patch(
+            self.Vb[ring], holes=[self.Vb[r] for r in hole_rings], corners=ring < self.n_nodes,
+            cross=[(i, -d) for i, v in enumerate(ring) if v < self.n_nodes
+                   for c, d in self.leaving.get(int(v), []) if c not in curves],
+            **self.options,
+        )
+        if kind != "plane":
+            hole_rings = []
+        full = np.concatenate([ring, *hole_rings]) if hole_rings else ring
+        gid = np.concatenate([full, self.nv + np.arange(len(interior))])
+        self.extra.append(interior)
+        self.nv += len(interior)
+        self.meshes[key] = (gid[T], kind)
+        return self.meshes[key]
+
+    def vertices(self):
+        return np.vstack([self.Vb, *self.extra]) if self.extra else self.Vb
+
+    def conflicts(self, chosen, skip, h):
+        """Pairs of chosen candidates that cross or lie on each other, and those that fold.
+
+        ``skip``: candidate pairs not to report (a loop cut out of the patch it lies on). Pairs
+        of candidates both tested in an earlier call are not tested again.
+        """
+        from .checks import OVERLAP_CURVE_MARGIN, OVERLAP_DISTANCE, OVERLAP_MIN_TRIANGLES
+        from .crossings import crossing_patches, curve_samples, overlapping_patches
+
+        parts = [(pos, self.mesh(k)) for pos, k in enumerate(chosen)]
+        parts = [(pos, t, kind) for pos, (t, kind) in parts if len(t)]
+        if not parts:
+            return set(), set()
+        T = np.vstack([t for _, t, _ in parts])
+        P = np.concatenate([np.full(len(t), pos, dtype=np.int64) for pos, t, _ in parts])
+        # pairs inside the largest earlier tested selection (restricted to this one) are known
+        ids = {chosen[pos] for pos, _, _ in parts}
+        known = max((ids & s for s in self.tested), key=len, default=set())
+        only = {pos for pos, _, _ in parts if chosen[pos] not in known} if known else None
+        folds = {pos for pos, _, kind in parts if kind != "plane" and chosen[pos] not in known}
+        V = self.vertices()
+        pairs, folded = crossing_patches(V, T, P, only=only, folds=folds)
+        if self.curve_pts is None:
+            self.curve_pts = curve_samples(self.Vb, self.curve_vertices, h / 2)
+        over, _ = overlapping_patches(V, T, P, self.curve_pts, distance=OVERLAP_DISTANCE * h,
+                                      margin=OVERLAP_CURVE_MARGIN * h, min_triangles=OVERLAP_MIN_TRIANGLES,
+                                      only=only, folds=folds)
+        self.tested.append(ids)
+        folded |= {a for a, b in over if a == b}
+        pairs = set(pairs) | self._shared_chords(T, P)
+        out = set()
+        for a, b in (set(pairs) | set(over)) - {(a, a) for a in folded}:
+            key = (min(chosen[a], chosen[b]), max(chosen[a], chosen[b]))
+            if key not in skip:
+                out.add(key)
+        return out, {chosen[a] for a in folded}
+
+
+    def _shared_chords(self, T, P):
+        """Pairs of patches that both hold an edge not on a curve (folded onto each other there)."""
+        nv = 1 << 31  # fixed, so that the curve keys of the first call stay valid
+        if self.curve_keys is None:
+            keys = []
+            for c, ids in enumerate(self.curve_vertices):
+                if ids is None or len(ids) < 2:
+                    continue
+                ring = np.append(ids, ids[0]) if self.edges[c, 0] < 0 else ids
+                e = np.sort(np.column_stack([ring[:-1], ring[1:]]), axis=1)
+                keys.append(e[:, 0] * nv + e[:, 1])
+            self.curve_keys = np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
+        e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+        key = e[:, 0] * nv + e[:, 1]
+        pk = np.unique(np.column_stack([key, np.tile(P, 3)]), axis=0)
+        pk = pk[~np.isin(pk[:, 0], self.curve_keys)]
+        dup = np.flatnonzero(pk[1:, 0] == pk[:-1, 0])
+        return {(int(min(pk[i, 1], pk[i + 1, 1])), int(max(pk[i, 1], pk[i + 1, 1]))) for i in dup}
+
+
+def _drop_conflicting(cs, cand, conflicts, banned):
+    """The selection less its banned patches and, per conflicting pair, the costlier per curve."""
+    keep = [k for k in cs.index if k not in banned]
+    per = {k: cand.costs[k] / max(len(cand.cycles[k]), 1) for k in keep}
+    for a, b in sorted(conflicts):
+        if a in per and b in per and a in keep and b in keep:
+            keep.remove(max((a, b), key=lambda k: (per[k], k)))
+    pos = [i for i, k in enumerate(cs.index) if k in keep]
+    return type(cs)([cs.cycles[i] for i in pos], [cs.directions[i] for i in pos], cs.n_candidates,
+                    [cs.costs[i] for i in pos], [cs.index[i] for i in pos])
 
 
 def _orient_outward(V, T, P, cycles, directions):

@@ -15,6 +15,9 @@ so the cycles here are chosen globally:
    total area. Two candidates that meet a common curve from the same side (folded onto each other,
    e.g. the outer boundary of an open sheet against the sheet's own cells) may not both be chosen;
    this is what keeps an open network open while a closed network gets every curve used twice.
+   :func:`curvenet.surfacing.surface` adds geometric conflicts: pairs of chosen patches whose
+   meshes cross or lie on each other are forbidden and the program is solved again
+   (:func:`select_cycles` with ``conflicts`` and ``banned``).
 4. *Orientation*: the chosen cycles are oriented so that two patches run through a shared curve in
    opposite directions. Should the choice be non-orientable (an odd ring of patches), the patch
    whose removal leaves the fewest conflicts is dropped, until none is left.
@@ -36,7 +39,7 @@ import numpy as np
 
 from .patches import min_area_triangulation
 
-__all__ = ["CycleSet", "find_cycles", "prune_dangling"]
+__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling"]
 
 
 @dataclass
@@ -53,12 +56,39 @@ class CycleSet:
         Number of distinct candidate cycles scored.
     costs : list of float
         Area of the coarse minimal triangulation of each chosen cycle.
+    index : list of int
+        The candidate (index into :attr:`Candidates.cycles`) of each chosen cycle.
     """
 
     cycles: list
     directions: list
     n_candidates: int = 0
     costs: list | None = None
+    index: list | None = None
+
+
+@dataclass
+class Candidates:
+    """Candidate patch boundaries of a network, scored (see :func:`candidate_cycles`).
+
+    Attributes
+    ----------
+    cycles : list of list of int
+        Each candidate as darts: ``2 c`` runs along curve ``c`` from its start to its end,
+        ``2 c + 1`` against it.
+    costs : (K,) ndarray
+        Area of the coarse minimal triangulation of each candidate.
+    inward : list of dict
+        Per candidate: curve id -> mean unit vector from the curve into the candidate's
+        coarse triangulation.
+    n_curves : int
+        Number of curves of the network.
+    """
+
+    cycles: list
+    costs: np.ndarray
+    inward: list
+    n_curves: int
 
 
 def prune_dangling(edges: np.ndarray, n_nodes: int) -> np.ndarray:
@@ -275,16 +305,14 @@ def _canonical(cycle: list[int]) -> tuple:
     return tuple(sorted(d // 2 for d in cycle))
 
 
-def find_cycles(
+def candidate_cycles(
     chains: list[np.ndarray],
     edges: np.ndarray,
     nodes: np.ndarray,
     *,
-    fold_angle: float = 30.0,
     coarse_points: int = 64,
-    time_limit: float = 60.0,
-) -> CycleSet:
-    """Choose the patch boundaries of a curve network.
+) -> Candidates:
+    """Candidate patch boundaries of a curve network, each scored by a coarse spanning surface.
 
     Parameters
     ----------
@@ -295,28 +323,22 @@ def find_cycles(
         Start and end node of each curve, ``-1`` for a loop without node.
     nodes : (n, 3) ndarray
         Node positions.
-    fold_angle : float
-        Two candidate cycles that meet a common curve from sides closer than this angle (degrees)
-        are exclusive.
     coarse_points : int
         Size of the coarse polygon on which a candidate's minimal-area triangulation is computed.
-    time_limit : float
-        Seconds allowed to the integer program.
 
     Returns
     -------
-    CycleSet
+    Candidates
+        In a deterministic order (sorted by their sets of curves; loops last).
 
     Notes
     -----
-    Candidates: :math:`O(\\sum_v \\deg(v)^2)` shortest-path cycles plus the rotation faces; each is
-    scored in :math:`O(k^3)` for a coarse polygon of ``k <= coarse_points`` points.
+    :math:`O(\\sum_v \\deg(v)^2)` shortest-path cycles plus the rotation faces; each is scored in
+    :math:`O(k^3)` for a coarse polygon of ``k <= coarse_points`` points.
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     keep = prune_dangling(edges, len(nodes))
     g = _Graph(chains, edges, keep, nodes)
-
-    # ------------------------------------------------------------------ candidates
     raw = []
     if g.core:
         normals = _node_frames(g)
@@ -332,10 +354,6 @@ def find_cycles(
             seen[key] = cyc
     cands = [seen[k] for k in sorted(seen)]
     cands += [[2 * c] for c in g.loops]
-    if not cands:
-        return CycleSet([], [], 0, [])
-
-    # ------------------------------------------------------------------ coarse geometry
     per_curve = {}
     costs = np.zeros(len(cands))
     inward = []  # per candidate: {curve: mean inward unit vector}
@@ -361,9 +379,41 @@ def find_cycles(
         area, tris = min_area_triangulation(poly)
         costs[k] = area
         inward.append(_inward_directions(poly, tris, owner))
+    return Candidates(cands, costs, inward, len(edges))
 
-    # ------------------------------------------------------------------ selection
-    chosen = _select(cands, costs, inward, len(edges), fold_angle, time_limit)
+
+def select_cycles(
+    cand: Candidates,
+    *,
+    fold_angle: float = 30.0,
+    time_limit: float = 60.0,
+    conflicts=(),
+    banned=(),
+) -> CycleSet:
+    """Choose patch boundaries among candidates by a 0-1 program, and orient them.
+
+    Parameters
+    ----------
+    cand : Candidates
+    fold_angle : float
+        Two candidates that meet a common curve from sides closer than this angle (degrees) are
+        exclusive.
+    time_limit : float
+        Seconds allowed to the integer program.
+    conflicts : iterable of (int, int)
+        More pairs of candidates that may not both be chosen (patches found to cross or cover
+        each other, see :func:`curvenet.surfacing.assemble.surface`).
+    banned : iterable of int
+        Candidates that may not be chosen (a patch that crosses itself).
+
+    Returns
+    -------
+    CycleSet
+    """
+    if not cand.cycles:
+        return CycleSet([], [], 0, [], [])
+    cands, costs = cand.cycles, cand.costs
+    chosen = _select(cands, costs, cand.inward, cand.n_curves, fold_angle, time_limit, conflicts, banned)
     # a non-orientable choice (a Moebius-like ring of patches) cannot be oriented: drop, one at
     # a time, the patch whose removal leaves the fewest conflicts (ties: the costliest by area
     # per curve) among those that run the same way through a curve as a neighbour
@@ -383,7 +433,35 @@ def find_cycles(
         [[1 if d % 2 == 0 else -1 for d in c] for c in cycles],
         len(cands),
         [float(costs[k]) for k in chosen],
+        [int(k) for k in chosen],
     )
+
+
+def find_cycles(
+    chains: list[np.ndarray],
+    edges: np.ndarray,
+    nodes: np.ndarray,
+    *,
+    fold_angle: float = 30.0,
+    coarse_points: int = 64,
+    time_limit: float = 60.0,
+) -> CycleSet:
+    """Choose the patch boundaries of a curve network (:func:`candidate_cycles`, then
+    :func:`select_cycles` without geometric conflicts).
+
+    Parameters
+    ----------
+    chains, edges, nodes, coarse_points
+        As for :func:`candidate_cycles`.
+    fold_angle, time_limit
+        As for :func:`select_cycles`.
+
+    Returns
+    -------
+    CycleSet
+    """
+    cand = candidate_cycles(chains, edges, nodes, coarse_points=coarse_points)
+    return select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit)
 
 
 def _inward_directions(poly, tris, owner):
@@ -428,7 +506,7 @@ def _inward_directions(poly, tris, owner):
     return out
 
 
-def _select(cands, costs, inward, n_curves, fold_angle, time_limit):
+def _select(cands, costs, inward, n_curves, fold_angle, time_limit, extra=(), banned=()):
     """Solve the 0-1 program; returns the indices of the chosen candidates."""
     from scipy.optimize import Bounds, LinearConstraint, milp
     from scipy.sparse import coo_matrix
@@ -450,6 +528,9 @@ def _select(cands, costs, inward, n_curves, fold_angle, time_limit):
                 a, b = inward[ks[i]].get(c), inward[ks[j]].get(c)
                 if a is not None and b is not None and a @ b > cos_max:
                     conflicts.add((ks[i], ks[j]))
+    conflicts.update((min(a, b), max(a, b)) for a, b in extra if a != b)
+    ub = np.ones(K)
+    ub[list(banned)] = 0.0
     constraints = [LinearConstraint(A, -np.inf, 2.0)]
     if conflicts:
         cr = np.repeat(np.arange(len(conflicts)), 2)
@@ -463,15 +544,15 @@ def _select(cands, costs, inward, n_curves, fold_angle, time_limit):
         obj,
         constraints=constraints,
         integrality=np.ones(K),
-        bounds=Bounds(0, 1),
+        bounds=Bounds(0, ub),
         options={"time_limit": time_limit, "disp": False},
     )
     if res.x is None:
-        return _greedy(cands, costs, conflicts, n_curves)
+        return _greedy(cands, costs, conflicts, n_curves, banned)
     return [k for k in range(K) if res.x[k] > 0.5]
 
 
-def _greedy(cands, costs, conflicts, n_curves):
+def _greedy(cands, costs, conflicts, n_curves, banned=()):
     """Fallback selection: cheapest area per curve first, respecting the same constraints."""
     use = np.zeros(n_curves, dtype=np.int64)
     bad = {}
@@ -481,6 +562,8 @@ def _greedy(cands, costs, conflicts, n_curves):
     chosen = []
     for k in np.argsort(costs / np.maximum([len(c) for c in cands], 1), kind="stable"):
         cur = [d // 2 for d in cands[k]]
+        if k in banned:
+            continue
         if (use[cur] < 2).all() and not (bad.get(k, set()) & set(chosen)):
             use[cur] += 1
             chosen.append(int(k))

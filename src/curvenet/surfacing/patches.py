@@ -5,9 +5,10 @@ out in a 2D domain (its projection on the best-fit plane when that projection is
 otherwise a circle parametrised by arc length), triangulated there by a constrained, quality
 Delaunay triangulation without boundary Steiner points (Shewchuk's Triangle, flags ``pYq``), and the
 interior vertices are placed in 3D as a height field over the domain: harmonic, or (fairing) the
-solution of a Poisson equation whose constant right-hand side is twice the mean normal curvature
-of the boundary curves, i.e. a patch of about constant mean curvature (cotangent weights of the
-domain mesh; Pinkall and Polthier 1993). A biharmonic extension with positional boundary
+solution of a Poisson equation whose right-hand side, the Laplacian of the heights, is read off
+the boundary curves (:mod:`curvenet.surfacing.fairing`; where the boundary has no corners, twice
+the mean normal curvature of the curves, i.e. a patch of about constant mean curvature), with
+the cotangent weights of the domain mesh (Pinkall and Polthier 1993). A biharmonic extension with positional boundary
 conditions only was tried and stays much flatter (sphere quads off the sphere by 0.11 radius
 against 0.013 here).
 
@@ -20,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MethodError, require
+from .fairing import boundary_laplacian
 
 __all__ = ["min_area_triangulation", "triangulate_patch", "is_simple_polygon", "cotan_laplacian"]
 
@@ -223,10 +225,66 @@ def _extend(L, M, xb: np.ndarray, nb: int, laplacian: float = 0.0) -> np.ndarray
     Qii = L[nb:, nb:].tocsc()
     Qib = L[nb:, :nb]
     rhs = -(Qib @ xb)
-    if laplacian:
+    if np.any(laplacian):
         rhs = rhs - laplacian * M[nb:, None]
     x = spsolve(Qii, rhs)
     return np.asarray(x).reshape(-1, xb.shape[1])
+
+
+def _harmonic_field(Vd, T, values, known):
+    """Harmonic interpolation over the domain mesh of values given at some boundary points.
+
+    The first ``len(values)`` vertices carry ``values`` where ``known``; every other vertex is
+    free (natural boundary condition on the free boundary points). Returns (N,) values.
+    """
+    from scipy.sparse.linalg import spsolve
+
+    L, _ = cotan_laplacian(Vd, T)
+    N = len(Vd)
+    fixed = np.zeros(N, dtype=bool)
+    fixed[: len(values)] = known
+    out = np.zeros(N)
+    out[: len(values)][known] = values[known]
+    free = np.flatnonzero(~fixed)
+    if len(free):
+        Lff = L[free][:, free].tocsc()
+        rhs = -(L[free][:, np.flatnonzero(fixed)] @ out[fixed])
+        out[free] = spsolve(Lff, rhs)
+    return out
+
+
+def _coons_field(Vd, T, values, sides):
+    """Transfinite (Coons) interpolation over a four-sided domain of values given on its sides.
+
+    ``u`` and ``v`` are harmonic coordinates (``u`` 0 on side 0 and 1 on side 2, ``v`` 0 on side 3
+    and 1 on side 1, free elsewhere); each side's values are interpolated along its coordinate and
+    blended bilinearly: a value that varies along two opposite sides alone (a cylinder's arcs)
+    is carried straight across. Returns (N,) values, or ``None`` if the coordinates degenerate.
+    """
+    s0, s1, s2, s3 = sides
+    N = len(Vd)
+    nb = len(values)
+
+    def coord(zero, one):
+        vals = np.zeros(nb)
+        known = np.zeros(nb, dtype=bool)
+        vals[one], known[one] = 1.0, True
+        vals[zero], known[zero] = 0.0, True
+        return _harmonic_field(Vd, T, vals, known)
+
+    u, v = coord(s0, s2), coord(s3, s1)
+    if not (np.isfinite(u).all() and np.isfinite(v).all()):
+        return None
+
+    def along(side, t, at):
+        o = np.argsort(t[side], kind="stable")
+        return np.interp(at, t[side][o], values[side][o])
+
+    F0, F2 = along(s0, v, v), along(s2, v, v)
+    F3, F1 = along(s3, u, u), along(s1, u, u)
+    c30, c01, c12, c23 = values[s0[0]], values[s0[-1]], values[s2[0]], values[s2[-1]]
+    return ((1 - u) * F0 + u * F2 + (1 - v) * F3 + v * F1
+            - ((1 - u) * (1 - v) * c30 + (1 - u) * v * c01 + u * v * c12 + u * (1 - v) * c23))
 
 
 def _mean_normal_curvature(poly, normal, corners, n_outer) -> float:
@@ -342,10 +400,12 @@ def triangulate_patch(
         triangle with this side).
     fair : bool
         When the polygon projects simply on its best-fit plane, the patch is a height field over
-        the domain mesh. With ``fair``, the heights solve ``Laplacian(h) = 2 H`` with ``H`` the
-        mean normal curvature of the boundary curves (away from corners): a patch of about
-        constant mean curvature, which bulges like the surface the curves were drawn on (a
-        sphere's quads, a torus's cells); without, they are harmonic (a membrane). Otherwise
+        the domain mesh. With ``fair``, the heights solve ``Laplacian(h) = f`` with ``f`` read
+        off the boundary curves between their corners (see
+        :func:`curvenet.surfacing.fairing.boundary_laplacian`; a quarter cylinder keeps its
+        arcs' curvature across), interpolated inside (Coons on four sides, harmonic otherwise);
+        without corners, ``f = 2 H`` with ``H`` the mean normal curvature of the boundary curves.
+        Without ``fair``, the heights are harmonic (a membrane). Otherwise
         (no simple projection) the interior is the harmonic extension of the 3D boundary over a
         disk.
     corners : (n,) ndarray of bool, optional
@@ -437,7 +497,17 @@ def triangulate_patch(
             Hs = _slope_curvature(q[:n0], poly[:n0], c, vt, cross)
             if Hs is not None:
                 H = Hs
-        hi = _extend(L, M, hb[:, None], n, 2.0 * H)[:, 0]
+        lap = 2.0 * H
+        bl = boundary_laplacian(q[:n0], hb[:n0], corners) if fair and corners is not None else None
+        if bl is not None:
+            values, known, sides = bl
+            f = None
+            if len(sides) == 4 and all(known[sd].all() for sd in sides):
+                f = _coons_field(Vd, T, values, sides)
+            if f is None:
+                f = _harmonic_field(Vd, T, values, known)
+            lap = f[n:, None]
+        hi = _extend(L, M, hb[:, None], n, lap)[:, 0]
         if not np.isfinite(hi).all():
             L, M = cotan_laplacian(Vd, T)
             hi = _extend(L, M, hb[:, None], n)[:, 0]

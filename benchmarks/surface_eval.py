@@ -1,0 +1,175 @@
+"""Surface the CASSIE sketches and the synthetic models and check every mesh (issue 24).
+
+Usage::
+
+    python benchmarks/surface_eval.py [--set free,study,synth] [--names hat,teapot]
+                                      [--network reconstructed|truth] [--cache DIR] [--quick]
+
+For each sketch or model: the network (by default reconstructed by the default method from the
+true curves sampled at 2 mm for CASSIE, as :func:`curvenet.bench.run_cassie` does, and at the
+model's reference spacing for the synthetic models; ``--network truth``: the true network), then
+:func:`curvenet.surface` and :func:`curvenet.surfacing.check_mesh`. Prints one line per model:
+nodes and curves, patches, triangles, self-intersecting faces (MeshLab's test confirmed by
+libigl's), non-manifold edges, boundary loops, genus, overlapping patch pairs, seconds (surfacing
+and checks); for the models drawn on a known surface (sphere, torus, mug), the mean and largest
+distance of the mesh vertices to it in units of the model's spacing h; then the totals, and the
+mug cylinder's smallest and largest radius at mid-height off its curves (0.50 true). ``--quick`` runs a few models only (for CI).
+``--cache DIR`` keeps the reconstructed networks between runs (pickles keyed by name).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from curvenet import synth
+from curvenet.bench import _seed
+from curvenet.reconstruct import reconstruct
+from curvenet.surfacing import SurfaceCheckWarning, surface
+from curvenet.synth import cassie
+
+#: CASSIE sampling spacing (metres), as in :func:`curvenet.bench.run_cassie`.
+CASSIE_H = 0.002
+#: Models of ``--quick``.
+QUICK = {"synth": ["cube", "mug"], "free": ["architecture-2"], "study": []}
+#: Half-height of the band around the mug's mid-height where the radius is measured.
+MUG_BAND = 0.05
+
+
+def networks(kind: str, names, source: str, cache: Path | None):
+    """Yield ``(name, network)`` for one set of models."""
+    if kind == "synth":
+        all_names = synth.model_names()
+    elif kind == "free":
+        all_names = list(cassie.FREE_CREATIONS) if cassie.available() else []
+    else:
+        all_names = cassie.study_sketches()
+    for name in all_names:
+        if names and name not in names:
+            continue
+        if kind == "synth":
+            truth = synth.model(name)
+            h, rng = synth.h_of(truth), _seed(name, "clean")
+        else:
+            truth = cassie.load(name)
+            h, rng = CASSIE_H, _seed("cassie", name)
+        if source == "truth":
+            yield name, truth
+            continue
+        path = cache / f"{kind}-{name}.pkl" if cache else None
+        if path is not None and path.exists():
+            yield name, pickle.loads(path.read_bytes())
+            continue
+        pts, _ = synth.sample(truth, h=h, rng=rng)
+        net = reconstruct(pts)
+        if path is not None:
+            path.write_bytes(pickle.dumps(net))
+        yield name, net
+
+
+def mug_radius(mesh) -> tuple[float, float]:
+    """Smallest and largest distance to the axis of the mug's cylinder at mid-height, off its curves.
+
+    Vertices within :data:`MUG_BAND` of mid-height, the handle's plane and the curve points (on
+    the cylinder by construction) left out.
+    """
+    V = mesh.vertices
+    on_curve = np.zeros(len(V), dtype=bool)
+    for ids in mesh.curve_vertices:
+        if ids is not None:
+            on_curve[ids] = True
+    band = (np.abs(V[:, 2] - 0.5) < MUG_BAND) & ~on_curve
+    handle = (np.abs(V[:, 1]) < 1e-9) & (V[:, 0] > 0.5 - 1e-9)
+    r = np.hypot(V[band & ~handle, 0], V[band & ~handle, 1])
+    return float(r.min()), float(r.max())
+
+
+def _cylinder_with_caps(p):
+    """Distance to the mug's cylinder (radius 0.5, height 1) with its two caps."""
+    rho = np.hypot(p[:, 0], p[:, 1])
+    side = np.where((p[:, 2] >= 0) & (p[:, 2] <= 1), np.abs(rho - 0.5), np.inf)
+    cap = np.where(rho <= 0.5, np.minimum(np.abs(p[:, 2]), np.abs(p[:, 2] - 1)), np.inf)
+    return np.minimum(side, cap)
+
+
+#: Synthetic models drawn on a known surface -> distance of points to that surface (the mug: its
+#: handle patch, off the cylinder, is left out).
+TRUE_SURFACES = {
+    "sphere": lambda p: np.abs(np.linalg.norm(p, axis=1) - 1.0),
+    "torus": lambda p: np.abs(np.hypot(np.hypot(p[:, 0], p[:, 1]) - 1.0, p[:, 2]) - 0.4),
+    "mug": _cylinder_with_caps,
+}
+
+
+def truth_distance(name, mesh, h):
+    """Mean and largest distance (in units of h) of the mesh vertices to the true surface."""
+    V = mesh.vertices
+    if name == "mug":
+        handle = (np.abs(V[:, 1]) < 1e-9) & (V[:, 0] > 0.5 + 1e-9)
+        V = V[~handle]
+    d = TRUE_SURFACES[name](V) / h
+    return float(d.mean()), float(d.max())
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--set", default="free,study,synth", help="comma list of free, study, synth")
+    ap.add_argument("--names", default="", help="comma list of model names (default: all)")
+    ap.add_argument("--network", choices=["reconstructed", "truth"], default="reconstructed")
+    ap.add_argument("--cache", default=None, help="folder for reconstructed networks")
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv)
+    cache = Path(args.cache) if args.cache else None
+    if cache:
+        cache.mkdir(parents=True, exist_ok=True)
+    names = {n for n in args.names.split(",") if n}
+    head = f"{'set':5} {'model':16} {'N_n':>4} {'N_c':>4} {'patch':>5} {'tris':>7} {'selfx':>5} {'nm_e':>4} {'bnd':>3} {'genus':>5} {'ovl':>3} {'time':>6}"
+    print(head)
+    tot = {"models": 0, "self_x": 0, "self_x_models": 0, "nm": 0, "nm_models": 0, "ovl_models": 0}
+    bad = []
+    for kind in [k for k in args.set.split(",") if k]:
+        sel = set(QUICK[kind]) if args.quick else names
+        if args.quick and not sel:
+            continue
+        for name, net in networks(kind, sel, args.network, cache):
+            t0 = time.perf_counter()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SurfaceCheckWarning)  # printed below
+                mesh = surface(net)
+            dt = time.perf_counter() - t0
+            ck = mesh.checks
+            sx = ck.self_intersecting_faces
+            print(f"{kind:5} {name:16} {net.n_nodes:4d} {net.n_curves:4d} {mesh.n_patches:5d} "
+                  f"{len(mesh.triangles):7d} {sx if sx is not None else '-':>5} {ck.non_manifold_edges:4d} "
+                  f"{ck.boundary_loops:3d} {ck.genus if ck.genus is not None else '-':>5} "
+                  f"{len(ck.overlaps):3d} {dt:6.1f}", flush=True)
+            tot["models"] += 1
+            tot["self_x"] += sx or 0
+            tot["self_x_models"] += bool(sx)
+            tot["nm"] += ck.non_manifold_edges
+            tot["nm_models"] += bool(ck.non_manifold_edges)
+            tot["ovl_models"] += bool(ck.overlaps)
+            if not ck.ok:
+                bad.append(f"{name}: {ck.warning()}")
+            if kind == "synth" and name in TRUE_SURFACES:
+                dm, dx = truth_distance(name, mesh, synth.h_of(synth.model(name)))
+                print(f"      distance to the true {name} surface: mean {dm:.3f} h, max {dx:.3f} h")
+            if kind == "synth" and name == "mug":
+                rmin, rmean = mug_radius(mesh)
+                print(f"      mug cylinder at mid-height: radius min {rmin:.3f}, max {rmean:.3f} (true 0.500)")
+    print(f"total: {tot['models']} models; self-intersecting faces {tot['self_x']} in {tot['self_x_models']} "
+          f"models; non-manifold edges {tot['nm']} in {tot['nm_models']} models; overlapping patches in "
+          f"{tot['ovl_models']} models")
+    for line in bad:
+        print("  " + line)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
