@@ -138,7 +138,7 @@ def _expected_type(param: inspect.Parameter) -> str | None:
     return None
 
 
-def _has_type(value, expected: str) -> bool:
+def _has_type(value: Any, expected: str) -> bool:
     if value is None:
         return expected.endswith(" or none")
     if expected.startswith("true or false"):
@@ -150,7 +150,7 @@ def _has_type(value, expected: str) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating))
 
 
-def _scaled(value, k: int):
+def _scaled(value: Any, k: int) -> Any:
     """``value * 2**k`` for a number or a list of numbers (exact); anything else unchanged."""
     if isinstance(value, bool) or value is None:
         return value
@@ -162,14 +162,14 @@ def _scaled(value, k: int):
     return value
 
 
-def _back_to_units(net: CurveNetwork, name: str, shift, k: int) -> None:
+def _back_to_units(net: CurveNetwork, name: str, shift: np.ndarray | None, k: int) -> None:
     """Bring the network ``net`` computed in the internal frame ``(shift, k)`` back to the units
     of the points, in place: coordinates times ``2**-k`` plus ``shift``, and the length entries
     of :data:`LENGTH_RESULTS`."""
     if shift is None and k == 0:
         return
 
-    def back(a):
+    def back(a: Any) -> np.ndarray:
         a = np.ldexp(np.asarray(a, dtype=np.float64), -k)
         return a if shift is None else a + shift
 
