@@ -55,6 +55,26 @@ def test_save_and_load_at_the_top_level(tmp_path):
         curvenet.load(tmp_path / "missing.json")
 
 
+def test_meshlab_reads_the_network_and_surface_ply(tmp_path):
+    """MeshLab's own reader (pymeshlab, of the surface extra) opens both PLY files."""
+    pymeshlab = pytest.importorskip("pymeshlab")
+    from curvenet import synth
+
+    net = synth.model("cube")
+    curvenet.save(net, tmp_path / "net.ply")
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(tmp_path / "net.ply"))
+    m = ms.current_mesh()
+    assert m.vertex_number() > 0
+    assert m.edge_number() == sum(len(c.points) - 1 for c in net.curves)  # every segment a line
+    mesh = curvenet.surface(net)
+    from curvenet.surfacing.mesh_io import mesh_to_ply
+
+    (tmp_path / "mesh.ply").write_bytes(mesh_to_ply(mesh))
+    ms.load_new_mesh(str(tmp_path / "mesh.ply"))
+    assert ms.current_mesh().face_number() == len(mesh.triangles)
+
+
 def test_py_typed_is_shipped():
     assert (ROOT / "src" / "curvenet" / "py.typed").exists()
     text = (ROOT / "pyproject.toml").read_text()
