@@ -159,10 +159,15 @@ class Split(NamedTuple):
     #: a region whose radius exceeds this many outer shell radii may hold two junctions (one
     #: junction's region measures 0.35 to 0.45 on the benchmark)
     radius: float = 0.65
-    #: it is re-tested on a shell this many times the size
-    fine: float = 0.7
+    #: it is re-tested on a shell this many times the size; a region still too large for one
+    #: junction at one scale (radius over ``radius`` times that scale's outer radius) is
+    #: re-tested at the next, finer one
+    scales: tuple = (0.7, 0.5)
     #: and split into sub-regions of at least this many points
     min_points: int = 2
+    #: ... at the finer scales (after the first) at least this many: a pair of points there is
+    #: too few to tell two junctions under 2h apart (a sketch's double junction) from one
+    fine_min_points: int = 3
     #: more than this many fine outer radii apart
     sep: float = 1.2
 
