@@ -40,3 +40,17 @@ def test_tangent_junctions_from_5_degrees_are_placed_within_2h():
         if ang >= 5.0:
             true_j = truth.nodes[truth.valence == 3][k]
             assert np.linalg.norm(found - true_j, axis=1).min() <= 2 * h, ang
+
+
+def test_finer_split_scale_stays_clear_of_the_noise(monkeypatch):
+    # noise 0.3h with density x3: a 0.5 shell inside the noise's blur splits a crossing's
+    # junction (the benchmark's crossing, sampling offset 6: curve F1 0.57 without the guard)
+    truth = synth.model("crossing")
+    cond = "noise 0.3h + density x3"
+    pts, _ = synth.sample(truth, rng=bench._seed("crossing", cond) + 6, **bench.CONDITIONS[cond])
+    h = synth.h_of(truth)
+    guarded = compare(reconstruct(pts, method="robust"), truth, h=h)
+    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(fine_noise=0.0))
+    unguarded = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert guarded["curve_f1"] == 1.0 and guarded["exact_topology"]
+    assert unguarded["curve_f1"] < 0.9

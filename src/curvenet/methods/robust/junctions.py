@@ -63,7 +63,7 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     flagged = groups != 2
     ka, kb = _k.short_links(nb.h, nb.dist, nb.idx, float(prm.link))
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
-                                              noisy=not fr.clean)
+                                              noisy=not fr.clean, noise=NOISE.scale * fr.sigma)
     return Regions(groups, flagged, reg, n_reg)
 
 
@@ -93,7 +93,8 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
     )
 
 
-def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustParams, noisy: bool):
+def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustParams, noisy: bool,
+                        noise: float = 0.0):
     """The junction flags, with regions too large for one junction split in two or more.
 
     A region of radius over ``SPLIT.radius`` outer shell radii is re-tested on a shell
@@ -125,6 +126,10 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
         ``shell_inner``, ``shell_outer``.
     noisy : bool
         The input is noisy.
+    noise : float
+        The noise scale (absolute units): a scale after the first re-tests only the regions
+        whose fine inner shell radius is over ``SPLIT.fine_noise`` times it (a finer shell
+        inside the noise's blur would split one junction).
 
     Returns
     -------
@@ -142,24 +147,26 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
         # would pass for a tip
         flagged, reg, n_reg = _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm,
                                           noisy and k == 0, coarse, fine,
-                                          SPLIT.min_points if k == 0 else SPLIT.fine_min_points)
+                                          SPLIT.min_points if k == 0 else SPLIT.fine_min_points,
+                                          0.0 if k == 0 else SPLIT.fine_noise * noise)
         coarse = fine
     return flagged, reg, n_reg
 
 
 def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: RobustParams, noisy: bool,
-                coarse: float, fine: float, min_points: int):
+                coarse: float, fine: float, min_points: int, clear: float):
     """One scale of :func:`split_large_regions`: the regions too large for one junction at shell
     scale ``coarse`` re-tested at scale ``fine`` (both in shell radii), split when that shows
-    separate junctions (sub-regions of ``min_points`` points or more). Returns ``flagged, reg,
-    n_reg`` (the inputs when nothing splits)."""
+    separate junctions (sub-regions of ``min_points`` points or more); only regions whose
+    fine inner shell radius exceeds ``clear`` are re-tested. Returns ``flagged, reg, n_reg``
+    (the inputs when nothing splits)."""
     N = len(P)
     if n_reg == 0:
         return flagged, reg, n_reg
     ids = np.flatnonzero(flagged)
     r = reg[ids]
     rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
-    big = rad > SPLIT.radius * coarse * prm.shell_outer * hmean
+    big = (rad > SPLIT.radius * coarse * prm.shell_outer * hmean) & (fine * prm.shell_inner * hmean > clear)
     if not big.any():
         return flagged, reg, n_reg
     ft = _fine_test(P, hs, indptr, indices, flagged, ka, kb, ids[big[r]], prm, fine)
