@@ -272,6 +272,10 @@ class Curves(NamedTuple):
     untangle_w: int = 64
     #: node and curve order: coordinates rounded to this many decimals
     round_decimals: int = 9
+    #: an interior sample farther than this many (spacing + noise scale) from the chord of its
+    #: two neighbours is a spike (an outlier taken into the curve) and is dropped; a 30-degree
+    #: corner sits 0.97 spacing from that chord
+    spike: float = 1.5
 
 
 class Numeric(NamedTuple):
