@@ -34,12 +34,15 @@ from .reconstruct import METHODS, reconstruct
 __all__ = [
     "CONDITIONS",
     "EXTRA_CONDITIONS",
+    "REALDEV_CONDITIONS",
     "QUICK_MODELS",
     "PAPER_GRID",
     "available_methods",
     "tune_paper",
     "run_bench",
     "run_cassie",
+    "run_kinds",
+    "run_realdev",
     "eps_sweep",
     "method_vs_emst",
     "summarize",
@@ -62,7 +65,11 @@ CONDITIONS: dict[str, dict[str, float]] = {
 EXTRA_CONDITIONS: dict[str, dict[str, float]] = {
     "outliers 2%": {"outliers": 0.02},
     "noise 0.1h": {"noise": 0.1},
+    "outliers 2% + noise 0.1h": {"outliers": 0.02, "noise": 0.1},
 }
+
+#: Conditions of the real-dev table (:func:`run_realdev`).
+REALDEV_CONDITIONS = ("clean", "noise 0.2h")
 
 #: Models of ``--quick``: two small ones.
 QUICK_MODELS = ("crossing", "cube")
@@ -205,7 +212,9 @@ def run_bench(
         :func:`available_methods`. Unknown names raise InputError; a method whose module
         cannot be imported is skipped.
     models : iterable of str, optional
-        Names from :data:`curvenet.synth.MODELS`; default all (``QUICK_MODELS`` if quick).
+        Names from :data:`curvenet.synth.MODELS` or :data:`curvenet.synth.KIND_MODELS` (rows of
+        the latter have ``dataset = "kinds"``); default all of :data:`curvenet.synth.MODELS`
+        (``QUICK_MODELS`` if quick).
     conditions : iterable of str, optional
         Keys of :data:`CONDITIONS` or :data:`EXTRA_CONDITIONS`; default all of
         :data:`CONDITIONS`.
@@ -232,8 +241,8 @@ def run_bench(
     methods = _check_methods(methods)
     models = list(models) if models is not None else list(QUICK_MODELS if quick else synth.MODELS)
     for m in models:
-        if m not in synth.MODELS:
-            raise InputError(f"unknown model {m!r}; expected one of: {', '.join(synth.MODELS)}")
+        if m not in synth.MODELS and m not in synth.KIND_MODELS:
+            raise InputError(f"unknown model {m!r}; expected one of: {', '.join([*synth.MODELS, *synth.KIND_MODELS])}")
     conditions = list(conditions) if conditions is not None else list(CONDITIONS)
     allc = {**CONDITIONS, **EXTRA_CONDITIONS}
     for c in conditions:
@@ -262,7 +271,8 @@ def run_bench(
                             tuned, _ = tune_paper(clean, truth, h=h, grid=grid)
                     params = dict(tuned)
                 row = _run_one(method, pts, truth, h, params)
-                row.update(dataset="synthetic", model=name, condition=cond, h=h)
+                row.update(dataset="synthetic" if name in synth.MODELS else "kinds", model=name, condition=cond,
+                           h=h)
                 row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
                 if method == "paper-tuned":
                     row["tuned_on"] = "clean" if tune_on == "clean" else cond
@@ -337,6 +347,70 @@ def run_cassie(
             rows.append(row)
             if progress:
                 progress(_line(row))
+    return rows
+
+
+def run_kinds(methods: Iterable[str] | None = None, models: Iterable[str] | None = None,
+              conditions: Iterable[str] | None = None, *, seed: int = 0, progress=None) -> list[dict[str, Any]]:
+    """Run methods on the synthetic analogues of real failure kinds (:mod:`curvenet.synth.kinds`).
+
+    As :func:`run_bench` (same conditions, seeds and rows, ``dataset = "kinds"``) on the models
+    of :data:`curvenet.synth.KIND_MODELS` (default all of them); ``paper-tuned`` is not run.
+    """
+    methods = [m for m in _check_methods(methods) if m != "paper-tuned"]
+    models = list(models) if models is not None else list(synth.KIND_MODELS)
+    for m in models:
+        if m not in synth.KIND_MODELS:
+            raise InputError(f"unknown kind model {m!r}; expected one of: {', '.join(synth.KIND_MODELS)}")
+    return run_bench(methods, models, conditions, seed=seed, progress=progress)
+
+
+def run_realdev(methods: Iterable[str] | None = None, names: Iterable[str] | None = None,
+                conditions: Iterable[str] | None = None, *, seed: int = 0, progress=None) -> list[dict[str, Any]]:
+    """Run methods on the real-dev networks (:mod:`curvenet.synth.realdev`) sampled at their spacing.
+
+    Parameters
+    ----------
+    methods, progress
+        As for :func:`run_bench` (``paper-tuned`` is not run).
+    names : iterable of str, optional
+        Model names; default :func:`curvenet.synth.realdev.names` (all 20).
+    conditions : iterable of str, optional
+        Keys of :data:`CONDITIONS` or :data:`EXTRA_CONDITIONS`; default
+        :data:`REALDEV_CONDITIONS`.
+    seed : int
+        Added to the per-(model, condition) seed of the sampler.
+
+    Returns
+    -------
+    list of dict
+        Rows as :func:`run_bench` with ``dataset = "realdev"`` and ``kind`` (``"neuron"`` or
+        ``"building"``). An empty list when the dataset is missing.
+    """
+    from .synth import realdev
+
+    if not realdev.available():
+        return []
+    methods = [m for m in _check_methods(methods) if m != "paper-tuned"]
+    names = list(names) if names is not None else realdev.names()
+    conditions = list(conditions) if conditions is not None else list(REALDEV_CONDITIONS)
+    allc = {**CONDITIONS, **EXTRA_CONDITIONS}
+    for c in conditions:
+        if c not in allc:
+            raise InputError(f"unknown condition {c!r}; expected one of: {', '.join(allc)}")
+    rows = []
+    for name in names:
+        truth = realdev.load(name)
+        h = synth.h_of(truth)
+        for cond in conditions:
+            pts, _ = synth.sample(truth, rng=_seed("realdev", name, cond) + seed, **allc[cond])
+            for method in methods:
+                row = _run_one(method, pts, truth, h, {})
+                row.update(dataset="realdev", model=name, kind=truth.parameters["kind"], condition=cond, h=h)
+                row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+                rows.append(row)
+                if progress:
+                    progress(_line(row))
     return rows
 
 
@@ -612,6 +686,27 @@ def _table(rows: list[dict], *, gap: bool = False) -> list[str]:
     return lines
 
 
+def _worst_table(rows: list[dict], group=lambda r: "") -> list[str]:
+    """Per (group, condition, method): models, mean node and curve F1, the worst curve F1 (and its
+    model), the number with exact topology and the mean Chamfer distance (h)."""
+    cells: dict[tuple, list[dict]] = {}
+    for r in rows:
+        cells.setdefault((group(r), r["condition"], r["method"]), []).append(r)
+    head = ["Group", "Condition", "Method", "models", "node F1", "curve F1", "worst curve F1", "exact",
+            "Chamfer (h)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
+    for (g, c, m), rs in cells.items():
+        f1 = [float(r.get("curve_f1", 0.0)) for r in rs]
+        w = int(np.argmin(f1))
+        ch = [float(r["chamfer_h"]) for r in rs if r.get("chamfer_h") is not None and np.isfinite(r["chamfer_h"])]
+        lines.append("| " + " | ".join([
+            g or "all", c, m, str(len(rs)), _f(float(np.mean([r.get("node_f1", 0.0) for r in rs]))),
+            _f(float(np.mean(f1))), f"{f1[w]:.2f} ({rs[w]['model']})",
+            f"{sum(bool(r.get('exact_topology')) for r in rs)} of {len(rs)}",
+            _f(float(np.mean(ch))) if ch else "-"]) + " |")
+    return lines
+
+
 def _summary_table(summary: list[dict], dataset: str) -> list[str]:
     conds = []
     for s in summary:
@@ -751,6 +846,28 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
               "the synthetic models and the free creations above; these sketches check that a choice holds "
               "on drawings it was not chosen on.", ""]
         L += _summary_table(summary, "cassie-study")
+    kinds = [r for r in rows if r["dataset"] == "kinds"]
+    if kinds:
+        names_k = list(dict.fromkeys(r["model"] for r in kinds))
+        L += ["", "## Analogues of real failure kinds (synthetic)", "",
+              "Models of `curvenet.synth.kinds`: the structures that real networks have and the models above "
+              "lack (junctions a few spacings apart, twigs near junctions, short coplanar edges, lines leaving "
+              "arcs tangentially), sampled as the models above. Not part of the means above.", "",
+              "| Model | dim | nodes | curves | valences | h | what it tests |", "|---|---|---|---|---|---|---|"]
+        for name in names_k:
+            t = synth.model(name)
+            vals = ", ".join(str(v) for v in sorted(set(t.valence.tolist()))) or "-"
+            L.append(f"| {name} | {t.dimension}D | {t.n_nodes} | {t.n_curves} | {vals} | {synth.h_of(t):g} | "
+                     f"{t.parameters.get('features', '')} |")
+        L += [""] + _worst_table(kinds)
+    real = [r for r in rows if r["dataset"] == "realdev"]
+    if real:
+        L += ["", "## Real networks (real-dev: neuron tracings and building wireframes)", "",
+              "The 20 networks of `../shared/datasets/real-dev` (`curvenet.synth.realdev`): 10 neuron trees "
+              "(SWC) and 10 LoD2 building wireframes (CityJSON), each sampled at the spacing h its file gives "
+              "(every curve at least 4h long, curves sharing no node at least 4h apart), one sampling per "
+              "model and condition, scored as the synthetic models.", ""]
+        L += _worst_table(real, lambda r: r.get("kind", ""))
     L += _head_to_head_lines(rows)
     if spread:
         L += ["", f"## Seed spread ({spread[0]['seeds']} samplings, `robust`)", "",
@@ -794,6 +911,10 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
             "",
         ]
         L += _table(cas, gap=True)
+    for title, sel in (("Analogues of real failure kinds", kinds), ("Real-dev networks", real)):
+        for c in dict.fromkeys(r["condition"] for r in sel):
+            L += ["", f"## {title}, {c}", ""]
+            L += _table([r for r in sel if r["condition"] == c])
     text = "\n".join(L) + "\n"
     if path is not None:
         _atomic_write(Path(path), text)
@@ -871,6 +992,9 @@ def run_all(
         if study:
             rows += run_cassie(study, _cassie.study_sketches(), tune=False, progress=progress,
                                dataset="cassie-study")
+    if cassie and not quick:  # the other real data and the kind analogues go with the real sketches
+        rows += run_kinds(methods, conditions=conditions, progress=progress)
+        rows += run_realdev(methods, progress=progress)
     spread = None
     if spread_seeds and not quick and "robust" in _check_methods(methods):
         spread = seed_spread("robust", spread_seeds, models, conditions, progress=progress)

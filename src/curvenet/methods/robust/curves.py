@@ -4,7 +4,9 @@ Chain points lying behind their junction node (an overshoot into another branch)
 (:func:`build_curves`); every open curve runs from its node through the free-end extension,
 the chain and the other extension to its other node (:func:`open_curves`); a curve or loop
 that turns back on itself is reordered into a shorter path (:func:`untangle_loops`); curves
-are sorted canonically (:func:`sort_curves`) and may be smoothed (:func:`smooth_curve`).
+are sorted canonically (:func:`sort_curves`); samples far off the chord of their neighbours
+(outliers a chain took in) are dropped (:func:`drop_spikes`); curves may be smoothed
+(:func:`smooth_curve`).
 """
 
 from __future__ import annotations
@@ -16,9 +18,9 @@ import numpy as np
 from ...network import Curve
 from . import kernels as _k
 from .nodes import Placement
-from .thresholds import CURVES, NODES, NOISE
+from .thresholds import CURVES, NODES, NOISE, NUMERIC
 
-__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "smooth_curve"]
+__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "smooth_curve", "drop_spikes"]
 
 
 def build_curves(P: np.ndarray, h: np.ndarray, pl: Placement) -> list[Curve]:
@@ -241,3 +243,49 @@ def smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
         Y[0] = c.points[0]
         Y[-1] = c.points[-1]
     return Curve(Y, c.start, c.end, c.closed, np.full(len(Y), -1, dtype=np.int64))
+
+
+def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):
+    """The curves without their spikes: interior samples far off the chord of their neighbours.
+
+    A sample whose distance to the segment between the samples before and after it exceeds
+    ``CURVES.spike`` times its spacing plus the noise scale is an outlier the chain took in
+    (a corner of 30 degrees sits under one spacing from that chord). Computed nodes (index
+    -1) and the two ends stay; a curve keeps at least its two ends.
+
+    Parameters
+    ----------
+    curves : list of Curve
+        ``indices`` are internal point ids (-1 at computed nodes).
+    P : (N, d) ndarray
+    h : (N,) ndarray
+        Local spacing.
+    noise : float
+        Noise scale (absolute units; 0 on clean input).
+
+    Returns
+    -------
+    list of Curve
+        The same list, curves with spikes replaced by copies without them.
+    """
+    out = []
+    for c in curves:
+        X, ids = c.points, c.indices
+        m = len(X)
+        if m < 3:
+            out.append(c)
+            continue
+        a, b, x = X[:-2], X[2:], X[1:-1]
+        ab = b - a
+        L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
+        t = np.clip(((x - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
+        dist = np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
+        mid = ids[1:-1]
+        hh = np.where(mid >= 0, h[np.maximum(mid, 0)], np.inf)
+        spike = (mid >= 0) & (dist > CURVES.spike * (hh + noise))
+        if not spike.any():
+            out.append(c)
+            continue
+        keep = np.r_[True, ~spike, True]
+        out.append(Curve(X[keep], c.start, c.end, c.closed, ids[keep]))
+    return out

@@ -4,7 +4,7 @@ Around each point the points reached through the linked graph within a geodesic 
 ``shell_outer * (h + SHELL.widen * noise)`` form, beyond ``shell_inner``, a shell; its connected
 groups are counted (:func:`shell_group_counts`): 1 at a free end, 2 on a curve, 3 or more near
 a junction. Points not in 2 groups, joined by short links, form regions (:func:`junction_regions`);
-a region too large for one junction is re-tested on a smaller shell and split
+a region too large for one junction is re-tested on smaller shells, scale by scale, and split
 (:func:`split_large_regions`). After the chains are known, a junction region may still hide a
 whole short branch (:func:`swallowed_branches`) and a free end's region a fork
 (:func:`fork_possible`, :func:`hidden_fork`): the other places that decide junctions.
@@ -63,7 +63,7 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     flagged = groups != 2
     ka, kb = _k.short_links(nb.h, nb.dist, nb.idx, float(prm.link))
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
-                                              noisy=not fr.clean)
+                                              noisy=not fr.clean, noise=NOISE.scale * fr.sigma)
     return Regions(groups, flagged, reg, n_reg)
 
 
@@ -93,18 +93,23 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
     )
 
 
-def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustParams, noisy: bool):
+def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustParams, noisy: bool,
+                        noise: float = 0.0):
     """The junction flags, with regions too large for one junction split in two or more.
 
-    A region of radius over ``SPLIT.radius`` outer shell radii is re-tested on a shell ``SPLIT.fine``
-    times the size. The split is kept when it gives two or more sub-regions (``SPLIT.min_points``
-    points or more, one of them in 3 or more groups), each pair joined by at most one chain of
-    the freed points (linked graph), no freed chain touching three, at least one joining two,
-    and the joined sub-regions over ``SPLIT.sep`` fine outer radii apart: two junctions and the
+    A region of radius over ``SPLIT.radius`` outer shell radii is re-tested on a shell
+    ``SPLIT.scales[0]`` times the size, and a region still too large at that scale at the next
+    scale, and so on (junctions 4-5h apart: a facade, a building's notches). The split is kept
+    when it gives two or more sub-regions (``SPLIT.min_points`` points or more,
+    ``SPLIT.fine_min_points`` after the first scale; one of them in 3 or more groups), each
+    pair joined by at most one chain of the freed points (linked graph), no freed chain
+    touching three, at least one joining two, and the joined sub-regions over ``SPLIT.sep``
+    fine outer radii apart: two junctions and the
     short segment between them. Two chains between the same two (a crossing seen in two halves
-    by the smaller shell) keep the region whole. Under noise (``noisy``) a sub-region
-    with a free-end point (1 group) counts too when another has a junction point: a junction
-    and the tip of a branch shorter than the widened shell, joined by the branch.
+    by the smaller shell) keep the region whole. Under noise (``noisy``), at the first scale
+    only, a sub-region with a free-end point (1 group) counts too when another has a junction
+    point: a junction and the tip of a branch shorter than the widened shell, joined by the
+    branch.
 
     Parameters
     ----------
@@ -121,6 +126,10 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
         ``shell_inner``, ``shell_outer``.
     noisy : bool
         The input is noisy.
+    noise : float
+        The noise scale (absolute units): a scale after the first re-tests only the regions
+        whose fine inner shell radius is over ``SPLIT.fine_noise`` times it (a finer shell
+        inside the noise's blur would split one junction).
 
     Returns
     -------
@@ -130,17 +139,37 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
         Region of each flagged point (-1 elsewhere), see :func:`components`.
     n_reg : int
     """
+    reg, n_reg = components(len(P), ka, kb, flagged)
+    coarse = 1.0
+    for k, fine in enumerate(SPLIT.scales):
+        # the tip rule (noisy) at the first re-test only: it is there for branches shorter than
+        # the widened shell, which that re-test already sees; at finer scales a noise blob
+        # would pass for a tip
+        flagged, reg, n_reg = _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm,
+                                          noisy and k == 0, coarse, fine,
+                                          SPLIT.min_points if k == 0 else SPLIT.fine_min_points,
+                                          0.0 if k == 0 else SPLIT.fine_noise * noise)
+        coarse = fine
+    return flagged, reg, n_reg
+
+
+def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: RobustParams, noisy: bool,
+                coarse: float, fine: float, min_points: int, clear: float):
+    """One scale of :func:`split_large_regions`: the regions too large for one junction at shell
+    scale ``coarse`` re-tested at scale ``fine`` (both in shell radii), split when that shows
+    separate junctions (sub-regions of ``min_points`` points or more); only regions whose
+    fine inner shell radius exceeds ``clear`` are re-tested. Returns ``flagged, reg, n_reg``
+    (the inputs when nothing splits)."""
     N = len(P)
-    reg, n_reg = components(N, ka, kb, flagged)
     if n_reg == 0:
         return flagged, reg, n_reg
     ids = np.flatnonzero(flagged)
     r = reg[ids]
     rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
-    big = rad > SPLIT.radius * prm.shell_outer * hmean
+    big = (rad > SPLIT.radius * coarse * prm.shell_outer * hmean) & (fine * prm.shell_inner * hmean > clear)
     if not big.any():
         return flagged, reg, n_reg
-    ft = _fine_test(P, hs, indptr, indices, flagged, ka, kb, ids[big[r]], prm)
+    ft = _fine_test(P, hs, indptr, indices, flagged, ka, kb, ids[big[r]], prm, fine)
     # the points of each big region, grouped (one sort, not one pass per region)
     bsel = big[r]
     bi, br = ids[bsel], r[bsel]
@@ -151,7 +180,7 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
     for g0, g1 in zip(bcut[:-1], bcut[1:]):
         pts = bi[g0:g1]
         kept = pts[ft.nf[pts]]
-        good = _split_of(P, ft, pts, kept, SPLIT.sep * SPLIT.fine * prm.shell_outer * hmean[br[g0]], noisy)
+        good = _split_of(P, ft, pts, kept, SPLIT.sep * fine * prm.shell_outer * hmean[br[g0]], noisy, min_points)
         if good is not None:
             out[pts] = False
             out[kept[np.isin(ft.reg2[kept], good)]] = True
@@ -183,10 +212,10 @@ def _region_sizes(P, hs, ids, r, n_reg):
     return rad, np.bincount(r, weights=hs[ids], minlength=n_reg) / cnt
 
 
-def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm) -> _Fine:
-    """The shell test again on the points ``sub``, ``SPLIT.fine`` times the size, and what it frees."""
+def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm, scale) -> _Fine:
+    """The shell test again on the points ``sub``, ``scale`` times the size, and what it frees."""
     N = len(P)
-    fine = _k.shell_groups(P, hs, indptr, indices, SPLIT.fine * prm.shell_inner, SPLIT.fine * prm.shell_outer,
+    fine = _k.shell_groups(P, hs, indptr, indices, scale * prm.shell_inner, scale * prm.shell_outer,
                            subset=sub)
     nf = flagged.copy()
     nf[sub] = fine[sub] != 2
@@ -209,7 +238,7 @@ def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm) -> _Fine:
     return _Fine(nf, reg2, freed, lab, touch, tcut, is_j, is_e)
 
 
-def _split_of(P, ft: _Fine, pts, kept, far, noisy):
+def _split_of(P, ft: _Fine, pts, kept, far, noisy, min_points):
     """The sub-regions one big region splits into (their labels in ``ft.reg2``), or None.
 
     ``pts``: the region's points; ``kept``: those still flagged by the fine test; ``far``: how
@@ -225,10 +254,10 @@ def _split_of(P, ft: _Fine, pts, kept, far, noisy):
         # look like its free end and join the junction's region (the finer shell sees
         # the branch)
         tip = np.isin(labs, reg2[kept[ft.is_e[kept]]]) & ~jun
-        good = labs[(c2 >= SPLIT.min_points) & (jun | tip)]
+        good = labs[(c2 >= min_points) & (jun | tip)]
         ok = len(good) >= 2 and bool(np.isin(good, labs[jun]).any())
     else:
-        good = labs[(c2 >= SPLIT.min_points) & jun]
+        good = labs[(c2 >= min_points) & jun]
         ok = len(good) >= 2
     if not ok:
         return None

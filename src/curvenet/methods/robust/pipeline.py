@@ -11,7 +11,8 @@ small example):
 5. :mod:`.topology` and :mod:`.repairs` -- regions and chains as one topology object, repaired
    where noise and sparse sampling broke it;
 6. :mod:`.nodes` -- node positions;
-7. :mod:`.curves` -- curves ending exactly at their nodes, optionally smoothed.
+7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), optionally
+   smoothed.
 
 The result does not depend on the order of the input points: they are sorted by coordinates
 first and every tie is broken by that order. The fixed constants are in :mod:`.thresholds`,
@@ -31,7 +32,7 @@ from ...neighbors import locality_order
 from ...validate import as_points
 from . import kernels as _k
 from .chains import trace_chains
-from .curves import build_curves, smooth_curve
+from .curves import build_curves, drop_spikes, smooth_curve
 from .frames import duplicates, frames, lex_order, local_spacing, neighbours
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
@@ -140,7 +141,7 @@ def _reconstruct_robust(
                 width=max(prm.link_width, 0.0), indptr=graph.indptr, indices=graph.indices, tree=tree)
     topo = run_repairs(Topology(P, chains, regions), sc, prm)  # 6. repairs
     placement = place_nodes(topo, sc, prm)  # 7. nodes
-    nodes, curves = placement.nodes, build_curves(P, h, placement)  # 8. curves
+    nodes, curves = placement.nodes, drop_spikes(build_curves(P, h, placement), P, h, sc.noise)  # 8. curves
     tm["assemble"] = time.perf_counter() - t1
     _to_input_ids(curves, order)
 

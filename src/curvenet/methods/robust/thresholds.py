@@ -296,10 +296,19 @@ class Split(NamedTuple):
     #: a region whose radius exceeds this many outer shell radii may hold two junctions (one
     #: junction's region measures 0.35 to 0.45 on the benchmark)
     radius: float = 0.65
-    #: it is re-tested on a shell this many times the size
-    fine: float = 0.7
+    #: it is re-tested on a shell this many times the size; a region still too large for one
+    #: junction at one scale (radius over ``radius`` times that scale's outer radius) is
+    #: re-tested at the next, finer one
+    scales: tuple = (0.7, 0.5)
     #: and split into sub-regions of at least this many points
     min_points: int = 2
+    #: ... at the finer scales (after the first) at least this many: a pair of points there is
+    #: too few to tell two junctions under 2h apart (a sketch's double junction) from one
+    fine_min_points: int = 3
+    #: ... and only where their inner shell radius is over this many times the noise scale (a
+    #: finer shell inside the noise's blur splits one junction: noise 0.3h with density x3
+    #: lost junctions; noise 0.2h keeps the finer scale) (benchmark)
+    fine_noise: float = 6.0
     #: more than this many fine outer radii apart
     sep: float = 1.2
 
@@ -437,6 +446,10 @@ class Curves(NamedTuple):
     untangle_w: int = 64
     #: node and curve order: coordinates rounded to this many decimals
     round_decimals: int = 9
+    #: an interior sample farther than this many (spacing + noise scale) from the chord of its
+    #: two neighbours is a spike (an outlier taken into the curve) and is dropped; a 30-degree
+    #: corner sits 0.97 spacing from that chord
+    spike: float = 1.5
 
 
 CURVES = Curves()
