@@ -715,6 +715,8 @@ def _md(text: str) -> str:
 
 
 def _value(v) -> str:
+    if isinstance(v, tuple):
+        return "(" + ", ".join(_value(x) for x in v) + ")"
     if isinstance(v, bool):
         return str(v)
     if isinstance(v, (int, np.integer)):
