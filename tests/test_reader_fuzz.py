@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from curvenet import CurvenetError
@@ -42,6 +42,7 @@ _line = st.lists(_token, max_size=5).map(lambda t: " ".join(t))
 
 @FUZZ
 @given(lines=st.lists(_line, max_size=12), ext=st.sampled_from([".xyz", ".csv", ".txt", ".pts", ".obj"]))
+@example(lines=["v "], ext=".obj")  # a vertex line without coordinates read as no points (found by this test)
 def test_random_text(tmp_path, lines, ext):
     f = tmp_path / f"fuzz{ext}"
     f.write_text("\n".join(lines))

@@ -306,6 +306,9 @@ def read_obj(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     rows = re.findall(r"^[ \t]*v[ \t]+([^\n\r#]*)", text, flags=re.MULTILINE)
     if not rows:
         raise FormatError(f"{p}: no vertex ('v') lines in OBJ file")
+    empty = next((i for i, r in enumerate(rows) if not r.strip()), None)
+    if empty is not None:  # (np.loadtxt would skip it: a silent empty or short result)
+        raise FormatError(f"{p}: malformed OBJ vertex line (vertex {empty + 1} has no coordinates)")
     try:
         arr = np.loadtxt(_io.StringIO("\n".join(r.strip() for r in rows)), ndmin=2, usecols=(0, 1, 2))
     except ValueError as exc:
