@@ -66,7 +66,7 @@ class TilePieces:
     n_points: int = 0
 
 
-def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray) -> TilePieces:
+def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray, occupied) -> TilePieces:
     """Cut the network of one tile (box and halo) at the tile's box.
 
     Parameters
@@ -78,6 +78,9 @@ def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray) -> Tile
         The tile.
     ids : (N,) ndarray of int64
         Global input id of each of the tile's points.
+    occupied : set of tuple
+        The keys of every tile that holds input points (each runs a task): a vertex in
+        another tile goes to the nearest of them (:meth:`TileGrid.owners`).
 
     Returns
     -------
@@ -85,7 +88,12 @@ def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray) -> Tile
     """
     key = tuple(int(k) for k in key)
     d = net.dimension
-    own_node = grid.owns(key, net.nodes) if len(net.nodes) else np.zeros(0, bool)
+    kk = np.asarray(key, dtype=np.int64)
+
+    def owns(V):
+        return (grid.owners(V, occupied) == kk).all(axis=1) if len(V) else np.zeros(0, bool)
+
+    own_node = owns(net.nodes)
     new_node = np.cumsum(own_node) - 1
     ports: list[np.ndarray] = []
     tans: list[np.ndarray] = []
@@ -101,7 +109,7 @@ def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray) -> Tile
     for c in net.curves:
         V = c.points
         ind = np.where(c.indices >= 0, ids[np.maximum(c.indices, 0)], -1)
-        own = grid.owns(key, V)
+        own = owns(V)
         if not own.any():
             continue
         if own.all():

@@ -9,7 +9,12 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["TileGrid"]
+__all__ = ["TileGrid", "OWNER_DECIMALS"]
+
+#: Positions in tile units are rounded to this many decimals before the floor that gives their
+#: tile: a node that two tiles compute a rounding error apart, on a face or a corner, is then
+#: owned by one tile in both.
+OWNER_DECIMALS: int = 9
 
 
 @dataclass(frozen=True)
@@ -42,7 +47,39 @@ class TileGrid:
 
     def keys_of(self, points: np.ndarray) -> np.ndarray:
         """(N, d) int64 array: the key of the tile that owns each point of ``points`` (N, d)."""
-        return np.floor((np.asarray(points, float) - np.asarray(self.origin)) / self.side).astype(np.int64)
+        t = (np.asarray(points, float) - np.asarray(self.origin)) / self.side
+        return np.floor(np.round(t, OWNER_DECIMALS)).astype(np.int64)
+
+    def owners(self, points: np.ndarray, occupied) -> np.ndarray:
+        """(N, d) int64: the tile that keeps each of ``points`` (N, d), among ``occupied``.
+
+        A point's own tile (:meth:`keys_of`) when it holds input points (is in ``occupied``,
+        a set of key tuples); otherwise the occupied tile whose box is nearest (ties: the
+        smallest key). A node computed off the input points can lie in a tile without input
+        points, which runs no task: the nearest occupied tile keeps it. A function of the
+        position and the set alone, so every tile decides alike.
+        """
+        keys = self.keys_of(points)
+        if not len(keys):
+            return keys
+        uk, inv = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        lost = [u for u, k in enumerate(map(tuple, uk.tolist())) if k not in occupied]
+        for i in np.flatnonzero(np.isin(inv, lost)):
+            keys[i] = self._nearest_occupied(points[i], tuple(keys[i].tolist()), occupied)
+        return keys
+
+    def _nearest_occupied(self, p: np.ndarray, key: tuple, occupied) -> tuple:
+        for reach in range(1, 1 + max(1, len(occupied))):
+            steps = range(-reach, reach + 1)
+            cand = [tuple(k + s for k, s in zip(key, off)) for off in itertools.product(steps, repeat=len(key))]
+            cand = [c for c in cand if c in occupied]
+            if cand:
+                def dist(c):
+                    lo, hi = self.box(c)
+                    return (float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - p, p - hi)))), c)
+                return min(cand, key=dist)
+        raise ValueError("no occupied tile")
 
     def box(self, key) -> tuple[np.ndarray, np.ndarray]:
         """The (lo, hi) corners of tile ``key``, each a (d,) array."""

@@ -93,9 +93,11 @@ def _rows(path: Path) -> int | None:
     return None
 
 
-def plan_chunks(files: list[Path], rows: int = CHUNK_ROWS) -> list[Chunk]:
-    """The chunks of ``files`` (row ranges of at most ``rows``), offsets not yet set
-    (:func:`scan_chunk` counts the rows of whole-read files; the caller then sets them)."""
+def plan_chunks(files: list[Path], rows: int | None = None) -> list[Chunk]:
+    """The chunks of ``files`` (row ranges of at most ``rows``, default :data:`CHUNK_ROWS`),
+    offsets not yet set (:func:`scan_chunk` counts the rows of whole-read files; the caller
+    then sets them)."""
+    rows = CHUNK_ROWS if rows is None else int(rows)
     out = []
     for f in files:
         n = _rows(f)

@@ -247,8 +247,8 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
 
     # 4. one task per tile that owns points
     t1 = time.perf_counter()
-    est_fut = client.scatter(est, broadcast=True)
-    fut = {key: client.submit(tasks.run_tile, str(root), grid, key, H, est_fut, pure=False, retries=TASK_RETRIES,
+    occ = frozenset(keys)
+    fut = {key: client.submit(tasks.run_tile, str(root), grid, key, H, est, occ, pure=False, retries=TASK_RETRIES,
                               key=f"tile-{'_'.join(map(str, key))}-{root.name}") for key in keys}
     _progress(fut.values(), show)
 
