@@ -160,26 +160,28 @@ def test_3d_equal_for_tile_sides_origin_shifts_and_input_order(client, tree3d, t
         assert np.array_equal(P[perm][c.indices[m]], c.points[m])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workers", [1, 4])
 def test_threads_scheduler_with_1_and_4_workers(tree3d, tmp_path, workers):
     P, one = tree3d
     h = one.parameters["spacing"]
-    net = reconstruct_tiled(_save(tmp_path, P), tiles=25 * h, scheduler="threads", workers=workers)
+    net = reconstruct_tiled(_save(tmp_path, P), tiles=45 * h, scheduler="threads", workers=workers)
     _assert_same(one, net, h)
 
 
+@pytest.mark.slow
 def test_halo_doubled_changes_nothing(client, tree3d, tmp_path):
     P, one = tree3d
     h = one.parameters["spacing"]
     f = _save(tmp_path, P)
-    a = reconstruct_tiled(f, tiles=20 * h, client=client)
-    b = reconstruct_tiled(f, tiles=20 * h, client=client, halo=2 * a.parameters["halo"])
+    a = reconstruct_tiled(f, tiles=45 * h, client=client)
+    b = reconstruct_tiled(f, tiles=45 * h, client=client, halo=2 * a.parameters["halo"])
     assert a.parameters["halo"] == pytest.approx(halo_width(estimate(P)))
     assert np.array_equal(a.nodes, b.nodes) and len(a.curves) == len(b.curves)
     for ca, cb in zip(a.curves, b.curves):
         assert np.array_equal(ca.points, cb.points) and np.array_equal(ca.indices, cb.indices)
     # and a halo far too small does change it (the test can fail)
-    c = reconstruct_tiled(f, tiles=20 * h, client=client, halo=2 * h)
+    c = reconstruct_tiled(f, tiles=45 * h, client=client, halo=2 * h)
     assert network_difference(one, c, 0.5 * h) is not None
 
 
@@ -190,11 +192,11 @@ def test_estimates_are_the_whole_clouds_and_sampled_ones_decide_the_same(client,
     est = estimate(P)
     f = _save(tmp_path, P)
     h = one.parameters["spacing"]
-    net = reconstruct_tiled(f, tiles=20 * h, client=client)
+    net = reconstruct_tiled(f, tiles=45 * h, client=client)
     assert net.parameters["estimates_exact"] is True
     assert (net.parameters["spacing"], net.parameters["noise"]) == (est.hmed, est.sigma)
     monkeypatch.setattr(run, "ESTIMATE_POINTS", len(P) // 3)  # a sample of whole tiles
-    sub = reconstruct_tiled(f, tiles=20 * h, client=client)
+    sub = reconstruct_tiled(f, tiles=45 * h, client=client)
     assert sub.parameters["estimates_exact"] is False and sub.parameters["estimates_points"] < len(P)
     assert sub.parameters["clean"] == est.clean
     assert sub.parameters["spacing"] == pytest.approx(est.hmed, rel=0.1)
@@ -207,7 +209,7 @@ def test_chunked_inputs_several_files_laz_and_npy(client, tmp_path, monkeypatch)
     from curvenet.distributed import inputs
 
     monkeypatch.setattr(inputs, "CHUNK_ROWS", 150)
-    P = np.c_[adversarial_scene()[:700], np.zeros(700)] * 0.01 + [1000.0, 2000.0, 5.0]
+    P = np.c_[adversarial_scene()[:600], np.zeros(600)] * 0.01 + [1000.0, 2000.0, 5.0]
     parts = np.array_split(np.arange(len(P)), 3)
     folder = tmp_path / "tiles"
     folder.mkdir()

@@ -69,11 +69,9 @@ def dispatch(args) -> int | None:
             what = "several inputs" if args.more_inputs else ", ".join(given) or "--scheduler"
             raise InputError(f"{what} need --tiles SIZE|auto (the tiled run)")
         return None
-    from .cmd_reconstruct import collect_params
-
     if args.method not in ("auto", "robust"):
         raise InputError(f"--tiles runs the default method only, got --method {args.method}")
-    if collect_params(args):
+    if _method_parameters(args):
         raise InputError("--tiles runs the default method with its estimated parameters; "
                          "method parameters (--spacing, --param, --smooth ...) are not taken")
     for opt in ("png", "html"):
@@ -81,6 +79,16 @@ def dispatch(args) -> int | None:
             raise InputError(f"--{opt} draws the input points, which a tiled run never holds; "
                              "draw the network with curvenet render")
     return _run(args)
+
+
+#: The method-parameter options of ``curvenet reconstruct`` (attribute names).
+_METHOD_OPTIONS = ("k", "epsilon", "tau_s", "theta", "spacing")
+
+
+def _method_parameters(args) -> bool:
+    """Whether any method parameter was given (options, ``--param``, ``--smooth``)."""
+    return (any(getattr(args, o, None) is not None for o in _METHOD_OPTIONS)
+            or any(v is not None for _, v in getattr(args, "param", [])) or bool(getattr(args, "smooth", False)))
 
 
 def _run(args) -> int:
