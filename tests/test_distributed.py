@@ -367,3 +367,24 @@ def test_core_never_imports_the_distributed_package_nor_dask():
                 if "distributed" in n and not n.startswith(("dask", "distributed")) and not rel.startswith(("distributed/", "cli/")):
                     bad.append(f"{rel}: {n}")
     assert not bad, bad
+
+
+@pytest.mark.slow
+def test_ctrl_c_removes_the_scratch_store(tmp_path, tree3d):
+    P, one = tree3d
+    f = _save(tmp_path, np.vstack([P + [i * 10.0, 0, 0] for i in range(4)]))
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    out = tmp_path / "o.json"
+    proc = subprocess.Popen([sys.executable, "-m", "curvenet.cli", "reconstruct", str(f), "-o", str(out), "--tiles",
+                             str(20 * one.parameters["spacing"]), "--scheduler", "threads", "--workers", "1",
+                             "--scratch", str(scratch), "-q"], stderr=subprocess.PIPE, text=True)
+    for _ in range(1200):  # wait until the run has tiles in its store
+        if any(d.is_dir() and any(d.iterdir()) for d in scratch.iterdir()) or proc.poll() is not None:
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 130 and "interrupted" in err, err
+    assert list(scratch.iterdir()) == [] and not out.exists()

@@ -70,16 +70,13 @@ class TileGrid:
         return keys
 
     def _nearest_occupied(self, p: np.ndarray, key: tuple, occupied) -> tuple:
-        for reach in range(1, 1 + max(1, len(occupied))):
-            steps = range(-reach, reach + 1)
-            cand = [tuple(k + s for k, s in zip(key, off)) for off in itertools.product(steps, repeat=len(key))]
-            cand = [c for c in cand if c in occupied]
-            if cand:
-                def dist(c):
-                    lo, hi = self.box(c)
-                    return (float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - p, p - hi)))), c)
-                return min(cand, key=dist)
-        raise ValueError("no occupied tile")
+        """The occupied tile whose box is nearest to ``p`` (ties: the smallest key)."""
+        occ = np.array(sorted(occupied), dtype=np.int64).reshape(-1, self.dim)
+        if not len(occ):
+            raise ValueError("no tile holds input points")
+        lo = np.asarray(self.origin) + occ * self.side
+        dist = np.linalg.norm(np.maximum(0.0, np.maximum(lo - p, p - (lo + self.side))), axis=1)
+        return tuple(occ[int(np.argmin(dist))].tolist())  # (argmin: the first, in sorted key order)
 
     def box(self, key) -> tuple[np.ndarray, np.ndarray]:
         """The (lo, hi) corners of tile ``key``, each a (d,) array."""
