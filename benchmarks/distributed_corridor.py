@@ -48,9 +48,7 @@ class PeakRSS:
         while not self._stop.is_set():
             for pid, p in self.procs.items():
                 try:
-                    rss = p.memory_info().rss
-                    for ch in p.children(recursive=True):
-                        rss += ch.memory_info().rss
+                    rss = p.memory_info().rss  # the process alone (the client's children are the workers)
                 except Exception:  # a process that ended (a restarted worker)
                     continue
                 self.peak[pid] = max(self.peak[pid], rss)
