@@ -3,12 +3,10 @@ one process, on a LocalCluster of worker processes, on adversarial tile layouts.
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 

@@ -34,8 +34,6 @@ TASK_RETRIES: int = 2
 #: Seconds between two looks at Ctrl-C while waiting for tasks.
 _POLL = 0.2
 
-Scheduler = Literal["processes", "threads"]
-
 
 def make_client(scheduler: str = "processes", workers: int | None = None, *, dashboard: bool = False):
     """A Dask client: a LocalCluster of worker processes or threads, or a running scheduler.
@@ -76,7 +74,7 @@ def make_client(scheduler: str = "processes", workers: int | None = None, *, das
     return distributed.Client(cluster)
 
 
-def _gather(client, futures: dict, what, retries_note=""):
+def _gather(client, futures: dict, what):
     """Wait for every future (Ctrl-C checked meanwhile); the first failure raises.
 
     ``futures`` maps a label to a future; ``what(label, exc)`` gives the error to raise.
