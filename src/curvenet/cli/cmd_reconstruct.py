@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .options import add_common
 from .cmd_render import add_picture_options
+from .tiles import add_tile_options, dispatch
 
 #: CLI option -> method parameter name; only options the user gave are passed on.
 _PARAMS = {
@@ -93,6 +94,7 @@ def register(sub) -> None:
     p.add_argument("--surface", metavar="MESH", action="append", default=[],
                    help="also surface the network into a triangle mesh (.obj or .ply; extra surface); repeatable")
     add_picture_options(p, points=False)
+    add_tile_options(p)
     add_common(p)
     p.set_defaults(func=run)
 
@@ -163,6 +165,8 @@ def run(args) -> int:
     from .hints import empty_network_hint
     from .progress import Stages, _fmt, print_summary
 
+    if (tiled := dispatch(args)) is not None:
+        return tiled
     outputs = list(args.output)
     from_stdin = args.input == STDIO
     inputs = [] if from_stdin else [args.input]

@@ -1,0 +1,61 @@
+"""The halo: how far around its box a tile must see so that it decides as the whole cloud.
+
+Every decision of the default method about a point looks at most a fixed number of local
+spacings ``h`` away (plus a multiple of the noise): the junction shell, the links, the walks
+that place a junction node, the repairs' reaches. A tile that sees its box widened by that
+reach, with the whole cloud's :class:`~curvenet.methods.robust.Estimates`, reconstructs the
+part of the network inside its box as one process would (what lies farther out is cut at the
+halo's edge: a false free end, which the tile does not keep).
+"""
+
+from __future__ import annotations
+
+from ..methods.robust import Estimates
+from ..methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, REPAIRS, SHELL
+
+__all__ = ["HALO_MARGIN", "interaction_reach", "halo_width"]
+
+#: The halo is this many times the method's largest reach at the median spacing: the local
+#: spacing of a sparse stretch is above the median (twice it at the density ratio 3 of the
+#: benchmark), and every radius is in local spacings.
+HALO_MARGIN: float = 2.0
+
+
+def interaction_reach() -> tuple[float, float]:
+    """The method's largest interaction radius: ``(in spacings, in noise scales)``.
+
+    The candidates, from :mod:`curvenet.methods.robust.thresholds`: the walk into a junction
+    (``NODES.walk_far`` spacings, the largest), the chain trim at a node (twice
+    ``NODES.span``), the outer shell, the directional links, the junction merge
+    (``REPAIRS.merge_len``); the walk's shell radii widen by ``SHELL.widen`` noise scales per
+    shell radius, so its noise term is ``walk_far / shell_outer * shell_outer * widen``.
+
+    Returns
+    -------
+    in_h : float
+        In local spacings.
+    in_noise : float
+        In noise scales (``NOISE.scale`` times the noise std).
+    """
+    in_h = max(NODES.walk_far, 2 * NODES.span, DEFAULTS.shell_outer, DEFAULTS.link * LINKS.directional,
+               REPAIRS.merge_len)
+    in_noise = max(NODES.walk_far * SHELL.widen, NODES.fit_noise, LINKS.strip_noise, LINKS.gap_noise)
+    return float(in_h), float(in_noise)
+
+
+def halo_width(estimates: Estimates) -> float:
+    """The halo, in input units, for a cloud of these whole-cloud estimates.
+
+    Parameters
+    ----------
+    estimates : Estimates
+        The median spacing and noise std of the whole input.
+
+    Returns
+    -------
+    float
+        ``HALO_MARGIN * (in_h * hmed + in_noise * NOISE.scale * sigma)`` (see
+        :func:`interaction_reach`).
+    """
+    in_h, in_noise = interaction_reach()
+    return float(HALO_MARGIN * (in_h * estimates.hmed + in_noise * NOISE.scale * estimates.sigma))

@@ -1,0 +1,64 @@
+"""The scratch store of a tiled run: one pair of ``.npy`` files per tile and input chunk.
+
+Layout: ``ROOT/t<key>/c<chunk>.pts.npy`` ((n, d) float64 coordinates) and ``.ids.npy`` ((n,)
+int64 global ids), each written under a temporary name and renamed (a task that reruns after
+a lost worker rewrites its files whole). ``ROOT`` is a fresh folder of its own, removed whole
+at the end of the run, whatever the outcome.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["SCRATCH_PREFIX", "new_root", "remove_root", "tile_dir", "write_part", "read_tile"]
+
+#: Name prefix of a run's scratch folder (under ``--scratch`` or the system's temporary folder).
+SCRATCH_PREFIX = "curvenet-tiles-"
+
+
+def new_root(parent=None) -> Path:
+    """A new, empty scratch folder for one run (under ``parent``, default the system's temp)."""
+    if parent is not None:
+        Path(parent).mkdir(parents=True, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=SCRATCH_PREFIX, dir=parent))
+
+
+def remove_root(root: Path) -> None:
+    """Remove a run's scratch folder and everything in it (only that folder)."""
+    shutil.rmtree(root, ignore_errors=True)
+
+
+def tile_dir(root, key) -> Path:
+    """The folder of tile ``key`` (``t3_-1_0`` for key (3, -1, 0))."""
+    return Path(root) / ("t" + "_".join(str(int(k)) for k in key))
+
+
+def _save(path: Path, arr: np.ndarray) -> None:
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        np.save(f, arr)
+    os.replace(tmp, path)
+
+
+def write_part(root, key, chunk: int, points: np.ndarray, ids: np.ndarray) -> None:
+    """Store the points (n, d) and global ids (n,) of input chunk ``chunk`` in tile ``key``."""
+    d = tile_dir(root, key)
+    d.mkdir(exist_ok=True)
+    _save(d / f"c{chunk:06d}.ids.npy", np.ascontiguousarray(ids, dtype=np.int64))
+    _save(d / f"c{chunk:06d}.pts.npy", np.ascontiguousarray(points, dtype=np.float64))
+
+
+def read_tile(root, key):
+    """Every stored part of tile ``key``, as ``(points (n, d), ids (n,))`` pairs in chunk order."""
+    d = tile_dir(root, key)
+    if not d.is_dir():
+        return []
+    out = []
+    for f in sorted(d.glob("c*.pts.npy")):
+        out.append((np.load(f), np.load(f.with_name(f.name.replace(".pts.", ".ids.")))))
+    return out

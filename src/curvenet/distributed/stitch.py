@@ -1,0 +1,147 @@
+"""Stitching: the tiles' pieces joined at their ports into one network.
+
+Two ports of different tiles join when they lie within ``PORT_MATCH`` median spacings and
+their directions are opposite within ``PORT_ANGLE`` (each points out of its own tile). The
+joined ports are cut nodes of valence 2: they are contracted, so that a curve crossing ten
+tiles comes out as one curve, and a loop cut into pieces as one closed loop. A port left
+without partner (the tiles disagree there) becomes a free end, counted in the result.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..network import Curve, CurveNetwork
+from .cut import TilePieces
+
+__all__ = ["PORT_MATCH", "PORT_ANGLE_COS", "stitch"]
+
+#: Ports at most this many median spacings apart may join (the two tiles compute the same
+#: crossing segment, so the same midpoint up to rounding; a node placed a little differently
+#: moves it by a fraction of a spacing).
+PORT_MATCH: float = 0.5
+#: ... when their directions are opposite within 30 degrees (cosine).
+PORT_ANGLE_COS: float = float(np.cos(np.radians(30.0)))
+
+
+def _match_ports(pos: np.ndarray, tan: np.ndarray, tile: np.ndarray, reach: float) -> np.ndarray:
+    """Partner of every port (-1: none): nearest first, each port once."""
+    partner = np.full(len(pos), -1, dtype=np.int64)
+    if len(pos) < 2:
+        return partner
+    pairs = cKDTree(pos).query_pairs(reach, output_type="ndarray")
+    if not len(pairs):
+        return partner
+    i, j = pairs[:, 0], pairs[:, 1]
+    ok = (tile[i] != tile[j]) & ((tan[i] * tan[j]).sum(axis=1) <= -PORT_ANGLE_COS)
+    i, j = i[ok], j[ok]
+    dist = np.linalg.norm(pos[i] - pos[j], axis=1)
+    for a, b in zip(*(x[np.lexsort((j, i, dist))] for x in (i, j))):
+        if partner[a] < 0 and partner[b] < 0:
+            partner[a], partner[b] = b, a
+    return partner
+
+
+def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True) -> CurveNetwork:
+    """Join the pieces of every tile into one network (in canonical order).
+
+    Parameters
+    ----------
+    tiles : list of TilePieces
+        In any order (they are sorted by key).
+    spacing : float
+        The whole cloud's median spacing (the port match distance is in these units).
+    join : bool
+        Join ports across tiles (False: every port is a free end; the negative control).
+
+    Returns
+    -------
+    CurveNetwork
+        ``stats["unmatched_ports"]`` counts the ports without partner.
+    """
+    tiles = sorted(tiles, key=lambda t: t.key)
+    d = next((t.nodes.shape[1] for t in tiles), 3)
+    node_base = np.cumsum([0] + [len(t.nodes) for t in tiles])
+    port_base = np.cumsum([0] + [len(t.ports) for t in tiles])
+    nodes = [t.nodes for t in tiles]
+    pos = np.vstack([t.ports for t in tiles]) if tiles else np.zeros((0, d))
+    tan = np.vstack([t.tangents for t in tiles]) if tiles else np.zeros((0, d))
+    tile_of = np.repeat(np.arange(len(tiles)), np.diff(port_base))
+    partner = _match_ports(pos, tan, tile_of, PORT_MATCH * spacing) if join else np.full(len(pos), -1, np.int64)
+    n_nodes = int(node_base[-1])
+    # a port without partner: a free end at the port
+    loose = np.flatnonzero(partner < 0)
+    loose_node = np.full(len(pos), -1, dtype=np.int64)
+    loose_node[loose] = n_nodes + np.arange(len(loose))
+    nodes.append(pos[loose])
+
+    pieces, ends, owner = [], [], {}
+    for ti, t in enumerate(tiles):
+        for pc in t.pieces:
+            if pc.ends is None:
+                e = None
+            else:
+                e = []
+                for side, (kind, i) in enumerate(pc.ends):
+                    if kind == "node":
+                        e.append(("node", int(node_base[ti] + i)))
+                    else:
+                        g = int(port_base[ti] + i)
+                        owner[g] = (len(pieces), side)
+                        e.append(("node", int(loose_node[g])) if partner[g] < 0 else ("port", g))
+            pieces.append(pc)
+            ends.append(e)
+
+    curves: list[Curve] = []
+    used = np.zeros(len(pieces), dtype=bool)
+    for i, e in enumerate(ends):
+        if e is None:
+            used[i] = True
+            pc = pieces[i]
+            curves.append(Curve(pc.points, None, None, True, pc.indices))
+    for i, e in enumerate(ends):  # chains that start at a node
+        if used[i]:
+            continue
+        for side in (0, 1):
+            if e[side][0] == "node":
+                curves.append(_walk(i, side, pieces, ends, owner, partner, used, closed=False))
+                break
+    for i in range(len(pieces)):  # what is left are loops of cut nodes only
+        if not used[i]:
+            curves.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True))
+    net = CurveNetwork(np.vstack(nodes).reshape(-1, d), curves, {}, {})
+    net = net.canonical()
+    net.stats["unmatched_ports"] = int(len(loose))
+    net.stats["ports"] = int(len(pos))
+    return net
+
+
+def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> Curve:
+    """Follow pieces from piece ``i`` entering at ``side`` through joined ports; drop the port
+    midpoints on the way."""
+    start = ends[i][side]
+    pts, ids = [], []
+    cur, s_in = i, side
+    while True:
+        used[cur] = True
+        P, I = pieces[cur].points, pieces[cur].indices
+        if s_in == 1:
+            P, I = P[::-1], I[::-1]
+        lo = 1 if ends[cur][s_in][0] == "port" else 0
+        out = ends[cur][1 - s_in]
+        hi = len(P) - (1 if out[0] == "port" else 0)
+        pts.append(P[lo:hi])
+        ids.append(I[lo:hi])
+        if out[0] == "node":
+            end = out
+            break
+        nxt, s_next = owner[int(partner[out[1]])]
+        if used[nxt]:  # back at the start of a loop (or the tiles disagree: stop here)
+            end = None
+            break
+        cur, s_in = nxt, s_next
+    P, I = np.vstack(pts), np.concatenate(ids)
+    if closed or start[0] != "node" or end is None:
+        return Curve(P, None, None, True, I)
+    return Curve(P, start[1], end[1], False, I)
