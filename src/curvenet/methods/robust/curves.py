@@ -272,7 +272,7 @@ def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):
     for c in curves:
         X, ids = c.points, c.indices
         m = len(X)
-        if m < 3:
+        if m <= 2:  # a spike needs a point between two others
             out.append(c)
             continue
         a, b, x = X[:-2], X[2:], X[1:-1]
