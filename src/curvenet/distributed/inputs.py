@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import FormatError, InputError, require
 from ..io import READERS, extension, read_points
-from ..io.points import check_readable
+from ..io.points import check_readable, select_columns
 
 __all__ = ["CHUNK_ROWS", "Chunk", "expand_inputs", "plan_chunks", "read_chunk", "scan_chunk"]
 
@@ -127,7 +127,7 @@ def read_chunk(chunk: Chunk, *, columns=None, drop_nonfinite: bool = False) -> n
         arr = np.load(path, mmap_mode="r", allow_pickle=False)
         if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
             raise FormatError(f"{path}: expected a real numeric array, got dtype {arr.dtype}")
-        cols = _columns(path, arr.shape[1], columns)
+        cols = select_columns(path, None, arr.shape[1], columns)
         pts = np.array(arr[chunk.start:chunk.stop][:, cols], dtype=np.float64)
     else:
         laspy = require("laspy", "reading LAS/LAZ files", "io")
@@ -138,34 +138,12 @@ def read_chunk(chunk: Chunk, *, columns=None, drop_nonfinite: bool = False) -> n
                 pts = np.column_stack([np.asarray(rec.x), np.asarray(rec.y), np.asarray(rec.z)])
         except Exception as exc:  # laspy raises many types on malformed files
             raise FormatError(f"{where}: not a valid LAS/LAZ file ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
-        pts = pts[:, _columns(path, 3, columns, names=["x", "y", "z"])]
+        pts = pts[:, select_columns(path, ["x", "y", "z"], 3, columns)]
     bad = ~np.isfinite(pts).all(axis=1)
     if bad.any() and not drop_nonfinite:
         raise InputError(f"{where}: {int(bad.sum())} point(s) with NaN or infinite values; "
                          "use --drop-nonfinite to drop them")
     return pts
-
-
-def _columns(path, ncols: int, columns, names=None) -> list[int]:
-    """The coordinate columns of an array with ``ncols`` columns (all when 2 or 3)."""
-    if columns is None:
-        if ncols in (2, 3):
-            return list(range(ncols))
-        raise InputError(f"{path}: {ncols} columns per row; choose the coordinate columns (e.g. --columns 0,1,2)")
-    cols = []
-    for c in columns:
-        if isinstance(c, str) and not c.lstrip("-").isdigit():
-            if names is None or c.lower() not in names:
-                raise InputError(f"{path}: no column named {c!r}")
-            cols.append(names.index(c.lower()))
-        else:
-            i = int(c)
-            if not -ncols <= i < ncols:
-                raise InputError(f"{path}: column {i} does not exist (the file has {ncols} columns)")
-            cols.append(i % ncols)
-    if len(cols) not in (2, 3):
-        raise InputError(f"{path}: choose 2 or 3 coordinate columns, got {len(cols)}")
-    return cols
 
 
 def scan_chunk(chunk: Chunk, *, columns=None, drop_nonfinite: bool = False):

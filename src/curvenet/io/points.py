@@ -17,7 +17,7 @@ import numpy as np
 from .._sigint import checkpoint
 from ..errors import FormatError, InputError, require
 
-__all__ = ["read_text", "read_npy", "read_ply", "read_obj", "read_las", "check_readable"]
+__all__ = ["read_text", "read_npy", "read_ply", "read_obj", "read_las", "check_readable", "select_columns"]
 
 Columns = Sequence["int | str"] | None
 
@@ -47,7 +47,7 @@ def check_readable(path) -> Path:
     return p
 
 
-def _select(path, names: list[str] | None, ncols: int, columns: Columns) -> list[int]:
+def select_columns(path, names: list[str] | None, ncols: int, columns: Columns) -> list[int]:
     """Column indices of the coordinates, from an explicit choice, a header or the count."""
     if columns is not None:
         cols = []
@@ -154,7 +154,7 @@ def read_text(path, *, columns: Columns = None, drop_nonfinite: bool = False) ->
         names = [t.strip().strip('"').strip("'").lower() for t in toks]
         skip += 1
     ncols = len(toks)
-    cols = _select(p, names, ncols, columns)
+    cols = select_columns(p, names, ncols, columns)
     data_row = _first_data_row(lines, skip, delim)
     text_cols = [i for i, t in enumerate(data_row or []) if not _is_number(t)]
     usecols = None
@@ -244,7 +244,7 @@ def _finite(path, arr: np.ndarray, drop: bool) -> np.ndarray:
 def _from_array(path, arr: np.ndarray, columns: Columns, drop_nonfinite: bool) -> np.ndarray:
     if arr.dtype.names:
         names = [n.lower() for n in arr.dtype.names]
-        cols = _select(path, names, len(names), columns)
+        cols = select_columns(path, names, len(names), columns)
         for c in cols:
             field = arr.dtype[arr.dtype.names[c]]
             if field.kind not in "iuf" or field.shape:
@@ -257,7 +257,7 @@ def _from_array(path, arr: np.ndarray, columns: Columns, drop_nonfinite: bool) -
         raise FormatError(f"{path}: expected a real numeric array, got dtype {arr.dtype}")
     if arr.shape[0] == 0:
         raise FormatError(f"{path}: no points (array of shape {arr.shape})")
-    cols = _select(path, None, arr.shape[1], columns)
+    cols = select_columns(path, None, arr.shape[1], columns)
     return _finite(path, arr[:, cols].astype(np.float64), drop_nonfinite)
 
 
@@ -313,7 +313,7 @@ def read_obj(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
         arr = np.loadtxt(_io.StringIO("\n".join(r.strip() for r in rows)), ndmin=2, usecols=(0, 1, 2))
     except ValueError as exc:
         raise FormatError(f"{p}: malformed OBJ vertex line ({str(exc).splitlines()[0]})") from None
-    cols = _select(p, None, 3, columns)
+    cols = select_columns(p, None, 3, columns)
     return _finite(p, arr[:, cols], drop_nonfinite)
 
 
@@ -350,5 +350,5 @@ def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     arr = np.vstack(blocks) if blocks else np.zeros((0, 3))
     if len(arr) == 0:
         raise FormatError(f"{p}: LAS file has no points")
-    cols = _select(p, ["x", "y", "z"], 3, columns)
+    cols = select_columns(p, ["x", "y", "z"], 3, columns)
     return _finite(p, arr[:, cols], drop_nonfinite)

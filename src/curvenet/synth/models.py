@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import InputError
 from ..network import Curve, CurveNetwork
 
-__all__ = ["MODELS", "model", "h_of", "model_names"]
+__all__ = ["MODELS", "h_of", "model_names"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -436,30 +436,6 @@ MODELS: dict[str, Callable[[], CurveNetwork]] = {
 def model_names() -> list[str]:
     """Names of the synthetic models, in benchmark order."""
     return list(MODELS)
-
-
-def model(name: str) -> CurveNetwork:
-    """Build a ground-truth model by name.
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`MODELS`.
-
-    Returns
-    -------
-    CurveNetwork
-        The true network: nodes (junctions and free ends) and densely sampled true curves;
-        ``parameters["h"]`` is the model's reference sampling spacing.
-
-    Raises
-    ------
-    InputError
-        For an unknown name.
-    """
-    if name not in MODELS:
-        raise InputError(f"unknown model {name!r}; expected one of: {', '.join(MODELS)}")
-    return MODELS[name]()
 
 
 def h_of(net: CurveNetwork) -> float:
