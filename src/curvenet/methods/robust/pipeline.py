@@ -115,12 +115,8 @@ def _reconstruct_robust(
     tm["neighbors"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     fr = frames(P, nb, estimates)  # 2. tangents and noise
-    keep = duplicates(nb, fr)  # (noise-free samples repeated in one place: dropped, all redone)
-    params_out["duplicates_dropped"] = 0 if keep is None else int(N - len(keep))
-    if keep is not None:
-        P, order = P[keep], order[keep]
-        nb = neighbours(P, prm)
-        fr = frames(P, nb, estimates)
+    P, order, nb, fr = _without_duplicates(P, order, nb, fr, prm, estimates)
+    params_out["duplicates_dropped"] = int(N - len(P))
     params_out.update(_spacing_report(prm, nb.h, fr))
     if estimates is not None:
         params_out["estimates_given"] = True
@@ -164,6 +160,18 @@ def _internal_order(P0: np.ndarray) -> np.ndarray:
     if len(P0) > LAYOUT.local_min:
         order = order[locality_order(P0[order])]
     return order
+
+
+def _without_duplicates(P, order, nb, fr, prm: RobustParams, est: Estimates | None):
+    """Points, internal order, neighbours and frames without the noise-free samples repeated in
+    one place (see :func:`.frames.duplicates`): those are dropped and stages 1-2 redone on the
+    rest; the inputs themselves when nothing is dropped."""
+    keep = duplicates(nb, fr)
+    if keep is None:
+        return P, order, nb, fr
+    P, order = P[keep], order[keep]
+    nb = neighbours(P, prm)
+    return P, order, nb, frames(P, nb, est)
 
 
 def _spacing_report(prm: RobustParams, h: np.ndarray, fr) -> dict:
@@ -221,14 +229,10 @@ def estimate(points, *, spacing: float | None = None, k: int | None = None) -> E
     if len(P0) < DEFAULTS.min_points:
         raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
     with _k.compiled_for(len(P0)):
-        P = P0[_internal_order(P0)]
+        order = _internal_order(P0)
+        P = P0[order]
         nb = neighbours(P, prm)
-        fr = frames(P, nb)
-        keep = duplicates(nb, fr)
-        if keep is not None:
-            P = P[keep]
-            nb = neighbours(P, prm)
-            fr = frames(P, nb)
+        _, _, _, fr = _without_duplicates(P, order, nb, frames(P, nb), prm, None)
     return Estimates(hmed=fr.hmed, sigma=fr.sigma)
 
 
