@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -86,9 +86,6 @@ class RobustParams:
         out = {name: getattr(self, name) for name in _POSITIVE}
         out["smooth"] = self.smooth
         return out
-
-    def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
 
 
 class Estimates(NamedTuple):
