@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,13 @@ __all__ = ["SCRATCH_PREFIX", "new_root", "remove_root", "tile_dir", "write_part"
 
 #: Name prefix of a run's scratch folder (under ``--scratch`` or the system's temporary folder).
 SCRATCH_PREFIX = "curvenet-tiles-"
+
+#: How long (seconds) ``remove_root`` keeps removing files that tasks still running in worker
+#: threads finish writing after the run was interrupted (a write in flight takes milliseconds).
+REMOVE_PATIENCE = 10.0
+
+#: Pause (seconds) between two removal attempts of ``remove_root``.
+REMOVE_PAUSE = 0.05
 
 
 def new_root(parent=None) -> Path:
@@ -29,8 +37,25 @@ def new_root(parent=None) -> Path:
 
 
 def remove_root(root: Path) -> None:
-    """Remove a run's scratch folder and everything in it (only that folder)."""
-    shutil.rmtree(root, ignore_errors=True)
+    """Remove a run's scratch folder and everything in it (only that folder).
+
+    After Ctrl-C, tasks may still be running in worker threads and writing into the store. The
+    folder is first renamed, so that no new write can start under its name (a write resolves
+    the folder by name and fails once it is gone); then it is removed until nothing is left,
+    which catches a write that was already in flight.
+    """
+    root = Path(root)
+    doomed = root.with_name(root.name + ".removing")
+    try:
+        os.rename(root, doomed)
+    except OSError:
+        doomed = root
+    deadline = time.monotonic() + REMOVE_PATIENCE
+    while True:
+        shutil.rmtree(doomed, ignore_errors=True)
+        if not doomed.exists() or time.monotonic() > deadline:
+            return
+        time.sleep(REMOVE_PAUSE)
 
 
 def tile_dir(root, key) -> Path:
