@@ -229,6 +229,42 @@ def test_chunked_inputs_several_files_laz_and_npy(client, tmp_path, monkeypatch)
         assert np.array_equal(back[c.indices[m]], c.points[m])
 
 
+@pytest.mark.slow
+def test_a_killed_worker_is_survived_with_the_same_output(tree3d, tmp_path):
+    """SIGKILL one worker process while it runs a tile: Dask reruns its tasks elsewhere and the
+    output is the same network, exactly (the futures of the finished reference run were
+    released, so nothing of it is recomputed from its removed scratch store)."""
+    import threading
+
+    P, one = tree3d
+    h = one.parameters["spacing"]
+    f = _save(tmp_path, P)
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    c = distributed.Client(cluster)
+    try:
+        ref = reconstruct_tiled(f, tiles=20 * h, client=c)
+        out = {}
+        th = threading.Thread(target=lambda: out.setdefault("net", reconstruct_tiled(f, tiles=20 * h, client=c)))
+        th.start()
+        victim = None
+        for _ in range(1200):  # wait until a tile runs, then kill the process that runs it
+            busy = {w: ts for w, ts in c.processing().items() if any(str(t).startswith("tile-") for t in ts)}
+            if busy:
+                victim = sorted(busy)[0]
+                break
+            time.sleep(0.05)
+        assert victim is not None
+        pid = c.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)
+        th.join(300)
+        assert "net" in out, "the run did not survive the killed worker"
+        assert out["net"] == ref
+        _assert_same(one, out["net"], 0.5 * h)
+    finally:
+        c.close()
+        cluster.close()
+
+
 # ------------------------------------------------------------------------------------ the CLI
 def _cli(*args, cwd=None):
     env = dict(os.environ)

@@ -22,7 +22,9 @@ def network_difference(a: CurveNetwork, b: CurveNetwork, tol: float) -> str | No
     ----------
     a, b : CurveNetwork
     tol : float
-        In input units (the tiled run's test uses half the median spacing).
+        In input units (the tiled run's test uses half the median spacing). The densified
+        polylines hold curve length / (tol / 2) points each: for exact equality use ``a == b``
+        (:meth:`CurveNetwork.__eq__`), not a tiny ``tol``.
 
     Returns
     -------

@@ -77,22 +77,29 @@ def make_client(scheduler: str = "processes", workers: int | None = None, *, das
 def _gather(client, futures: dict, what):
     """Wait for every future (Ctrl-C checked meanwhile); the first failure raises.
 
-    ``futures`` maps a label to a future; ``what(label, exc)`` gives the error to raise.
+    ``futures`` maps a label to a future; ``what(label, exc)`` gives the error to raise. Whatever
+    the outcome, the futures are released on the way out (cancelled if still pending, their
+    results dropped from the workers): nothing of a phase stays alive on the cluster, so a worker
+    lost later makes Dask recompute only the tasks still needed, never the tasks of a finished
+    phase or run (whose scratch store may be gone by then).
     """
     from distributed import wait
 
-    pending = list(futures.values())
-    while pending:
-        checkpoint()
-        try:
-            wait(pending, timeout=_POLL, return_when="FIRST_COMPLETED")
-        except TimeoutError:
-            pass
-        for label, f in futures.items():
-            if f.status == "error":
-                raise what(label, f.exception())
-        pending = [f for f in pending if f.status not in ("finished", "error")]
-    return {label: f.result() for label, f in futures.items()}
+    try:
+        pending = list(futures.values())
+        while pending:
+            checkpoint()
+            try:
+                wait(pending, timeout=_POLL, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                pass
+            for label, f in futures.items():
+                if f.status == "error":
+                    raise what(label, f.exception())
+            pending = [f for f in pending if f.status not in ("finished", "error")]
+        return {label: f.result() for label, f in futures.items()}
+    finally:
+        client.cancel(list(futures.values()))
 
 
 def _one_line(exc: BaseException) -> str:
