@@ -15,6 +15,7 @@ from ..methods.robust import Estimates
 from ..network import CurveNetwork
 from . import tasks
 from .grid import TileGrid
+from .estimates import whole_cloud_estimates
 from .halo import halo_width
 from .inputs import expand_inputs, plan_chunks
 from .scratch import new_root, remove_root
@@ -25,8 +26,10 @@ __all__ = ["reconstruct_tiled", "TILE_AUTO_POINTS", "ESTIMATE_POINTS", "TASK_RET
 #: ``tiles="auto"``: the side that gives about this many points a tile, counted as if the
 #: points lay along the longest side of the bounding box (curves: denser tiles are rarer).
 TILE_AUTO_POINTS: int = 400_000
-#: The whole-cloud estimates are computed on whole tiles of at most about this many points in
-#: all (every tile when the cloud is smaller: then they are exactly the one-process values).
+#: The whole-cloud estimates are first computed on whole tiles of at most about this many points
+#: in all (every tile when the cloud is smaller: then they are exactly the one-process values);
+#: for a larger cloud this sample only sets the scale (the halo) of the exact pass over every
+#: tile (:mod:`.estimates`).
 ESTIMATE_POINTS: int = 1_000_000
 #: A task that raises is retried this many times before the run fails (a lost worker's tasks
 #: are rescheduled by Dask itself).
@@ -239,7 +242,8 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     keys = sorted(tile_count)
     tm["bin"] = time.perf_counter() - t1
 
-    # 3. the whole-cloud estimates, from whole tiles spread over the cloud
+    # 3. the whole-cloud estimates: from whole tiles spread over the cloud (all of it when it
+    #    is small), then, for a larger cloud, exactly from every tile (see .estimates)
     t1 = time.perf_counter()
     sample = _sample_tiles(keys, tile_count)
     est_f = client.submit(tasks.estimate_sample, str(root), sample, pure=False, retries=TASK_RETRIES)
@@ -247,6 +251,18 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
                          lambda _, exc: exc if isinstance(exc, CurvenetError)
                          else MethodError(f"the whole-cloud estimates failed ({_one_line(exc)})"))["estimates"]
     est = Estimates(float(est.hmed), float(est.sigma))
+    inexact = 0
+    if len(sample) < len(keys):
+        # the sample gave the scale; the medians over every tile give the values themselves
+        def submit(fn, *args):
+            return client.submit(fn, *args, pure=False, retries=TASK_RETRIES)
+
+        def gather(futures):
+            return _gather(client, futures, lambda _, exc: exc if isinstance(exc, CurvenetError)
+                           else MethodError(f"the whole-cloud estimates failed ({_one_line(exc)})"))
+
+        est, n_est, inexact = whole_cloud_estimates(submit, gather, str(root), grid, keys, halo_width(est), lo, hi)
+        est = Estimates(float(est.hmed), float(est.sigma))
     H = halo_width(est) if halo is None else float(halo)
     tm["estimate"] = time.perf_counter() - t1
 
@@ -277,7 +293,8 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
         "clean": est.clean,
         "estimates_points": n_est,
         "estimates_tiles": len(sample),
-        "estimates_exact": len(sample) == len(keys),
+        "estimates_exact": inexact == 0,
+        "estimates_inexact_points": inexact,
         "halo": H,
         "tile_side": side,
         "tile_origin": [float(x) for x in grid.origin],

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SCRATCH_PREFIX", "new_root", "remove_root", "tile_dir", "write_part", "read_tile"]
+__all__ = ["SCRATCH_PREFIX", "new_root", "remove_root", "tile_dir", "write_part", "read_tile", "write_values",
+           "read_values"]
 
 #: Name prefix of a run's scratch folder (under ``--scratch`` or the system's temporary folder).
 SCRATCH_PREFIX = "curvenet-tiles-"
@@ -87,3 +88,16 @@ def read_tile(root, key):
     for f in sorted(d.glob("c*.pts.npy")):
         out.append((np.load(f), np.load(f.with_name(f.name.replace(".pts.", ".ids.")))))
     return out
+
+
+def write_values(root, key, name: str, values: np.ndarray) -> None:
+    """Store per-point values (n,) of tile ``key`` under ``name`` (``ROOT/t<key>/v-<name>.npy``)."""
+    d = tile_dir(root, key)
+    d.mkdir(exist_ok=True)
+    _save(d / f"v-{name}.npy", np.ascontiguousarray(values))
+
+
+def read_values(root, key, name: str) -> np.ndarray:
+    """The values stored by :func:`write_values` (an empty array when there are none)."""
+    f = tile_dir(root, key) / f"v-{name}.npy"
+    return np.load(f) if f.exists() else np.zeros(0)

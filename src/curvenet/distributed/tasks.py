@@ -19,12 +19,12 @@ from .grid import TileGrid
 from .inputs import Chunk, read_chunk, scan_chunk
 from .scratch import read_tile, write_part
 
-__all__ = ["scan", "bin_chunk", "estimate_sample", "run_tile", "tile_points"]
+__all__ = ["scan", "bin_chunk", "estimate_sample", "run_tile", "tile_points", "METHOD_LOCK"]
 
 #: One run of the method at a time per process: the method switches its kernels (compiled or
 #: plain Python) through module globals, which is not safe from two threads at once (the
 #: ``threads`` scheduler runs several tasks in one process; worker processes run one each).
-_METHOD_LOCK = threading.Lock()
+METHOD_LOCK = threading.Lock()
 
 
 def scan(chunk: Chunk, columns=None, drop_nonfinite: bool = False):
@@ -84,7 +84,7 @@ def estimate_sample(root: str, keys: list) -> tuple[Estimates, int]:
     """
     parts = [p for key in keys for p, _ in read_tile(root, key)]
     P = np.vstack(parts)
-    with _METHOD_LOCK:
+    with METHOD_LOCK:
         return estimate(P), int(len(P))
 
 
@@ -93,7 +93,7 @@ def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, 
     estimates) and cut the network at the tile's box (``occupied``: the keys of every tile
     that holds input points, see :func:`.cut.cut_network`)."""
     P, ids = tile_points(root, grid, key, halo)
-    with _METHOD_LOCK:
+    with METHOD_LOCK:
         net = reconstruct_robust(P, estimates=estimates)
     out = cut_network(net, grid, key, ids, occupied)
     out.n_points = int(len(P))

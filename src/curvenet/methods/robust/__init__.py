@@ -1,6 +1,8 @@
 """The robust, parameter-free default method: see :mod:`.pipeline` for the stages in order."""
 
 from .params import Estimates
-from .pipeline import estimate, local_spacing, reconstruct_robust, shell_group_counts
+from .frames import dedup_applies, dedup_radius, median_noise, median_spacing
+from .pipeline import PointEstimates, estimate, local_spacing, point_estimates, reconstruct_robust, shell_group_counts
 
-__all__ = ["reconstruct_robust", "estimate", "Estimates", "local_spacing", "shell_group_counts"]
+__all__ = ["reconstruct_robust", "estimate", "Estimates", "local_spacing", "shell_group_counts", "PointEstimates",
+           "point_estimates", "median_spacing", "median_noise", "dedup_radius", "dedup_applies"]

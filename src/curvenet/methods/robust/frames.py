@@ -85,8 +85,8 @@ def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None) -> Frame
     idx, h = nb.idx, nb.h
     t, lin, rms, gain = tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
     if est is None:
-        sig = float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
-        hmed = float(np.median(h))
+        sig = median_noise(rms)
+        hmed = median_spacing(h)
     else:
         sig, hmed = float(est.sigma), float(est.hmed)
     clean = sig < SPACING.dedup_noise * hmed
@@ -108,12 +108,35 @@ def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:
     (M,) ndarray of int64 or None
         Ids of the points kept, ascending.
     """
-    if not fr.clean:
+    r = dedup_radius(Estimates(fr.hmed, fr.sigma))
+    if r is None:
         return None
-    dup = coincident(nb.dist, nb.idx, SPACING.dedup * fr.hmed)
-    if not dup.any() or len(dup) - dup.sum() < DEFAULTS.min_points:
+    dup = coincident(nb.dist, nb.idx, r)
+    if not dedup_applies(len(dup), int(np.count_nonzero(dup))):
         return None
     return np.flatnonzero(~dup)
+
+
+def median_spacing(h: np.ndarray) -> float:
+    """``Estimates.hmed`` from the local spacings (N,) of the points."""
+    return float(np.median(h))
+
+
+def median_noise(rms: np.ndarray) -> float:
+    """``Estimates.sigma`` from the per-point noise estimates (N,) (NaN: none)."""
+    return float(np.nanmedian(rms)) if np.isfinite(rms).any() else 0.0
+
+
+def dedup_radius(first: Estimates) -> float | None:
+    """The duplicate rule's radius for a cloud of estimates ``first`` (taken on all of its
+    points), or None when the rule does not apply (noisy input: close samples are noise)."""
+    return SPACING.dedup * first.hmed if first.clean else None
+
+
+def dedup_applies(n_points: int, n_duplicates: int) -> bool:
+    """Whether duplicates are dropped: some were found and at least ``DEFAULTS.min_points``
+    points would remain (else the cloud is kept whole)."""
+    return n_duplicates > 0 and n_points - n_duplicates >= DEFAULTS.min_points
 
 
 def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import functools
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,7 +34,8 @@ from ...validate import as_points
 from . import kernels as _k
 from .chains import trace_chains
 from .curves import build_curves, drop_spikes, smooth_curve
-from .frames import duplicates, frames, lex_order, local_spacing, neighbours
+from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, lex_order, local_spacing,
+                     median_noise, median_spacing, neighbours, tangents)
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
@@ -208,11 +210,79 @@ def _smoothing(prm: RobustParams, fr, dim: int) -> float:
     return max(fr.sigma**2 * max(dim - 1, 1), NOISE.smooth_min * hm**2) / hm**2
 
 
+class PointEstimates(NamedTuple):
+    """The per-point values whose medians are the whole-cloud :class:`Estimates`.
+
+    Each is a function of the point's k nearest neighbours alone, so a part of the cloud (a tile
+    with a halo) computes them exactly for its points whose neighbourhood it holds
+    (``reach``): the medians over the parts are then the whole cloud's estimates exactly.
+
+    Attributes
+    ----------
+    order : (M,) ndarray of int64
+        The input ids of the points the values are for (the points kept: all of them, or those
+        left after the duplicate rule), in the internal order.
+    h : (M,) ndarray
+        Local spacing; ``Estimates.hmed`` is its median.
+    rms : (M,) ndarray
+        Noise estimate (NaN where there is none); ``Estimates.sigma`` is its median over the
+        finite values (0 when none is).
+    earlier : (M,) ndarray
+        Distance to the nearest of the k neighbours that comes earlier in the internal order
+        (inf when none does): the point is a duplicate at radius ``r`` iff ``earlier < r``.
+    reach : (M,) ndarray
+        Distance to the k-th neighbour: every value above looks no farther.
+    """
+
+    order: np.ndarray
+    h: np.ndarray
+    rms: np.ndarray
+    earlier: np.ndarray
+    reach: np.ndarray
+
+
+def point_estimates(points, *, dedup_radius: float | None = None, k: int | None = None) -> PointEstimates:
+    """The per-point values of :class:`PointEstimates` on ``points``.
+
+    Parameters
+    ----------
+    points : (N, 2) or (N, 3) array_like
+    dedup_radius : float, optional
+        First drop the duplicates at this radius (the points with an earlier neighbour closer
+        than it, see :func:`.frames.coincident`), then compute the values on the rest.
+    k : int, optional
+        As for :func:`reconstruct_robust`.
+
+    Returns
+    -------
+    PointEstimates
+    """
+    P0 = as_points(points)
+    prm = RobustParams.from_keywords(k=k)
+    if len(P0) < DEFAULTS.min_points:
+        raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
+    with _k.compiled_for(len(P0)):
+        order = _internal_order(P0)
+        P = P0[order]
+        nb = neighbours(P, prm)
+        if dedup_radius is not None:
+            keep = ~coincident(nb.dist, nb.idx, dedup_radius)
+            P, order = P[keep], order[keep]
+            nb = neighbours(P, prm)
+        rms = tangents(P, nb.idx, nb.h, order=np.arange(len(P), dtype=np.int64))[2]
+    rows = np.arange(len(P))[:, None]
+    earlier = np.where(nb.idx < rows, nb.dist, np.inf).min(axis=1)
+    return PointEstimates(order, nb.h, rms, earlier, nb.dist[:, -1].copy())
+
+
 def estimate(points, *, spacing: float | None = None, k: int | None = None) -> Estimates:
     """The whole-cloud estimates the method takes its decisions from (see :class:`Estimates`).
 
     The very values :func:`reconstruct_robust` computes on ``points``: running it on any part
-    of them with ``estimates=estimate(points)`` takes those decisions as the whole would.
+    of them with ``estimates=estimate(points)`` takes those decisions as the whole would. They
+    are the medians of :func:`point_estimates`, taken twice when the duplicate rule drops
+    points (:func:`dedup_radius`, :func:`dedup_applies`); a tiled run takes the same medians
+    over its tiles.
 
     Parameters
     ----------
@@ -224,16 +294,24 @@ def estimate(points, *, spacing: float | None = None, k: int | None = None) -> E
     -------
     Estimates
     """
-    P0 = as_points(points)
-    prm = RobustParams.from_keywords(spacing=spacing, k=k)
-    if len(P0) < DEFAULTS.min_points:
-        raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
-    with _k.compiled_for(len(P0)):
-        order = _internal_order(P0)
-        P = P0[order]
-        nb = neighbours(P, prm)
-        _, _, _, fr = _without_duplicates(P, order, nb, frames(P, nb), prm, None)
-    return Estimates(hmed=fr.hmed, sigma=fr.sigma)
+    if spacing is not None:  # the user's spacing: only the noise is estimated
+        P0 = as_points(points)
+        prm = RobustParams.from_keywords(spacing=spacing, k=k)
+        if len(P0) < DEFAULTS.min_points:
+            raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
+        with _k.compiled_for(len(P0)):
+            order = _internal_order(P0)
+            P = P0[order]
+            nb = neighbours(P, prm)
+            _, _, _, fr = _without_duplicates(P, order, nb, frames(P, nb), prm, None)
+        return Estimates(hmed=fr.hmed, sigma=fr.sigma)
+    v = point_estimates(points, k=k)
+    first = Estimates(median_spacing(v.h), median_noise(v.rms))
+    r = dedup_radius(first)
+    if r is None or not dedup_applies(len(v.h), int(np.count_nonzero(v.earlier < r))):
+        return first
+    v = point_estimates(points, dedup_radius=r, k=k)
+    return Estimates(median_spacing(v.h), median_noise(v.rms))
 
 
 @functools.wraps(_reconstruct_robust)

@@ -1,0 +1,90 @@
+"""The whole cloud's estimates from its tiles: exact medians without gathering the values."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+distributed = pytest.importorskip("distributed")
+
+from curvenet import synth  # noqa: E402
+from curvenet.distributed import estimates as de  # noqa: E402
+from curvenet.distributed import reconstruct_tiled  # noqa: E402
+from curvenet.distributed import run as drun  # noqa: E402
+from curvenet.methods.robust import estimate  # noqa: E402
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 1000, 1001])
+def test_median_from_bins_is_numpys(n):
+    rng = np.random.default_rng(n)
+    v = np.exp(rng.normal(size=n)) * 1e-3
+    v[: n // 3] = v[0]  # ties across a bin
+    parts = np.array_split(rng.permutation(v), 5)
+    keys, counts = de.merge_counts([de.sparse_counts(p) for p in parts])
+    a, b, below, m = de.middle_bins(keys, counts)
+    inside = np.concatenate([p[(de.bin_keys(p) >= a) & (de.bin_keys(p) <= b)] for p in parts])
+    assert m == n and len(inside) < n or n < 10
+    assert de.median_of(inside, below, m) == np.median(v)
+
+
+def test_bins_sort_as_the_values():
+    v = np.sort(np.r_[0.0, -0.0, 5e-324, 1e-300, np.random.default_rng(0).random(1000), 1e300])
+    assert (np.diff(de.bin_keys(v).astype(np.float64)) >= 0).all()
+
+
+@pytest.fixture(scope="module")
+def threads():
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None)
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+@pytest.mark.parametrize("dups", [False, True])
+def test_tiled_estimates_are_the_whole_clouds_exactly(threads, tmp_path, monkeypatch, dups):
+    """A cloud larger than the estimate's sample: the spacing and noise a tiled run reports are
+    those of one process on all points, bit for bit (noise-free with repeated samples: the
+    duplicate rule's second pass)."""
+    rng = np.random.default_rng(3)
+    clouds = []
+    for i, name in enumerate(("tree", "torus", "cube", "mug")):
+        P, _ = synth.sample(synth.model(name), noise=0.0 if dups else 0.1, rng=i)
+        clouds.append(P + [3.0 * i, 0, 0])
+    P = np.vstack(clouds)
+    if dups:
+        P = np.vstack([P, P[rng.choice(len(P), len(P) // 20, replace=False)]])
+    P = P[rng.permutation(len(P))]
+    f = tmp_path / "p.npy"
+    np.save(f, P)
+    one = estimate(P)
+    monkeypatch.setattr(drun, "ESTIMATE_POINTS", len(P) // 6)  # the sample: a few of the tiles
+    net = reconstruct_tiled(f, tiles=40 * one.hmed, client=threads)
+    assert net.parameters["estimates_exact"] and net.parameters["estimates_inexact_points"] == 0
+    # (the repeated samples are dropped before the second medians)
+    assert net.parameters["estimates_points"] == (len(np.unique(P, axis=0)) if dups else len(P))
+    assert net.parameters["spacing"] == one.hmed and net.parameters["noise"] == one.sigma
+    assert net.parameters["clean"] == one.clean
+
+
+def test_the_sample_alone_would_differ():
+    """Control: on the cloud of the test above, the estimates of the sampled tiles alone are
+    not the whole cloud's (so that test checks the exact pass, not a lucky sample)."""
+    clouds = [synth.sample(synth.model(m), noise=0.1, rng=i)[0] + [3.0 * i, 0, 0]
+              for i, m in enumerate(("tree", "torus", "cube", "mug"))]
+    P = np.vstack(clouds)
+    one = estimate(P)
+    keys_of = np.floor((P - P.min(0)) / (40 * one.hmed)).astype(np.int64)
+    uk, inv, cnt = np.unique(keys_of, axis=0, return_inverse=True, return_counts=True)
+    keys = [tuple(k) for k in uk.tolist()]
+    count = dict(zip(keys, cnt.tolist()))
+    old = drun.ESTIMATE_POINTS
+    try:
+        drun.ESTIMATE_POINTS = len(P) // 6
+        sample = set(drun._sample_tiles(keys, count))
+    finally:
+        drun.ESTIMATE_POINTS = old
+    assert 0 < len(sample) < len(keys)
+    mask = np.array([keys[i] in sample for i in inv.ravel()])
+    part = estimate(P[mask])
+    assert part.hmed != one.hmed and part.sigma != one.sigma
