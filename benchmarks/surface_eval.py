@@ -2,8 +2,9 @@
 
 Usage::
 
-    python benchmarks/surface_eval.py [--set free,study,synth] [--names hat,teapot]
+    python benchmarks/surface_eval.py [--set free,study,synth,surfaces] [--names hat,teapot]
                                       [--network reconstructed|truth] [--cache DIR] [--quick]
+                                      [--markdown PATH]
 
 For each sketch or model: the network (by default reconstructed by the default method from the
 true curves sampled at 2 mm for CASSIE, as :func:`curvenet.bench.run_cassie` does, and at the
@@ -15,6 +16,16 @@ and checks); for the models drawn on a known surface (sphere, torus, mug), the m
 distance of the mesh vertices to it in units of the model's spacing h; then the totals, and the
 mug cylinder's smallest and largest radius at mid-height off its curves (0.50 true). ``--quick`` runs a few models only (for CI).
 ``--cache DIR`` keeps the reconstructed networks between runs (pickles keyed by name).
+
+The set ``surfaces`` holds the networks drawn on known surfaces (:mod:`curvenet.synth.surfaces`:
+sphere, torus, capped cylinder, saddle, box with a filleted edge, vase), sampled at their
+spacing h and reconstructed like the others: for each, the patches and boundary loops found
+against those of the true surface, and the distances in units of h both ways: mesh vertices to
+the true surface (mean and largest) and points of the true surface to the mesh (libigl's
+point-to-mesh distance; the largest of the two largest is the Hausdorff distance). Times are
+seconds on a shared machine; ``ref`` is the k=16 cKDTree query of the network's own curve points
+measured just before each model, the ratio ``time / ref`` being the figure to compare between
+runs. ``--markdown PATH`` writes the table of every model run (docs/surfacing-table.md).
 """
 
 from __future__ import annotations
@@ -32,12 +43,14 @@ from curvenet import synth
 from curvenet.bench import _seed
 from curvenet.reconstruct import reconstruct
 from curvenet.surfacing import SurfaceCheckWarning, surface
-from curvenet.synth import cassie
+from curvenet.synth import cassie, surfaces
 
 #: CASSIE sampling spacing (metres), as in :func:`curvenet.bench.run_cassie`.
 CASSIE_H = 0.002
 #: Models of ``--quick``.
-QUICK = {"synth": ["cube", "mug"], "free": ["architecture-2"], "study": []}
+QUICK = {"synth": ["cube", "mug"], "free": ["architecture-2"], "study": [], "surfaces": ["saddle"]}
+#: Samples per unit length of the true surfaces for the distance from the surface to the mesh.
+SURFACE_DENSITY = 150
 #: Half-height of the band around the mug's mid-height where the radius is measured.
 MUG_BAND = 0.05
 
@@ -46,6 +59,8 @@ def networks(kind: str, names, source: str, cache: Path | None):
     """Yield ``(name, network)`` for one set of models."""
     if kind == "synth":
         all_names = synth.model_names()
+    elif kind == "surfaces":
+        all_names = surfaces.surface_model_names()
     elif kind == "free":
         all_names = list(cassie.FREE_CREATIONS) if cassie.available() else []
     else:
@@ -53,8 +68,8 @@ def networks(kind: str, names, source: str, cache: Path | None):
     for name in all_names:
         if names and name not in names:
             continue
-        if kind == "synth":
-            truth = synth.model(name)
+        if kind in ("synth", "surfaces"):
+            truth = synth.model(name) if kind == "synth" else surfaces.surface_model(name).network
             h, rng = synth.h_of(truth), _seed(name, "clean")
         else:
             truth = cassie.load(name)
@@ -117,27 +132,73 @@ def truth_distance(name, mesh, h):
     return float(d.mean()), float(d.max())
 
 
+def both_ways(model, mesh, h):
+    """Mean and largest distance, in units of h, mesh -> true surface and true surface -> mesh."""
+    import igl
+
+    d = model.distance(mesh.vertices) / h
+    S = model.sample(SURFACE_DENSITY)
+    sq, _, _ = igl.point_mesh_squared_distance(S, mesh.vertices, mesh.triangles.astype(np.int64))
+    back = np.sqrt(sq) / h
+    return float(d.mean()), float(d.max()), float(back.mean()), float(back.max())
+
+
+def reference_seconds(net) -> float:
+    """Seconds of the k=16 cKDTree query of the network's curve points on themselves."""
+    from scipy.spatial import cKDTree
+
+    pts = np.vstack([c.points for c in net.curves]) if net.curves else np.zeros((1, 3))
+    t0 = time.perf_counter()
+    cKDTree(pts).query(pts, k=min(16, len(pts)))
+    return time.perf_counter() - t0
+
+
+def _fmt(x, spec):
+    return "-" if x is None else format(x, spec)
+
+
+def markdown(rows) -> str:
+    """The surfacing table (one row per model) as markdown."""
+    out = ["| set | model | nodes | curves | patches (true) | boundary loops (true) | self-intersecting faces | "
+           "non-manifold edges | genus | mesh to truth, mean / max (h) | truth to mesh, mean / max (h) | "
+           "time (s) | time / ref |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        tp = f" ({r['true_patches']})" if r.get("true_patches") is not None else ""
+        tb = f" ({r['true_boundary_loops']})" if r.get("true_boundary_loops") is not None else ""
+        d = r.get("distances")
+        m2t = f"{d[0]:.3f} / {d[1]:.2f}" if d else "-"
+        t2m = f"{d[2]:.3f} / {d[3]:.2f}" if d and d[2] is not None else "-"
+        out.append(f"| {r['set']} | {r['model']} | {r['nodes']} | {r['curves']} | {r['patches']}{tp} | "
+                   f"{r['boundary_loops']}{tb} | {_fmt(r['self_x'], 'd')} | {r['non_manifold']} | "
+                   f"{_fmt(r['genus'], 'd')} | {m2t} | {t2m} | {r['time']:.1f} | {r['time'] / r['ref']:.0f} |")
+    return "\n".join(out) + "\n"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--set", default="free,study,synth", help="comma list of free, study, synth")
+    ap.add_argument("--set", default="free,study,synth,surfaces", help="comma list of free, study, synth, surfaces")
     ap.add_argument("--names", default="", help="comma list of model names (default: all)")
     ap.add_argument("--network", choices=["reconstructed", "truth"], default="reconstructed")
     ap.add_argument("--cache", default=None, help="folder for reconstructed networks")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--markdown", default=None, help="write the table of every model run to this file")
     args = ap.parse_args(argv)
     cache = Path(args.cache) if args.cache else None
     if cache:
         cache.mkdir(parents=True, exist_ok=True)
     names = {n for n in args.names.split(",") if n}
-    head = f"{'set':5} {'model':16} {'N_n':>4} {'N_c':>4} {'patch':>5} {'tris':>7} {'selfx':>5} {'nm_e':>4} {'bnd':>3} {'genus':>5} {'ovl':>3} {'time':>6}"
+    head = (f"{'set':8} {'model':16} {'N_n':>4} {'N_c':>4} {'patch':>5} {'tris':>7} {'selfx':>5} {'nm_e':>4} "
+            f"{'bnd':>3} {'genus':>5} {'ovl':>3} {'time':>6} {'t/ref':>6}")
     print(head)
-    tot = {"models": 0, "self_x": 0, "self_x_models": 0, "nm": 0, "nm_models": 0, "ovl_models": 0}
-    bad = []
+    tot = {"models": 0, "self_x": 0, "self_x_models": 0, "nm": 0, "nm_models": 0, "ovl_models": 0, "time": 0.0,
+           "faces": 0}
+    bad, rows = [], []
     for kind in [k for k in args.set.split(",") if k]:
         sel = set(QUICK[kind]) if args.quick else names
         if args.quick and not sel:
             continue
         for name, net in networks(kind, sel, args.network, cache):
+            ref = reference_seconds(net)
             t0 = time.perf_counter()
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", SurfaceCheckWarning)  # printed below
@@ -145,29 +206,45 @@ def main(argv=None) -> int:
             dt = time.perf_counter() - t0
             ck = mesh.checks
             sx = ck.self_intersecting_faces
-            print(f"{kind:5} {name:16} {net.n_nodes:4d} {net.n_curves:4d} {mesh.n_patches:5d} "
+            print(f"{kind:8} {name:16} {net.n_nodes:4d} {net.n_curves:4d} {mesh.n_patches:5d} "
                   f"{len(mesh.triangles):7d} {sx if sx is not None else '-':>5} {ck.non_manifold_edges:4d} "
                   f"{ck.boundary_loops:3d} {ck.genus if ck.genus is not None else '-':>5} "
-                  f"{len(ck.overlaps):3d} {dt:6.1f}", flush=True)
+                  f"{len(ck.overlaps):3d} {dt:6.1f} {dt / ref:6.0f}", flush=True)
+            row = {"set": kind, "model": name, "nodes": net.n_nodes, "curves": net.n_curves,
+                   "patches": mesh.n_patches, "boundary_loops": ck.boundary_loops, "self_x": sx,
+                   "non_manifold": ck.non_manifold_edges, "genus": ck.genus, "time": dt, "ref": ref}
             tot["models"] += 1
             tot["self_x"] += sx or 0
             tot["self_x_models"] += bool(sx)
             tot["nm"] += ck.non_manifold_edges
             tot["nm_models"] += bool(ck.non_manifold_edges)
             tot["ovl_models"] += bool(ck.overlaps)
+            tot["time"] += dt
+            tot["faces"] += len(mesh.triangles)
             if not ck.ok:
                 bad.append(f"{name}: {ck.warning()}")
+            if kind == "surfaces":
+                model = surfaces.surface_model(name)
+                d = both_ways(model, mesh, synth.h_of(model.network))
+                row.update(true_patches=model.patches, true_boundary_loops=model.boundary_loops, distances=d)
+                print(f"      patches {mesh.n_patches} (true {model.patches}), boundary loops {ck.boundary_loops} "
+                      f"(true {model.boundary_loops}); mesh to the true surface: mean {d[0]:.3f} h, max {d[1]:.3f} h; "
+                      f"true surface to mesh: mean {d[2]:.3f} h, max {d[3]:.3f} h")
             if kind == "synth" and name in TRUE_SURFACES:
                 dm, dx = truth_distance(name, mesh, synth.h_of(synth.model(name)))
+                row.update(distances=(dm, dx, None, None))
                 print(f"      distance to the true {name} surface: mean {dm:.3f} h, max {dx:.3f} h")
             if kind == "synth" and name == "mug":
                 rmin, rmean = mug_radius(mesh)
                 print(f"      mug cylinder at mid-height: radius min {rmin:.3f}, max {rmean:.3f} (true 0.500)")
-    print(f"total: {tot['models']} models; self-intersecting faces {tot['self_x']} in {tot['self_x_models']} "
-          f"models; non-manifold edges {tot['nm']} in {tot['nm_models']} models; overlapping patches in "
-          f"{tot['ovl_models']} models")
+            rows.append(row)
+    print(f"total: {tot['models']} models, {tot['faces']} faces; self-intersecting faces {tot['self_x']} in "
+          f"{tot['self_x_models']} models; non-manifold edges {tot['nm']} in {tot['nm_models']} models; "
+          f"overlapping patches in {tot['ovl_models']} models; surfacing time {tot['time']:.0f} s")
     for line in bad:
         print("  " + line)
+    if args.markdown:
+        Path(args.markdown).write_text(markdown(rows))
     return 0
 
 
