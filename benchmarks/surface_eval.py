@@ -143,14 +143,22 @@ def both_ways(model, mesh, h):
     return float(d.mean()), float(d.max()), float(back.mean()), float(back.max())
 
 
+#: Repeats of the reference query (the fastest counts: it takes milliseconds).
+REF_REPEATS = 5
+
+
 def reference_seconds(net) -> float:
-    """Seconds of the k=16 cKDTree query of the network's curve points on themselves."""
+    """Seconds of the k=16 cKDTree query of the network's curve points on themselves (fastest of
+    :data:`REF_REPEATS`)."""
     from scipy.spatial import cKDTree
 
     pts = np.vstack([c.points for c in net.curves]) if net.curves else np.zeros((1, 3))
-    t0 = time.perf_counter()
-    cKDTree(pts).query(pts, k=min(16, len(pts)))
-    return time.perf_counter() - t0
+    best = np.inf
+    for _ in range(REF_REPEATS):
+        t0 = time.perf_counter()
+        cKDTree(pts).query(pts, k=min(16, len(pts)))
+        best = min(best, time.perf_counter() - t0)
+    return best
 
 
 def _fmt(x, spec):
