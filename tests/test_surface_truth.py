@@ -112,3 +112,24 @@ def test_quadratic_derivatives_are_savitzky_golay(n, window):
     for k, d in ((1, d1), (2, d2)):
         want = savgol_filter(X, window, 2, deriv=k, delta=0.3, axis=0, mode="interp")
         assert np.allclose(d, want, rtol=0, atol=1e-10)
+
+
+def test_surface_eval_quick_runs_and_writes_the_table(tmp_path):
+    """The surfacing benchmark (small size) runs and its table holds the truth's figures."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    pytest.importorskip("igl")
+    root = Path(__file__).resolve().parents[1]
+    md = tmp_path / "table.md"
+    out = subprocess.run([sys.executable, str(root / "benchmarks" / "surface_eval.py"), "--quick", "--set", "surfaces",
+                          "--markdown", str(md)], capture_output=True, text=True, env=dict(os.environ), timeout=600)
+    assert out.returncode == 0, out.stderr
+    row = [line for line in md.read_text().splitlines() if "| saddle |" in line]
+    assert len(row) == 1
+    cells = [c.strip() for c in row[0].strip("|").split("|")]
+    assert cells[4] == "9 (9)" and cells[5] == "1 (1)"
+    mean, largest = (float(x) for x in cells[9].split("/"))
+    assert mean <= 0.5 and largest <= 3.0
