@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["boundary_laplacian", "MIN_CORNER_ANGLE", "SMOOTH_FRACTION", "MIN_WINDOW"]
+__all__ = ["boundary_laplacian", "quadratic_derivatives", "MIN_CORNER_ANGLE", "SMOOTH_FRACTION", "MIN_WINDOW"]
 
 #: Degrees: at a corner whose two runs meet closer to straight (or folded) than this, the gradient
 #: is not determined by the two slopes; the runs take their across-data from their other end.
@@ -38,14 +38,50 @@ SMOOTH_FRACTION = 0.25
 MIN_WINDOW = 5
 
 
+def quadratic_derivatives(X: np.ndarray, window: int, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    """First and second derivatives of evenly spaced samples by local quadratic least squares.
+
+    The Savitzky-Golay filter of order 2 (the values of ``scipy.signal.savgol_filter(X, window,
+    2, deriv=k, delta=delta, axis=0, mode="interp")`` for k = 1, 2): each point's derivatives are
+    those of the least-squares parabola through the ``window`` samples centred on it; the first
+    and last ``window // 2`` points take the parabola of the first and last full window. Written
+    here because importing ``scipy.signal`` costs more than a second, more than surfacing a
+    small network.
+
+    Parameters
+    ----------
+    X : (N, k) ndarray
+        Samples, one row per point, evenly spaced by ``delta``.
+    window : int
+        Odd number of samples per fit, ``3 <= window <= N``.
+    delta : float
+        The spacing.
+
+    Returns
+    -------
+    d1, d2 : (N, k) ndarray
+        First and second derivatives.
+    """
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    N, half = len(X), window // 2
+    x = (np.arange(window) - half) * delta
+    P = np.linalg.pinv(np.vander(x, 3, increasing=True))  # (3, window): rows give a0, a1, a2
+    coef = sliding_window_view(X, window, axis=0) @ P.T  # (N - window + 1, k, 3)
+    d1, d2 = np.empty_like(X, dtype=float), np.empty_like(X, dtype=float)
+    d1[half:N - half], d2[half:N - half] = coef[..., 1], 2.0 * coef[..., 2]
+    for c, rows, at in ((coef[0], slice(0, half), x[:half]), (coef[-1], slice(N - half, N), x[half + 1:])):
+        d1[rows] = c[:, 1] + 2.0 * c[:, 2] * at[:, None]
+        d2[rows] = 2.0 * c[:, 2]
+    return d1, d2
+
+
 def _run_derivatives(q: np.ndarray, h: np.ndarray, sign: float):
     """First and second derivatives along one run, by arc length of its 2D path.
 
     Returns ``(t, n_in, kappa, h_s, h_ss)``: unit tangents (m, 2), inward normals (m, 2), curvature
     toward the interior (m,), slope (m,) and second derivative (m,) of the heights.
     """
-    from scipy.signal import savgol_filter
-
     m = len(q)
     seg = np.linalg.norm(np.diff(q, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(seg)])
@@ -56,8 +92,7 @@ def _run_derivatives(q: np.ndarray, h: np.ndarray, sign: float):
     w = max(MIN_WINDOW, int(SMOOTH_FRACTION * N) | 1)
     w = min(w, N if N % 2 else N - 1)
     ds = L / (N - 1)
-    d1 = savgol_filter(X, w, 2, deriv=1, delta=ds, axis=0, mode="interp")
-    d2 = savgol_filter(X, w, 2, deriv=2, delta=ds, axis=0, mode="interp")
+    d1, d2 = quadratic_derivatives(X, w, ds)
     d1 = np.column_stack([np.interp(s, g, d1[:, j]) for j in range(3)])
     d2 = np.column_stack([np.interp(s, g, d2[:, j]) for j in range(3)])
     t = d1[:, :2] / np.maximum(np.linalg.norm(d1[:, :2], axis=1), 1e-300)[:, None]

@@ -23,7 +23,19 @@ import numpy as np
 from ..errors import MethodError, require
 from .fairing import boundary_laplacian
 
-__all__ = ["min_area_triangulation", "triangulate_patch", "is_simple_polygon", "cotan_laplacian"]
+__all__ = ["min_area_triangulation", "triangulate_patch", "is_simple_polygon", "cotan_laplacian",
+           "FLAT_CURVATURE", "FLAT_HEIGHT"]
+
+#: A patch's boundary curves count as about planar (no curvature of their own to fair by, so the
+#: slopes of the curves continuing into the patch give its curvature) when their mean normal
+#: curvature times the patch size is below this ...
+FLAT_CURVATURE = 0.02
+
+#: ... or when their heights over the best-fit plane span less than this fraction of the patch
+#: size. The discrete curvature of a reconstructed curve is noisy (a polar cap of the
+#: reconstructed sphere model: curvature x size 0.024, height span 0.002 of the size), its
+#: heights are not.
+FLAT_HEIGHT = 0.01
 
 
 def _cross(u, v):
@@ -493,7 +505,8 @@ def triangulate_patch(
         hb = (poly - c) @ vt[2]
         H = _mean_normal_curvature(poly, vt[2], corners, n0) if fair else 0.0
         size = float(np.ptp(q[:n0], axis=0).max())
-        if fair and cross and abs(H) * size < 0.02:
+        flat = abs(H) * size < FLAT_CURVATURE or float(np.ptp(hb[:n0])) < FLAT_HEIGHT * size
+        if fair and cross and flat:
             Hs = _slope_curvature(q[:n0], poly[:n0], c, vt, cross)
             if Hs is not None:
                 H = Hs
