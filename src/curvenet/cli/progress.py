@@ -37,7 +37,7 @@ __all__ = ["Stages", "Handle", "print_summary", "summary_rows", "eta_seconds", "
 PROGRESS_DELAY = 1.0
 
 #: Said on the bar and as a log line when a stage will compile numba kernels first.
-COMPILE_NOTE = "compiling the numba kernels (once: later runs load them from numba's cache)"
+COMPILE_NOTE = "compiling numba kernels (once; later runs load them)"
 
 #: Values of ``CURVENET_PROGRESS``.
 PROGRESS_MODES = ("auto", "always", "log", "never")
@@ -171,7 +171,7 @@ class Handle:
 
     def _update_bar(self) -> None:
         note = COMPILE_NOTE if self._compiling else format_eta(self.eta())
-        desc = self._shown + (f" · {self._label(*self._part[:2])}" if self._part else "")
+        desc = self._shown + (f" · {self._part[0]} {self._part[1]:.0%}" if self._part else "")
         self._progress.update(self._task, description=desc, note=note,
                               total=100 if self._part or self.parts else self.total,
                               completed=100 * self._share_done if (self._part or self.parts) else self.done)
