@@ -7,6 +7,7 @@ import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -165,3 +166,22 @@ def test_the_one_time_compile_is_announced_once(tmp_path):
     assert second.returncode == 0, second.stderr
     assert COMPILE_NOTE not in second.stderr and "reconstructing (robust)" in second.stderr
     assert curvenet.load(tmp_path / "a.json") == curvenet.load(tmp_path / "b.json")  # compiled = loaded
+
+
+
+def test_the_paper_method_help_example_gives_a_meaningful_network(tmp_path):
+    """The ``--method paper`` example of ``curvenet reconstruct --help``, run as written from a
+    copy of the shipped examples, finds the clean cube's 8 corners and 12 edges (it was the
+    noisy mug: 1 node, 0 curves)."""
+    import shlex
+    import shutil
+
+    from curvenet.cli.examples import EXAMPLES
+
+    root = Path(__file__).resolve().parents[1]
+    shutil.copytree(root / "examples", tmp_path / "examples")
+    [args] = [shlex.split(c) for c in EXAMPLES["reconstruct"] if "--method paper" in c]
+    r = cli(*args[1:], cwd=tmp_path)
+    assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
+    net = curvenet.load(tmp_path / args[args.index("-o") + 1])
+    assert (net.n_nodes, net.n_curves, net.betti) == (8, 12, (1, 5))
