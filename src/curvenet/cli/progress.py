@@ -230,15 +230,16 @@ class Stages:
             print(message, file=self.file, flush=True)
 
     def _line(self, text: str, seconds: float | None, note: str = "") -> None:
-        """A log line (``seconds`` None: an announcement, printed in both log styles)."""
-        if self.quiet or (seconds is not None and (self.verbose or not (self._log_all or self._log_slow))):
-            return
-        if seconds is None and self._bars and not self.verbose:
-            return  # said on the bar
-        if seconds is not None and not self._log_all and seconds < self._delay:
-            return
-        tail = "" if seconds is None else f": {seconds:.2f} s"
-        print(f"curvenet: {text}{tail}" + (f", {note}" if note else ""), file=self.file, flush=True)
+        """Print a log line on the stage stream: an announcement (``seconds`` None) in the log
+        styles and with ``verbose`` (a bar says it otherwise); a stage or part that ended, with
+        its time, in the log styles (``log``: every one; off a terminal: over the delay)."""
+        if seconds is None:
+            wanted = self._log_all or self._log_slow or self.verbose
+        else:
+            wanted = not self.verbose and (self._log_all or (self._log_slow and seconds >= self._delay))
+        if wanted:
+            tail = "" if seconds is None else f": {seconds:.2f} s"
+            print(f"curvenet: {text}{tail}" + (f", {note}" if note else ""), file=self.file, flush=True)
 
     @contextmanager
     def stage(self, label: str, *, total: int | None = None, detail: str = "", compiling: bool = False):
