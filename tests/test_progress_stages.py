@@ -155,7 +155,8 @@ def test_the_one_time_compile_is_announced_once(tmp_path):
     pts = tee_points(NUMBA_MIN_POINTS // 3 + 10) + rng.normal(0, 1e-4, (3 * (NUMBA_MIN_POINTS // 3 + 10) + 1, 2))
     np.savetxt(tmp_path / "t.xyz", pts)
     env = {"NUMBA_CACHE_DIR": str(cache), "CURVENET_PROGRESS": "log"}
-    env.pop("CURVENET_NO_NUMBA", None)
+    if os.environ.get("CURVENET_NO_NUMBA", "") in ("1", "true", "yes"):
+        pytest.skip("numba switched off (CURVENET_NO_NUMBA): nothing compiles")
     first = cli("reconstruct", "t.xyz", "-o", "a.json", cwd=tmp_path, env=env)
     assert first.returncode == 0, first.stderr
     assert first.stderr.count(COMPILE_NOTE) == 1, first.stderr
