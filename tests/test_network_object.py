@@ -1,6 +1,7 @@
 """Issue 21, the Python object: equality, allclose, len and iteration, a clearly mutable network
 whose derived values never go stale, save/load at the top level, and typed public API."""
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -53,6 +54,66 @@ def test_save_and_load_at_the_top_level(tmp_path):
         curvenet.save(net, tmp_path / "n.xyz")
     with pytest.raises(curvenet.InputError):
         curvenet.load(tmp_path / "missing.json")
+
+
+@pytest.mark.parametrize("options", [{}, {"indent": 2}], ids=["compact (orjson when installed)", "indented (json)"])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_net_save_round_trips_through_load(tmp_path, options, dim):
+    """``net.save`` then ``curvenet.load``: exactly equal, for each JSON writer path (the only
+    format read back); a nudged coordinate breaks ``==`` but not ``allclose``."""
+    net = sample_network(3)
+    if dim == 2:
+        net = CurveNetwork(net.nodes[:, :2].copy(), [Curve(c.points[:, :2].copy(), c.start, c.end, c.closed,
+                                                           c.indices) for c in net.curves])
+    net.curves[0].points[1] += np.array([0.1, 1 / 3, 2 / 7][:dim])  # digits that need all 17 places
+    path = net.save(tmp_path / "n.json", **options)
+    assert path == tmp_path / "n.json"
+    back = curvenet.load(path)
+    assert back == net and back.allclose(net, rtol=0, atol=0)
+    assert back.canonical() == net.canonical()
+    assert back.dimension == dim and [c.start for c in back] == [c.start for c in net]
+    back.curves[0].points[1, 0] = np.nextafter(back.curves[0].points[1, 0], np.inf)
+    assert back != net and back.allclose(net) and not back.allclose(net, rtol=0, atol=0)
+
+
+def test_net_save_writes_every_format_and_load_refuses_the_ones_it_cannot_read(tmp_path):
+    from curvenet.io import WRITERS
+
+    net = sample_network(3)
+    for ext in sorted(WRITERS):
+        path = net.save(tmp_path / f"n{ext}")
+        a, b = path.read_bytes(), curvenet.save(net, tmp_path / f"m{ext}").read_bytes()
+        if ext == ".dxf":  # ezdxf stamps each file with random GUIDs and its times of writing
+            a, b = (_without_stamps(x) for x in (a, b))
+        assert a == b, ext
+        if ext != ".json":
+            with pytest.raises(curvenet.FormatError, match="written, not read back"):
+                curvenet.load(path)
+    with pytest.raises(curvenet.FormatError):
+        net.save(tmp_path / "n.xyz")
+
+
+def _without_stamps(dxf: bytes) -> list[str]:
+    """The DXF's lines with the values of its GUID and time header variables blanked."""
+    lines = dxf.decode().split("\n")
+    for i, line in enumerate(lines):
+        if re.fullmatch(r"\$(TD\w+|FINGERPRINTGUID|VERSIONGUID)", line.strip()):
+            lines[i + 2] = ""
+        lines[i] = re.sub(r"@ \d{4}-\d\d-\d\dT[0-9:.+]+", "", lines[i])
+    return lines
+
+
+def test_network_module_never_imports_the_file_formats():
+    """CurveNetwork.save reaches curvenet.io only through the writer the package hands in."""
+    import ast
+
+    import curvenet.network as network
+
+    tree = ast.parse(Path(network.__file__).read_text())
+    imported = [n.module or "" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
+    imported += [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+    assert not [m for m in imported if m.lstrip(".").startswith("io") or "curvenet.io" in m]
+    assert network._file_writer is curvenet.save
 
 
 def test_meshlab_reads_the_network_and_surface_ply(tmp_path):

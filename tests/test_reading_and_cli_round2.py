@@ -245,9 +245,13 @@ def test_progress_log_lines_name_and_number_the_stages(tmp_path, monkeypatch, ca
     lines = capsys.readouterr().err.splitlines()
     import re
 
-    assert len(lines) == 3, lines
+    assert len(lines) == 8, lines
     assert re.fullmatch(r"curvenet: \[1/3\] reading t\.xyz: \d+\.\d\d s", lines[0])
-    assert re.fullmatch(r"curvenet: \[2/3\] reconstructing \(robust\) \u00b7 61 points: \d+\.\d\d s", lines[1])
-    assert re.fullmatch(r"curvenet: \[3/3\] writing \u00b7 2 file\(s\): \d+\.\d\d s", lines[2])
+    parts = ("neighbors", "graph", "nodes", "tracing", "assemble")  # the method's own stages
+    for line, part in zip(lines[1:6], parts):
+        assert re.fullmatch(rf"curvenet: \[2/3\] reconstructing \(robust\) \u00b7 61 points \u00b7 {part} "
+                            rf"\(\d+% of the work\): \d+\.\d\d s(, .+ left)?", line), line
+    assert re.fullmatch(r"curvenet: \[2/3\] reconstructing \(robust\) \u00b7 61 points: \d+\.\d\d s", lines[6])
+    assert re.fullmatch(r"curvenet: \[3/3\] writing \u00b7 2 file\(s\): \d+\.\d\d s", lines[7])
     assert main(["reconstruct", str(f), "-o", str(tmp_path / "b.json"), "-q"]) == 0
     assert capsys.readouterr().err == ""  # --quiet wins

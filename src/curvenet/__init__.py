@@ -1,7 +1,8 @@
 """curvenet: reconstruct curve networks from unorganized 2D/3D points.
 
 The main entry point is :func:`reconstruct`, which returns a :class:`CurveNetwork`;
-:func:`save` writes one in any format (by extension) and :func:`load` reads a saved ``.json``.
+:func:`save` (or ``network.save(path)``) writes one in any format (by extension) and
+:func:`load` reads a saved ``.json``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from .errors import (
     MissingDependencyError,
     OutputError,
 )
+from . import network as _network
 from .network import Curve, CurveNetwork
 from .reconstruct import METHODS, reconstruct
 
@@ -60,6 +62,9 @@ def save(network: CurveNetwork, path: str | Path, **options: Any) -> Path:
     return write_network(network, path, **options)
 
 
+_network._set_file_writer(save)  # CurveNetwork.save writes through save (network never imports io)
+
+
 def load(path: str | Path) -> CurveNetwork:
     """Read a network saved in the curvenet JSON format (``.json``).
 
@@ -76,8 +81,11 @@ def load(path: str | Path) -> CurveNetwork:
     InputError, FormatError
         When the file is missing or is not a curvenet network.
     """
-    from .io import read_network
+    from .io import extension, read_network
 
+    if extension(path) != ".json":
+        raise FormatError(f"{path}: curvenet.load reads the curvenet JSON format (.json); "
+                          f"{extension(path) or 'a file without extension'} is written, not read back")
     return read_network(path)
 
 

@@ -13,8 +13,9 @@ the order they are stored (compare :meth:`CurveNetwork.canonical` forms to ignor
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -31,6 +32,19 @@ __all__ = ["Curve", "CurveNetwork", "NODE_KINDS"]
 #: more curve ends), ``"end"`` (a free end, 1) and ``"other"`` (2, or 0 for a node no curve
 #: reaches).
 NODE_KINDS = ("junction", "end", "other")
+
+#: The function behind :meth:`CurveNetwork.save`, ``f(network, path, **options) -> Path``:
+#: :func:`curvenet.save`, handed in by the package when it is imported (which Python always
+#: does before any of its modules). The file formats (:mod:`curvenet.io`) are an outer layer
+#: this core module never imports, not even inside a function; the package facade, allowed to
+#: import them when called, passes its writer in instead (see :func:`_set_file_writer`).
+_file_writer: Callable[..., Path] | None = None
+
+
+def _set_file_writer(writer: Callable[..., Path]) -> None:
+    """Set the function behind :meth:`CurveNetwork.save` (called once, by ``curvenet``)."""
+    global _file_writer
+    _file_writer = writer
 
 
 @dataclass(eq=False)
@@ -551,6 +565,38 @@ class CurveNetwork:
         v, lines = self.polyline_vertices()
         entities = [Line(points=ids) for ids in lines if len(ids) >= 2]
         return trimesh.path.Path3D(entities=entities, vertices=v, process=False)
+
+    def save(self, path: str | Path, **options: Any) -> Path:
+        """Write the network to ``path``, the format chosen by the extension, atomically.
+
+        The same as :func:`curvenet.save` (``net.save(p)`` is ``curvenet.save(net, p)``);
+        :func:`curvenet.load` reads a ``.json`` back (``load(p) == net``).
+
+        Parameters
+        ----------
+        path : str or Path
+            ``.json``, ``.ply``, ``.obj``, ``.vtu``, ``.svg``, ``.dxf``, ``.geojson``, ``.swc``...
+            (``curvenet formats`` lists them).
+        **options
+            Options of the format's writer (e.g. ``projection="iso"`` for ``.svg``).
+
+        Returns
+        -------
+        Path
+            The written file.
+
+        Raises
+        ------
+        FormatError
+            For an unknown extension.
+        OutputError
+            When the file cannot be written.
+        """
+        if _file_writer is None:  # only when this module was loaded without its package
+            from .errors import OutputError
+
+            raise OutputError("CurveNetwork.save needs the curvenet package imported (import curvenet)")
+        return _file_writer(self, path, **options)
 
     def __repr__(self) -> str:
         return (

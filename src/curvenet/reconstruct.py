@@ -14,7 +14,7 @@ from .errors import InputError
 from .network import CurveNetwork
 from .validate import reconstructable, unit_frame
 
-__all__ = ["reconstruct", "METHODS", "DEFAULT_METHOD", "LENGTH_PARAMETERS", "LENGTH_RESULTS"]
+__all__ = ["reconstruct", "compile_pending", "METHODS", "DEFAULT_METHOD", "LENGTH_PARAMETERS", "LENGTH_RESULTS"]
 
 #: Method name -> (module, function). Each function takes ``(points, **params)`` with points a
 #: checked (N, d) float array and returns a :class:`CurveNetwork`.
@@ -44,7 +44,13 @@ LENGTH_RESULTS: dict[str, tuple[str, ...]] = {
 }
 
 
-def reconstruct(points: ArrayLike, *, method: str = "auto", **params: Any) -> CurveNetwork:
+def reconstruct(
+    points: ArrayLike,
+    *,
+    method: str = "auto",
+    on_stage: Callable[[str, float], None] | None = None,
+    **params: Any,
+) -> CurveNetwork:
     """Reconstruct a curve network from unorganized points.
 
     Parameters
@@ -54,6 +60,11 @@ def reconstruct(points: ArrayLike, *, method: str = "auto", **params: Any) -> Cu
     method : str
         ``"auto"`` (the default method), or a name from :data:`METHODS`: ``"paper"`` is the
         method of the founding paper (Algorithms 1 and 2).
+    on_stage : callable, optional
+        ``on_stage(name, share)``, called as each stage of the method begins, with the stage's
+        name and its share (0 to 1) of the method's work (the shares of
+        :mod:`curvenet.methods.stages`, measured); for a progress display. The ``robust`` and
+        ``paper`` methods report their stages; ``emst`` does not call it.
     **params
         Parameters of the method (see its documentation); unknown names raise InputError.
 
@@ -92,6 +103,8 @@ def reconstruct(points: ArrayLike, *, method: str = "auto", **params: Any) -> Cu
     for key in LENGTH_PARAMETERS.get(name, ()):
         if key in params:
             params[key] = _scaled(params[key], k)
+    if on_stage is not None and "on_stage" in inspect.signature(fn).parameters:
+        params = {**params, "on_stage": on_stage}
     t0 = time.perf_counter()
     net = fn(inner, **params)
     _back_to_units(net, name, shift, k)
@@ -106,13 +119,40 @@ def reconstruct(points: ArrayLike, *, method: str = "auto", **params: Any) -> Cu
     return net
 
 
+def compile_pending(n_points: int, *, method: str = "auto") -> bool:
+    """Whether a run of ``method`` on ``n_points`` points will first compile numba kernels.
+
+    numba compiles a method's kernels on their first use and keeps them in its disk cache
+    (beside the package, or in ``NUMBA_CACHE_DIR``): that happens once, then runs load them.
+    Only the ``robust`` method decides this ahead (see
+    :func:`curvenet.methods.robust.kernels.registry.compile_pending`); the others answer False.
+
+    Parameters
+    ----------
+    n_points : int
+        Points of the run (small inputs run plain-Python kernels, compiling nothing).
+    method : str
+        ``"auto"`` or a name from :data:`METHODS`.
+
+    Returns
+    -------
+    bool
+    """
+    name = DEFAULT_METHOD if method == "auto" else method
+    if name != "robust":
+        return False
+    from .methods.robust.kernels.registry import compile_pending as _pending
+
+    return _pending(n_points)
+
+
 def _check_params(name: str, fn: Callable[..., CurveNetwork], params: dict[str, Any]) -> None:
     """Raise InputError for a parameter the method does not take, or a value of another type
     than its annotation says (a number for ``int`` and ``float``, true or false for ``bool``)."""
     sig = inspect.signature(fn)
     if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
         return
-    known = [p for p in list(sig.parameters)[1:]]
+    known = [p for p in list(sig.parameters)[1:] if p != "on_stage"]  # (reconstruct's own keyword)
     for key, value in params.items():
         if key not in known:
             raise InputError(

@@ -159,7 +159,7 @@ def run(args) -> int:
     from ..errors import FormatError
     from ..io import WRITERS, check_output_path, check_outputs, extension, read_points, write_network
     from ..io.stdio import STDIO, read_points_stdin, stdout_extension, write_stdout
-    from ..reconstruct import DEFAULT_METHOD, reconstruct
+    from ..reconstruct import DEFAULT_METHOD, compile_pending, reconstruct
     from ..validate import reconstructable
     from .cmd_render import check_extension, picture_options
     from .hints import empty_network_hint
@@ -208,8 +208,9 @@ def run(args) -> int:
             points = read_points(args.input, columns=args.columns, drop_nonfinite=args.drop_nonfinite)
     st.info(f"  {len(points)} points, dimension {points.shape[1]}")
     reconstructable(points, name="<stdin>" if from_stdin else args.input)  # too few or identical points: the file named
-    with st.stage(f"reconstructing ({method})", detail=f"{len(points):,} points"):
-        net = reconstruct(points, method=method, **params)
+    with st.stage(f"reconstructing ({method})", detail=f"{len(points):,} points",
+                  compiling=compile_pending(len(points), method=method)) as bar:
+        net = reconstruct(points, method=method, on_stage=bar.method_stage, **params)
     hint = empty_network_hint(net)
     if hint and not args.quiet:
         print(f"curvenet: warning: {hint}", file=sys.stderr)

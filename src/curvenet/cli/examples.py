@@ -11,7 +11,7 @@ EXAMPLES = {
     "reconstruct": [
         "curvenet reconstruct examples/mug.xyz -o mug.json --png mug.png",
         "curvenet reconstruct examples/mug.xyz -o mug.ply -o mug.svg --view iso --labels mug-labels.csv",
-        "curvenet reconstruct examples/mug.xyz --method paper -o mug-paper.json",
+        "curvenet reconstruct examples/cube.xyz --method paper -o cube-paper.json",
         "cat examples/fig8_2d.xyz | curvenet reconstruct - --format xyz -o - --output-format geojson",
     ],
     "info": [

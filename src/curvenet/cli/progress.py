@@ -1,13 +1,18 @@
 """Terminal feedback for the CLI: progress display of slow stages, timings, the summary table.
 
-Progress bars (rich) appear on standard error only when a stage runs longer than
-:data:`PROGRESS_DELAY` seconds, standard error is a terminal and rich is installed; otherwise
-nothing is drawn. Two environment variables change this (used by the tests, handy in CI logs):
+A stage that runs longer than :data:`PROGRESS_DELAY` seconds shows on standard error: as a bar
+(rich) when standard error is a terminal, as one line when it ends otherwise (log style: its
+number, name, detail and time). A stage that reports parts (the method's own stages, through
+:meth:`Handle.method_stage`, the ``on_stage`` callback of :func:`curvenet.reconstruct`) shows
+each part by name with its share of the work, and the time left once a part has ended
+(:func:`eta_seconds`); off a terminal each part is a line of its own. A one-time numba compile is
+announced on the stage it slows (:data:`COMPILE_NOTE`). Two environment variables change this
+(used by the tests, handy in CI logs):
 
 ``CURVENET_PROGRESS``
-    ``auto`` (default), ``always`` (draw even when standard error is not a terminal),
-    ``log`` (no bars: one line per stage on standard error when it ends, with its number, name,
-    detail and time; for CI logs and batch jobs) or ``never``.
+    ``auto`` (default: bars on a terminal, lines for the slow stages elsewhere), ``always``
+    (draw bars even when standard error is not a terminal), ``log`` (no bars: one line for every
+    stage and part, however quick) or ``never``.
 ``CURVENET_PROGRESS_DELAY``
     Seconds a stage must run before its bar appears (default 1).
 
@@ -25,10 +30,14 @@ from contextlib import contextmanager
 
 from .._sigint import checkpoint
 
-__all__ = ["Stages", "print_summary", "summary_rows", "PROGRESS_DELAY"]
+__all__ = ["Stages", "Handle", "print_summary", "summary_rows", "eta_seconds", "format_eta",
+           "PROGRESS_DELAY", "COMPILE_NOTE"]
 
 #: A stage's progress bar appears once it has run this many seconds.
 PROGRESS_DELAY = 1.0
+
+#: Said on the bar and as a log line when a stage will compile numba kernels first.
+COMPILE_NOTE = "compiling numba kernels (once; later runs load them)"
 
 #: Values of ``CURVENET_PROGRESS``.
 PROGRESS_MODES = ("auto", "always", "log", "never")
@@ -53,21 +62,123 @@ def _isatty(f) -> bool:
         return False
 
 
-class _Handle:
-    """What a stage yields: ``advance()`` moves a bar with a known total."""
+def eta_seconds(elapsed: float, done: float) -> float | None:
+    """Seconds left when the share ``done`` of the work took ``elapsed`` seconds.
 
-    def __init__(self, total):
+    The rest is assumed to go at the same pace: ``elapsed * (1 - done) / done``.
+
+    Parameters
+    ----------
+    elapsed : float
+        Seconds spent so far.
+    done : float
+        Share of the work done, 0 to 1 (the measured shares of the stages that ended).
+
+    Returns
+    -------
+    float or None
+        None while nothing is done (the pace is unknown); 0 once all is done.
+
+    Examples
+    --------
+    >>> eta_seconds(3.0, 0.25)
+    9.0
+    >>> eta_seconds(3.0, 0.0) is None
+    True
+    """
+    if done >= 1:
+        return 0.0
+    if done <= 0 or elapsed < 0:
+        return None
+    return elapsed * (1 - done) / done
+
+
+def format_eta(seconds: float | None) -> str:
+    """The time left in words: ``""`` (unknown), ``"under 1 s left"``, ``"about 42 s left"``,
+    ``"about 3 min left"``, ``"about 2 h 5 min left"``.
+
+    Examples
+    --------
+    >>> format_eta(95)
+    'about 2 min left'
+    """
+    if seconds is None:
+        return ""
+    if seconds < 1:
+        return "under 1 s left"
+    if seconds < 90:
+        return f"about {round(seconds)} s left"
+    minutes = round(seconds / 60)
+    if minutes < 60:
+        return f"about {minutes} min left"
+    return f"about {minutes // 60} h {minutes % 60} min left"
+
+
+class Handle:
+    """What a stage yields: ``advance()`` moves a bar with a known total, ``method_stage`` (the
+    ``on_stage`` callback of :func:`curvenet.reconstruct`) shows the part that begins."""
+
+    def __init__(self, total, shown: str, emit, compiling: bool):
         self.total = total
         self.done = 0
         self._lock = threading.Lock()
         self._progress = None
         self._task = None
+        self._shown = shown
+        self._emit = emit  # emit(line text, seconds): a log line when the stage lines are wanted
+        self._compiling = compiling
+        self._t0 = time.perf_counter()
+        self._part: tuple[str, float, float] | None = None  # (name, share, start)
+        self._share_done = 0.0
+        self.parts: list[tuple[str, float, float]] = []  # (name, share, seconds) of ended parts
 
     def advance(self, n: int = 1) -> None:
         with self._lock:
             self.done += n
             if self._progress is not None:
                 self._progress.update(self._task, completed=self.done)
+
+    def eta(self) -> float | None:
+        """Seconds left in this stage from the shares of its ended parts (None: unknown, e.g.
+        while kernels compile: the compile does not scale with the shares)."""
+        if self._compiling or not self.parts:
+            return None
+        return eta_seconds(time.perf_counter() - self._t0, self._share_done)
+
+    def _end_part(self) -> None:
+        if self._part is None:
+            return
+        name, share, start = self._part
+        dt = time.perf_counter() - start
+        self.parts.append((name, share, dt))
+        self._share_done = min(1.0, self._share_done + share)
+        self._part = None
+        left = format_eta(self.eta()) if self._share_done < 1 else ""
+        self._emit(f"{self._shown} · {self._label(name, share)}", dt, left)
+
+    @staticmethod
+    def _label(name: str, share: float) -> str:
+        return f"{name} ({share:.0%} of the work)" if share else name
+
+    def method_stage(self, name: str, share: float) -> None:
+        """Begin the part ``name`` worth ``share`` (0 to 1) of this stage's work (and end the
+        previous one)."""
+        with self._lock:
+            self._end_part()
+            self._part = (name, share, time.perf_counter())
+            if self._progress is not None:
+                self._update_bar()
+
+    def _update_bar(self) -> None:
+        note = COMPILE_NOTE if self._compiling else format_eta(self.eta())
+        desc = self._shown + (f" · {self._part[0]} {self._part[1]:.0%}" if self._part else "")
+        self._progress.update(self._task, description=desc, note=note,
+                              total=100 if self._part or self.parts else self.total,
+                              completed=100 * self._share_done if (self._part or self.parts) else self.done)
+
+    def _close(self) -> None:
+        with self._lock:
+            self._end_part()
 
 
 class Stages:
@@ -101,8 +212,11 @@ class Stages:
         self.n_stages = stages
         self._count = 0
         mode = _progress_mode()
-        self._log = not quiet and mode == "log"
-        self._bars = not quiet and mode not in ("never", "log") and (mode == "always" or _isatty(self.file))
+        tty = _isatty(self.file)
+        self._log_all = not quiet and mode == "log"
+        self._bars = not quiet and mode not in ("never", "log") and (mode == "always" or tty)
+        # off a terminal (auto): a line for each stage or part that ran over the delay
+        self._log_slow = not quiet and mode == "auto" and not tty
         if self._bars:
             try:
                 import rich  # noqa: F401
@@ -115,8 +229,20 @@ class Stages:
         if self.verbose:
             print(message, file=self.file, flush=True)
 
+    def _line(self, text: str, seconds: float | None, note: str = "") -> None:
+        """Print a log line on the stage stream: an announcement (``seconds`` None) in the log
+        styles and with ``verbose`` (a bar says it otherwise); a stage or part that ended, with
+        its time, in the log styles (``log``: every one; off a terminal: over the delay)."""
+        if seconds is None:
+            wanted = self._log_all or self._log_slow or self.verbose
+        else:
+            wanted = not self.verbose and (self._log_all or (self._log_slow and seconds >= self._delay))
+        if wanted:
+            tail = "" if seconds is None else f": {seconds:.2f} s"
+            print(f"curvenet: {text}{tail}" + (f", {note}" if note else ""), file=self.file, flush=True)
+
     @contextmanager
-    def stage(self, label: str, *, total: int | None = None, detail: str = ""):
+    def stage(self, label: str, *, total: int | None = None, detail: str = "", compiling: bool = False):
         """Time a stage; show a bar (pulsing, or of ``total`` steps, with an ETA) if it runs long.
 
         Parameters
@@ -128,17 +254,24 @@ class Stages:
             time left.
         detail : str
             Shown after the name (e.g. ``"1,108 points"``).
+        compiling : bool
+            The stage compiles numba kernels first (:func:`curvenet.reconstruct.compile_pending`):
+            :data:`COMPILE_NOTE` is shown on its bar and as a line when it begins (off a
+            terminal), and no time left is estimated.
 
         Yields
         ------
-        handle
-            With ``advance(n=1)`` for stages with a ``total``.
+        Handle
+            With ``advance(n=1)`` for stages with a ``total`` and ``method_stage(name, share)``
+            for stages of parts.
         """
         checkpoint()  # Ctrl-C pressed since the last stage: stop before starting this one
         self._count += 1
         number = f"[{self._count}/{self.n_stages}] " if self.n_stages else ""
         shown = number + label + (f" \u00b7 {detail}" if detail else "")
-        handle = _Handle(total)
+        handle = Handle(total, shown, self._line, compiling)
+        if compiling:
+            self._line(f"{shown}: {COMPILE_NOTE}", None)
         lock = threading.Lock()
         state = {"progress": None, "stopped": False}
 
@@ -160,11 +293,12 @@ class Stages:
                 cols = [SpinnerColumn(), TextColumn("[bold]{task.description}"), BarColumn()]
                 if total is not None:
                     cols += [TextColumn("{task.completed}/{task.total}"), TimeRemainingColumn()]
-                cols.append(TimeElapsedColumn())
+                cols += [TextColumn("{task.fields[note]}"), TimeElapsedColumn()]
                 prog = Progress(*cols, console=console, transient=True)
                 with handle._lock:
-                    task = prog.add_task(shown, total=total, completed=handle.done)
+                    task = prog.add_task(shown, total=total, completed=handle.done, note="")
                     handle._progress, handle._task = prog, task
+                    handle._update_bar()
                 prog.start()
                 state["progress"] = prog
 
@@ -177,6 +311,7 @@ class Stages:
         try:
             yield handle
         finally:
+            handle._close()
             dt = time.perf_counter() - t0
             if timer is not None:
                 timer.cancel()
@@ -186,8 +321,7 @@ class Stages:
                     state["progress"].stop()
             self.times[label] = self.times.get(label, 0.0) + dt
             self.info(f"  {label}: {dt:.3f} s")
-            if self._log and not self.verbose:
-                print(f"curvenet: {shown}: {dt:.2f} s", file=self.file, flush=True)
+            self._line(shown, dt)
 
 
 def _fmt(v) -> str:

@@ -77,9 +77,11 @@ def polyline_vertices(net: CurveNetwork) -> tuple[np.ndarray, list[np.ndarray]]:
 
 
 def network_to_obj(net: CurveNetwork) -> str:
-    """Wavefront OBJ: ``v`` lines, then one ``l`` polyline per curve (``o curve_<i>``).
+    """Wavefront OBJ: ``v`` lines, then one ``l`` polyline per curve (``g curve_<i>``).
 
-    Node vertices come first and are shared by every curve that ends there; coordinates are
+    Node vertices come first and are shared by every curve that ends there (one object whose
+    curves meet at their nodes: Blender imports it as one mesh of loose edges, and its "split by
+    group" option gives one object per curve); coordinates are
     the shortest decimals that read back to the same floats. Blender, MeshLab and VTK
     (ParaView, PyVista) read the ``l`` lines as edges; trimesh and meshio read OBJ faces only
     and see the vertices alone: give them the ``.ply`` (trimesh, Open3D) or ``.vtu`` (meshio).
@@ -88,7 +90,7 @@ def network_to_obj(net: CurveNetwork) -> str:
     out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves", f"# nodes are vertices 1..{net.n_nodes}"]
     out.append("\n".join(shortest_rows(v, "v ")))
     for i, ids in enumerate(lines):
-        out.append(f"o curve_{i}")
+        out.append(f"g curve_{i}")
         out.append("l " + " ".join(str(j + 1) for j in ids))
     return "\n".join(s for s in out if s) + "\n"
 

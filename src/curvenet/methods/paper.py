@@ -110,6 +110,7 @@ from ..network import Curve, CurveNetwork
 from .._sigint import held
 from ..neighbors import build_tree, knn, query
 from ..validate import as_points
+from .stages import PAPER_SHARES, OnStage, report_stage
 
 __all__ = [
     "reconstruct_paper",
@@ -701,6 +702,7 @@ def reconstruct_paper(
     tau_s: float | None = None,
     theta: float = 120.0,
     use_numba: bool | None = None,
+    on_stage: OnStage | None = None,
     **unknown: Any,
 ) -> CurveNetwork:
     """Reconstruct a curve network with the founding paper's Algorithms 1 and 2.
@@ -726,6 +728,10 @@ def reconstruct_paper(
         Run the tracing kernel compiled with numba (True; needs the ``fast`` extra), as plain
         Python (False), or (None, the default) compiled when numba is installed and there are
         at least :data:`NUMBA_MIN_POINTS` points. Both give the same result.
+    on_stage : callable, optional
+        ``on_stage(name, share)``, called as each stage begins with its name (a key of
+        ``stats["time"]``) and its share of the work (:data:`curvenet.methods.stages.PAPER_SHARES`),
+        e.g. for a progress display.
 
     Returns
     -------
@@ -769,6 +775,7 @@ def reconstruct_paper(
     times: dict[str, float] = {}
 
     # canonical order: every tie broken by index below is then broken by coordinates
+    report_stage(on_stage, PAPER_SHARES, "neighbors")
     t0 = time.perf_counter()
     order = np.lexsort(pts_in.T[::-1])
     p = np.ascontiguousarray(pts_in[order])
@@ -787,12 +794,14 @@ def reconstruct_paper(
         return CurveNetwork(np.zeros((0, dim)), [], params, stats)
 
     # Algorithm 1
+    report_stage(on_stage, PAPER_SHARES, "nodes")
     t0 = time.perf_counter()
     det = detect_nodes(p, k=k, epsilon=eps, tau_s=tau, neighbors=nbr)
     nodes = det["nodes"]
     times["nodes"] = time.perf_counter() - t0
 
     # Algorithm 2, lines 1-23: trace from every node on the points minus the other candidates
+    report_stage(on_stage, PAPER_SHARES, "tracing")
     t0 = time.perf_counter()
     keep = np.ones(n, dtype=bool)
     keep[det["candidates"]] = False
@@ -808,6 +817,7 @@ def reconstruct_paper(
     times["tracing"] = time.perf_counter() - t0
 
     # Algorithm 2, lines 24-28: reverse search
+    report_stage(on_stage, PAPER_SHARES, "merging")
     t0 = time.perf_counter()
     merged, unmatched = _merge_twins(raw)
     node_loc = np.flatnonzero(is_node)  # ascending = coordinate order

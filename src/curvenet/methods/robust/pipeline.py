@@ -31,6 +31,7 @@ from ...errors import InputError
 from ...network import CurveNetwork
 from ...neighbors import locality_order
 from ...validate import as_points
+from ..stages import ROBUST_SHARES, OnStage, report_stage
 from . import kernels as _k
 from .chains import trace_chains
 from .curves import build_curves, drop_spikes, smooth_curve
@@ -60,6 +61,7 @@ def _reconstruct_robust(
     smooth: bool = False,
     smoothing: float | None = None,
     estimates: Estimates | None = None,
+    on_stage: OnStage | None = None,
 ) -> CurveNetwork:
     """Reconstruct a curve network without tuning: the robust default method.
 
@@ -92,6 +94,10 @@ def _reconstruct_robust(
         The median spacing and noise level of a larger cloud this one is a part of (a tile):
         the decisions taken from them (noise gates, duplicate rule, radii) are then the whole
         cloud's. Default: estimated on ``points`` (see :func:`estimate`).
+    on_stage : callable, optional
+        ``on_stage(name, share)``, called as each stage begins with its name (a key of
+        ``stats["time"]``) and its share of the work (:data:`curvenet.methods.stages.ROBUST_SHARES`),
+        e.g. for a progress display. Not called for inputs too small to run the stages.
 
     Returns
     -------
@@ -113,8 +119,10 @@ def _reconstruct_robust(
         params_out["spacing"] = float(spacing) if spacing is not None else None
         return CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
 
+    report_stage(on_stage, ROBUST_SHARES, "neighbors")
     nb = neighbours(P, prm)  # 1. neighbours and spacing
     tm["neighbors"] = time.perf_counter() - t0
+    report_stage(on_stage, ROBUST_SHARES, "graph")
     t1 = time.perf_counter()
     fr = frames(P, nb, estimates)  # 2. tangents and noise
     P, order, nb, fr = _without_duplicates(P, order, nb, fr, prm, estimates)
@@ -125,15 +133,18 @@ def _reconstruct_robust(
     graph = linked_graph(P, nb, fr, prm)  # 3. links
     tm["graph"] = time.perf_counter() - t1
 
+    report_stage(on_stage, ROBUST_SHARES, "nodes")
     t1 = time.perf_counter()
     reg = junction_regions(P, nb, fr, graph, prm)  # 4. the shell test and its regions
     tm["nodes"] = time.perf_counter() - t1
+    report_stage(on_stage, ROBUST_SHARES, "tracing")
     t1 = time.perf_counter()
     tree, h = nb.tree, nb.h
     del nb  # memory: the kNN lists are not needed below
     chains, regions = trace_chains(P, h, graph, reg.flagged, reg.reg, reg.n_reg, fr.lin)  # 5. chains
     tm["tracing"] = time.perf_counter() - t1
 
+    report_stage(on_stage, ROBUST_SHARES, "assemble")
     t1 = time.perf_counter()
     sc = Scales(h=h, hmed=fr.hmed, sigma=fr.sigma, noise=NOISE.scale * fr.sigma, clean=fr.clean,
                 width=max(prm.link_width, 0.0), indptr=graph.indptr, indices=graph.indices, tree=tree)
@@ -144,6 +155,7 @@ def _reconstruct_robust(
     _to_input_ids(curves, order)
 
     if prm.smooth:
+        report_stage(on_stage, ROBUST_SHARES, "smooth")
         t1 = time.perf_counter()
         s = _smoothing(prm, fr, dim)
         params_out["smoothing"] = s

@@ -36,7 +36,7 @@ from . import chains, frames, graph, heap, linalg, nodes, shell
 from .nodes import JunctionParams
 
 __all__ = [
-    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compiled_active", "NUMBA_MIN_POINTS",
+    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
     "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS", "PAR_MIN", "spacing", "shell_groups", "csr_union",
     "components", "chain_order", "chain_ends", "end_count", "end_counts", "tangents", "linked_edges",
     "short_links", "junction_nodes", "trim_ends", "untangle", "noisy_tangents", "strand_cuts",
@@ -255,6 +255,25 @@ def _compiled_already() -> bool:
     strand test's kernels run compiled on their own, see :data:`NUMBA_MIN_POINTS_NOISY`.)"""
     # (no signatures: numba absent, or NUMBA_DISABLE_JIT=1 made its version plain Python)
     return bool(getattr(KERNELS["tangents"].compiled, "signatures", None))
+
+
+#: The kernels every robust run on :data:`NUMBA_MIN_POINTS` points or more calls, the heaviest to
+#: compile (parallel): when numba's cache lacks one of them, the run starts with the compile of
+#: the kernels (about a minute, see docs/performance.json "compile"). Kernels that only some
+#: inputs need (``untangle``, the strand test's) compile on their first use, a few seconds each,
+#: unannounced.
+COMPILE_MARKERS = ("spacing", "tangents", "linked_edges", "shell_groups", "junction_nodes")
+
+
+def compile_pending(n: int) -> bool:
+    """True when a run on ``n`` points will compile kernels first: numba is there, ``n`` is
+    enough for the compiled kernels (see :func:`compiled_for`), none has run in this process,
+    and numba's disk cache lacks one of :data:`COMPILE_MARKERS` (its index file, see
+    :func:`_in_cache`). The compile happens once per machine, numba version and kernel source;
+    later runs load it."""
+    if not HAVE_NUMBA or n < NUMBA_MIN_POINTS or _compiled_already():
+        return False
+    return not _in_cache(COMPILE_MARKERS)
 
 
 def compiled_active() -> bool:
