@@ -29,8 +29,10 @@ class Neighbours(NamedTuple):
     Attributes
     ----------
     tree : scipy.spatial.cKDTree
-    dist, idx : (N, k) ndarray
-        Distances (ascending) and ids of the k nearest neighbours, self excluded.
+    dist : (N, k) ndarray of float
+        Distances (ascending) of the k nearest neighbours, self excluded.
+    idx : (N, k) ndarray of int32
+        Their ids (int32: the largest array of the method, half the size of int64).
     h : (N,) ndarray of float
         Local spacing (or the user's spacing everywhere).
     """
@@ -68,7 +70,7 @@ class Frames(NamedTuple):
 def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
     """Stage 1: the k-d tree, the k nearest neighbours and the local spacing of the points ``P``."""
     tree = build_tree(P)  # kept for the repairs (repairs.attach_dangling)
-    dist, idx = knn(P, prm.k, ordered=True, tree=tree)
+    dist, idx = knn(P, prm.k, ordered=True, tree=tree, index_dtype=_k.INDEX)
     h = local_spacing(dist, idx) if prm.spacing is None else np.full(len(P), float(prm.spacing))
     return Neighbours(tree, dist, idx, h)
 
@@ -137,7 +139,7 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """
     if _k.compiled_active() and dist.shape[1] <= SPACING.kernel_k_max:
         # compiled, one pass over the rows, the same numbers as the numpy formula below
-        h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+        h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX),
                        float(SPACING.dup), float(SPACING.dup_k))
         return _spacing_floor(h)
     m = min(SPACING.n_mean, dist.shape[1])
@@ -202,7 +204,7 @@ def tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = TANGENTS.st
     # and the noise: distance of each point from the chord between its nearest strip neighbours
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
-    t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+    t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX),
                                    np.ascontiguousarray(h, dtype=np.float64), m, order, margin=margin)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
@@ -238,13 +240,13 @@ def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
     # l2 <= (1 - TANGENTS.vote_coh) l1, hence t^T C t <= (m + 1) (c^2 + (1 - TANGENTS.vote_coh) (1 - c^2)); the
     # eigen-decomposition is computed only for the points below that bound (few on clean data);
     # t^T C t = sum_k (T_k . t)^2 is computed in a compiled loop (no (N, m + 1, d) array)
-    agree = _k.vote_agreement(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m)
+    agree = _k.vote_agreement(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX), m)
     bound = (m + 1) * (TANGENTS.vote_cos**2 + (1.0 - TANGENTS.vote_coh) * (1.0 - TANGENTS.vote_cos**2))
     cand = np.flatnonzero(agree <= bound * (1 + NUMERIC.rel))
     if len(cand) == 0:
         return t, lin
     # the top eigenpair of C for the candidates (compiled, closed form: kernels.linalg._eig_top)
-    u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m,
+    u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX), m,
                          cand.astype(np.int64))
     swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < TANGENTS.vote_cos) & (coh >= TANGENTS.vote_coh)
     sw = cand[swap]
@@ -292,11 +294,11 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
         short = np.zeros(N, dtype=bool)
     rows = np.flatnonzero(short)
     if len(rows):
-        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows, :kk], dtype=np.int64), h, sig)
+        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows, :kk], dtype=_k.INDEX), h, sig)
     rows = np.flatnonzero(~short)
     for s in range(0, len(rows), TANGENTS.noisy_block):  # blocks: the (rows, 32) neighbour ids stay small
         r = rows[s:s + TANGENTS.noisy_block]
-        _, nb = knn(P, k, tree=tree, rows=r)
+        _, nb = knn(P, k, tree=tree, rows=r, index_dtype=_k.INDEX)
         T[r], lin[r] = _k.noisy_tangents(P, r, nb, h, sig)
     return T, lin
 

@@ -25,11 +25,12 @@ class Graph(NamedTuple):
 
     Attributes
     ----------
-    src, dst : (E,) ndarray of int64
+    src, dst : (E,) ndarray of int32
         Directed links (kept by the tests; both directions of a pair may be there).
     dd : (E,) ndarray of float
         Their lengths.
-    indptr, indices : ndarray of int64
+    indptr : (N + 1,) ndarray of int64
+    indices : ndarray of int32
         CSR adjacency of the undirected union of the links.
     """
 
@@ -64,7 +65,7 @@ def linked_graph(P: np.ndarray, nb: Neighbours, fr: Frames, prm: RobustParams) -
             tn, ln = noisy_tangents(P, nb.h, fr.sigma, nb.tree, nb.dist, nb.idx)
             tn, _ = vote_tangents(tn, ln, nb.idx, m=min(TANGENTS.vote_m_noisy, nb.idx.shape[1]))
             src, dst, dd = cut_strand_links(P, nb.h, nb.idx, tn, src, dst, dd, fr.sigma)
-    indptr, indices = _k.csr_union(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64))
+    indptr, indices = _k.csr_union(N, np.asarray(src, dtype=_k.INDEX), np.asarray(dst, dtype=_k.INDEX))
     return Graph(src, dst, dd, indptr, indices)
 
 
@@ -93,8 +94,8 @@ def cut_strand_links(P, h, idx, tn, src, dst, dd, sig):
     if len(src) == 0:
         return src, dst, dd
     cut = _k.strand_cuts(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
-                         np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(tn, dtype=np.float64),
-                         np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64), float(sig))
+                         np.ascontiguousarray(idx, dtype=_k.INDEX), np.ascontiguousarray(tn, dtype=np.float64),
+                         np.asarray(src, dtype=_k.INDEX), np.asarray(dst, dtype=_k.INDEX), float(sig))
     if not cut.any():
         return src, dst, dd
     n = np.int64(len(P))
@@ -110,6 +111,6 @@ def components(n, a, b, mask):
     Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id,
     and their number (compiled union-find).
     """
-    lab, count = _k.components(int(n), np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64),
+    lab, count = _k.components(int(n), np.asarray(a, dtype=_k.INDEX), np.asarray(b, dtype=_k.INDEX),
                                np.ascontiguousarray(mask, dtype=np.bool_))
     return lab, int(count)

@@ -28,7 +28,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
 
     Returns
     -------
-    src, dst : (E,) ndarray of int64
+    src, dst : (E,) ndarray of the dtype of ``idx``
     dd : (E,) ndarray of float
     """
     n = idx.shape[0]
@@ -78,8 +78,8 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
     for p in range(n):
         cnt[p + 1] += cnt[p]
     total = cnt[n]
-    src = np.empty(total, dtype=np.int64)
-    dst = np.empty(total, dtype=np.int64)
+    src = np.empty(total, dtype=idx.dtype)
+    dst = np.empty(total, dtype=idx.dtype)
     out_d = np.empty(total)
     for p in prange(n):
         e = cnt[p]
@@ -93,7 +93,8 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
 
 
 def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
-    """The kNN pairs ``(p, q)`` with ``dist <= link * 0.5 * (h_p + h_q)``, in row order."""
+    """The kNN pairs ``(p, q)`` with ``dist <= link * 0.5 * (h_p + h_q)``, in row order (ids of
+    the dtype of ``idx``)."""
     n = idx.shape[0]
     k = idx.shape[1]
     cnt = np.zeros(n + 1, dtype=np.int64)  # pairs of row p at cnt[p + 1]
@@ -106,8 +107,8 @@ def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
     for p in range(n):
         cnt[p + 1] += cnt[p]
     total = cnt[n]
-    a = np.empty(total, dtype=np.int64)
-    b = np.empty(total, dtype=np.int64)
+    a = np.empty(total, dtype=idx.dtype)
+    b = np.empty(total, dtype=idx.dtype)
     for p in prange(n):
         e = cnt[p]
         for j in range(k):
@@ -122,7 +123,7 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
     """CSR adjacency of the undirected graph with edges (src[i], dst[i]) (both directions).
 
     Within a row, the out-edges come first in edge order, then the in-edges in edge order
-    (a counting sort, stable).
+    (a counting sort, stable). ``indptr`` is int64, ``indices`` of the dtype of ``src``.
     """
     m = src.shape[0]
     deg = np.zeros(n + 1, dtype=np.int64)
@@ -132,7 +133,7 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
     for i in range(n):
         deg[i + 1] += deg[i]
     fill = deg[:-1].copy()
-    out = np.empty(2 * m, dtype=np.int64)
+    out = np.empty(2 * m, dtype=src.dtype)
     for i in range(m):
         a = src[i]
         out[fill[a]] = dst[i]
