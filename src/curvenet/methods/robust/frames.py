@@ -20,27 +20,40 @@ from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
 __all__ = ["Neighbours", "Frames", "neighbours", "frames", "duplicates", "local_spacing", "tangents",
-           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "lex_order"]
+           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "lex_order", "pair_distances"]
 
 
 class Neighbours(NamedTuple):
     """The k nearest neighbours of every point and its local spacing.
 
+    Their distances are not kept (at 16 neighbours, 128 bytes a point: the largest array of the
+    method): :meth:`distances` recomputes them, the same bits as the query's.
+
     Attributes
     ----------
     tree : scipy.spatial.cKDTree
-    dist : (N, k) ndarray of float
-        Distances (ascending) of the k nearest neighbours, self excluded.
+        Over the points (``tree.data``).
     idx : (N, k) ndarray of int32
-        Their ids (int32: the largest array of the method, half the size of int64).
+        Ids of the k nearest neighbours (self excluded), by ascending distance (int32: half the
+        size of int64).
     h : (N,) ndarray of float
         Local spacing (or the user's spacing everywhere).
     """
 
     tree: object
-    dist: np.ndarray
     idx: np.ndarray
     h: np.ndarray
+
+    def distances(self, rows=None, col=None) -> np.ndarray:
+        """Distances of the neighbours (of the points ``rows``; of column ``col`` only), as the
+        query gave them.
+
+        Returns
+        -------
+        (N, k), (R, k), (N,) or (R,) ndarray of float
+        """
+        I = self.idx if rows is None else self.idx[rows]
+        return pair_distances(self.tree.data, rows, I if col is None else I[:, col])
 
 
 class Frames(NamedTuple):
@@ -72,7 +85,32 @@ def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
     tree = build_tree(P)  # kept for the repairs (repairs.attach_dangling)
     dist, idx = knn(P, prm.k, ordered=True, tree=tree, index_dtype=_k.INDEX)
     h = local_spacing(dist, idx) if prm.spacing is None else np.full(len(P), float(prm.spacing))
-    return Neighbours(tree, dist, idx, h)
+    return Neighbours(tree, idx, h)  # (the distances go: Neighbours.distances recomputes them)
+
+
+def pair_distances(P: np.ndarray, rows, I: np.ndarray) -> np.ndarray:
+    """``|P[I] - P[rows]|`` summed as scipy's k-d tree query sums it (the squared coordinate
+    differences, first to last, then the root): the same bits as the distances it returns.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    rows : (R,) ndarray of int or None
+        The points (None: all, R = N).
+    I : (R,) or (R, m) ndarray of int
+        Ids of other points, a row (or one id) for each.
+
+    Returns
+    -------
+    ndarray of float, the shape of ``I``
+    """
+    Q = P if rows is None else P[rows]
+    s = np.zeros(I.shape)
+    for c in range(P.shape[1]):
+        q = Q[:, c] if I.ndim == 1 else Q[:, c, None]
+        v = P[I, c] - q
+        s += v * v
+    return np.sqrt(s)
 
 
 def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None) -> Frames:
@@ -112,7 +150,7 @@ def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:
     """
     if not fr.clean:
         return None
-    dup = coincident(nb.dist, nb.idx, SPACING.dedup * fr.hmed)
+    dup = coincident(nb, SPACING.dedup * fr.hmed)
     if not dup.any() or len(dup) - dup.sum() < DEFAULTS.min_points:
         return None
     return np.flatnonzero(~dup)
@@ -268,7 +306,8 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
     points more than 30 degrees off; 0.1% with these). Used as the tangents of the whole method
     they cost the mug's junctions (bench samplings 0 and 1), so they serve this test only.
 
-    The method's own neighbours (``dist``, ``idx``: (N, k), sorted by distance) serve the
+    The method's own neighbours (``idx``: (N, k), sorted by distance; ``dist`` their distances,
+    or None: recomputed where needed, :func:`pair_distances`) serve the
     points whose last one (or ``TANGENTS.noisy_k``-th) lies beyond the kernel's reach
     (:func:`kernels.noisy_reach`): the farther ones would change nothing (on a lone
     curve, most points). The others get their ``TANGENTS.noisy_k`` nearest from ``tree``, in blocks.
@@ -289,7 +328,8 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
     if kk >= k:
         short = np.ones(N, dtype=bool)  # (as many as the kernel's)
     elif kk >= min(_k.NOISY_CAND, k) and kk > 0:
-        short = dist[:, kk - 1] > _k.noisy_reach(h, sig)
+        far = pair_distances(P, None, idx[:, kk - 1]) if dist is None else dist[:, kk - 1]
+        short = far > _k.noisy_reach(h, sig)
     else:
         short = np.zeros(N, dtype=bool)
     rows = np.flatnonzero(short)
@@ -303,23 +343,24 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
     return T, lin
 
 
-def coincident(dist, idx, r):
+def coincident(nb: Neighbours, r):
     """Points with a neighbour earlier in the (internal) order closer than ``r``.
 
     Parameters
     ----------
-    dist, idx : (N, k) ndarray
-        Distances and indices of the k nearest neighbours, ascending.
+    nb : Neighbours
     r : float
 
     Returns
     -------
     (N,) bool ndarray
     """
-    dup = np.zeros(len(dist), dtype=bool)
-    rows = np.flatnonzero(dist[:, 0] < r)
+    dup = np.zeros(len(nb.idx), dtype=bool)
+    if nb.idx.shape[1] == 0:
+        return dup
+    rows = np.flatnonzero(nb.distances(col=0) < r)
     if len(rows):
-        dup[rows] = ((dist[rows] < r) & (idx[rows] < rows[:, None])).any(axis=1)
+        dup[rows] = ((nb.distances(rows) < r) & (nb.idx[rows] < rows[:, None])).any(axis=1)
     return dup
 
 
