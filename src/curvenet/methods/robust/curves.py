@@ -132,11 +132,14 @@ def open_curves(P, nodes, ids, nids, a, b, last0, last1):
     inner = (k >= 0) & (k < nids[cid])
     ind = np.full(off[-1], -1, dtype=np.int64)
     ind[inner] = ids[(np.r_[0, np.cumsum(nids)][cid] + k)[inner]]
+    del local, src  # (memory: the (M,) temporaries go before the next ones come)
+    at_a = np.flatnonzero(~inner & (k < 0))
+    at_b = np.flatnonzero(~inner & (k >= 0))
+    del k, inner
     pts = P[np.maximum(ind, 0)]
-    at_a = ~inner & (k < 0)
-    at_b = ~inner & (k >= 0)
     pts[at_a] = nodes[a[cid[at_a]]]
     pts[at_b] = nodes[b[cid[at_b]]]
+    del cid
     # a curve whose points turn back (two steps in a row more than 120 degrees apart) zigzags
     # (a sharp spike whose legs were linked across, a region's points ordered along a chord
     # that crosses the spike): its inner points are reordered into a shorter path
@@ -180,7 +183,19 @@ def _untangled(X, off):
 
 def _turning_back(X, off):
     """The curves (points ``X[off[i]:off[i + 1]]``, concatenated) with two successive steps
-    whose directions are more than 120 degrees apart (``CURVES.turn_back_cos``)."""
+    whose directions are more than 120 degrees apart (``CURVES.turn_back_cos``), ascending;
+    in blocks of about ``LAYOUT.curve_block`` points (the temporaries stay small)."""
+    off = np.asarray(off, dtype=np.int64)
+    out, i, nc = [], 0, len(off) - 1
+    while i < nc:
+        j = max(i + 1, min(nc, int(np.searchsorted(off, off[i] + LAYOUT.curve_block, side="right")) - 1))
+        out.append(i + _turning_back_block(X[off[i]:off[j]], off[i:j + 1] - off[i]))
+        i = j
+    return np.concatenate(out) if out else np.zeros(0, dtype=np.int64)
+
+
+def _turning_back_block(X, off):
+    """:func:`_turning_back` of one block of curves."""
     d = np.diff(X, axis=0)
     L = np.linalg.norm(d, axis=1)
     # steps inside a curve of nonzero length, and pairs of them inside one curve
