@@ -297,13 +297,13 @@ def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
             fr = frames(P, nb)
         graph = linked_graph(P, nb, fr, prm)
         noise = thresholds.NOISE.scale * fr.sigma
-        src0, dst0, _ = linked_edges(P, nb.h, nb.dist, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
+        src0, dst0, _ = linked_edges(P, nb.h, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
                                      thresholds.LINKS.strip_noise * noise, thresholds.LINKS.gap_noise * noise)
         links, before = _pairs(graph.src, graph.dst), _pairs(src0, dst0)
         kept = {tuple(x) for x in links.tolist()}
         cut = np.array([x for x in before.tolist() if tuple(x) not in kept], dtype=np.int64).reshape(-1, 2)
         reg = junction_regions(P, nb, fr, graph, prm)
-        ka, kb = _k.short_links(nb.h, nb.dist, nb.idx, float(prm.link))
+        ka, kb = _k.short_links(P, nb.h, nb.idx, float(prm.link))
         reg0, _ = components(len(P), ka, kb, reg.groups != 2)
         chains, regions = trace_chains(P, nb.h, graph, reg.flagged, reg.reg, reg.n_reg, fr.lin)
         sc = Scales(h=nb.h, hmed=fr.hmed, sigma=fr.sigma, noise=noise, clean=fr.clean,

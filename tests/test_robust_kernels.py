@@ -201,8 +201,8 @@ dist, idx = knn(P, 16)
 h = RF.local_spacing(dist, idx)
 t, lin, chord, gain = K.tangents(P, idx, h, 12)
 sub = K.tangents(P, idx, h, 12, order=np.arange(0, len(P), 2), margin=1.0)
-e = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
-s = K.short_links(h, dist, idx, 2.5)
+e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+s = K.short_links(P, h, idx, 2.5)
 np.savez(sys.argv[1], t, lin, chord, gain, *sub, *e, *s)
 """
 
@@ -218,8 +218,8 @@ def test_compiled_and_python_runs_agree(cloud, tmp_path):
     P, dist, idx, h = cloud
     t, lin, chord, gain = K.tangents(P, idx, h, 12)
     sub = K.tangents(P, idx, h, 12, order=np.arange(0, len(P), 2), margin=1.0)
-    e = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
-    s = K.short_links(h, dist, idx, 2.5)
+    e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+    s = K.short_links(P, h, idx, 2.5)
     out = tmp_path / "py.npz"
     env = dict(os.environ, CURVENET_NO_NUMBA="1")
     r = subprocess.run([sys.executable, "-c", _PY_RUN, str(out)], env=env, capture_output=True, text=True,
@@ -241,8 +241,8 @@ def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
 
     def run():
         t, lin, chord, _ = K.tangents(P, idx, h, 12)
-        e = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
-        s = K.short_links(h, dist, idx, 2.5)
+        e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+        s = K.short_links(P, h, idx, 2.5)
         agree = K.vote_agreement(t, idx, 8)
         u = K.vote_eig(t, idx, 8, cand)
         indptr, indices = K.csr_union(len(P), e[0], e[1])
@@ -256,8 +256,8 @@ def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
     for a, b in zip(one, par):
         assert np.array_equal(a, b, equal_nan=True)
     t, lin = par[0], par[1]
-    for got, ref in ((par[3:6], _plain("linked_edges")(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
-                     (par[6:8], _plain("short_links")(h, dist, idx, 2.5)),
+    for got, ref in ((par[3:6], _plain("linked_edges")(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
+                     (par[6:8], _plain("short_links")(P, h, idx, 2.5)),
                      ((par[8],), (_plain("vote_agreement")(t, idx, 8),))):
         for a, b in zip(got, ref):
             assert np.array_equal(a, b)
@@ -267,7 +267,7 @@ def test_linked_edges_match_the_array_formulas(cloud):
     P, dist, idx, h = cloud
     t, lin, _, _ = K.tangents(P, idx, h, 12)
     link, width, wmin, gap, extra_len, lmin = 2.5, 1.0, 0.004, 0.002, 2.0, 0.3
-    got = K.linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, lmin)
+    got = K.linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lmin)
     # the same tests on flat arrays
     n, k = idx.shape
     src = np.repeat(np.arange(n), k)
@@ -293,7 +293,7 @@ def test_linked_edges_match_the_array_formulas(cloud):
     assert np.array_equal(got[0], src[sel])
     assert np.array_equal(got[1], dst[sel])
     assert np.array_equal(got[2], dd[sel])
-    a, b = K.short_links(h, dist, idx, link)
+    a, b = K.short_links(P, h, idx, link)
     ks = np.repeat(np.arange(n), k)
     m = dist.ravel() <= link * 0.5 * (h[ks] + h[idx.ravel()])
     assert np.array_equal(a, ks[m]) and np.array_equal(b, idx.ravel()[m])
@@ -431,7 +431,7 @@ def test_vote_eig_matches_lapack(d):
 def test_shell_groups_of_a_subset_equal_those_of_all(cloud):
     P, dist, idx, h = cloud
     t, lin, _, _ = K.tangents(P, idx, h, 12)
-    src, dst, _ = K.linked_edges(P, h, dist, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+    src, dst, _ = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
     indptr, indices = K.csr_union(len(P), src, dst)
     full = K.shell_groups(P, h, indptr, indices, 1.5, 3.3)
     sub = np.random.default_rng(1).choice(len(P), size=len(P) // 7, replace=False)

@@ -23,7 +23,7 @@ def query(tree: cKDTree, x: np.ndarray, **kwargs):
 
 
 def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1,
-        ordered: bool = False, rows: np.ndarray | None = None):
+        ordered: bool = False, rows: np.ndarray | None = None, index_dtype=np.int64):
     """The ``k`` nearest neighbours of every point, the point itself excluded.
 
     Parameters
@@ -43,12 +43,14 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     rows : (R,) ndarray of int, optional
         Only these points (ids into ``points``, queried in the order given): the result has
         their ``R`` rows.
+    index_dtype : numpy integer dtype
+        Of ``idx`` (``np.int32`` halves the largest array of a large cloud; N < 2**31).
 
     Returns
     -------
     dist : (N, k) or (R, k) ndarray of float
         Distances, ascending in each row.
-    idx : (N, k) or (R, k) ndarray of int64
+    idx : (N, k) or (R, k) ndarray of ``index_dtype``
         Neighbour indices. Ties are broken by index, so the result does not depend on the
         order of the input points up to that relabelling.
     """
@@ -57,10 +59,10 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     n_out = n if sel is None else len(sel)
     k = int(min(k, max(n - 1, 0)))
     if k == 0:
-        return np.zeros((n_out, 0)), np.zeros((n_out, 0), dtype=np.int64)
+        return np.zeros((n_out, 0)), np.zeros((n_out, 0), dtype=index_dtype)
     tree = tree if tree is not None else build_tree(points)
     dist = np.empty((n_out, k))
-    idx = np.empty((n_out, k), dtype=np.int64)
+    idx = np.empty((n_out, k), dtype=index_dtype)
     # in blocks of rows, so the (rows, k + 1) query results stay small for large clouds; the
     # rows are visited in spatial order (each query is independent: the result is the same, but
     # consecutive queries touch the same parts of the tree, which is much faster for large N)

@@ -82,7 +82,7 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
         return []
     # compiled: each chain ordered by its distance along the linked graph (edges inside the
     # chain) from its far end, the point farthest from its lowest id (a double sweep)
-    ids_o, par_o, bounds = _k.chain_order(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64),
+    ids_o, par_o, bounds = _k.chain_order(N, np.asarray(src, dtype=_k.INDEX), np.asarray(dst, dtype=_k.INDEX),
                                           np.ascontiguousarray(dd, dtype=np.float64), chn, int(n_chn))
 
     # contacts: linked edges between a chain point and a region point

@@ -18,7 +18,7 @@ import numpy as np
 from ...network import Curve
 from . import kernels as _k
 from .nodes import Placement
-from .thresholds import CURVES, NODES, NOISE, NUMERIC
+from .thresholds import CURVES, LAYOUT, NODES, NOISE, NUMERIC
 
 __all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "smooth_curve", "drop_spikes"]
 
@@ -132,11 +132,14 @@ def open_curves(P, nodes, ids, nids, a, b, last0, last1):
     inner = (k >= 0) & (k < nids[cid])
     ind = np.full(off[-1], -1, dtype=np.int64)
     ind[inner] = ids[(np.r_[0, np.cumsum(nids)][cid] + k)[inner]]
+    del local, src  # (memory: the (M,) temporaries go before the next ones come)
+    at_a = np.flatnonzero(~inner & (k < 0))
+    at_b = np.flatnonzero(~inner & (k >= 0))
+    del k, inner
     pts = P[np.maximum(ind, 0)]
-    at_a = ~inner & (k < 0)
-    at_b = ~inner & (k >= 0)
     pts[at_a] = nodes[a[cid[at_a]]]
     pts[at_b] = nodes[b[cid[at_b]]]
+    del cid
     # a curve whose points turn back (two steps in a row more than 120 degrees apart) zigzags
     # (a sharp spike whose legs were linked across, a region's points ordered along a chord
     # that crosses the spike): its inner points are reordered into a shorter path
@@ -180,7 +183,19 @@ def _untangled(X, off):
 
 def _turning_back(X, off):
     """The curves (points ``X[off[i]:off[i + 1]]``, concatenated) with two successive steps
-    whose directions are more than 120 degrees apart (``CURVES.turn_back_cos``)."""
+    whose directions are more than 120 degrees apart (``CURVES.turn_back_cos``), ascending;
+    in blocks of about ``LAYOUT.curve_block`` points (the temporaries stay small)."""
+    off = np.asarray(off, dtype=np.int64)
+    out, i, nc = [], 0, len(off) - 1
+    while i < nc:
+        j = max(i + 1, min(nc, int(np.searchsorted(off, off[i] + LAYOUT.curve_block, side="right")) - 1))
+        out.append(i + _turning_back_block(X[off[i]:off[j]], off[i:j + 1] - off[i]))
+        i = j
+    return np.concatenate(out) if out else np.zeros(0, dtype=np.int64)
+
+
+def _turning_back_block(X, off):
+    """:func:`_turning_back` of one block of curves."""
     d = np.diff(X, axis=0)
     L = np.linalg.norm(d, axis=1)
     # steps inside a curve of nonzero length, and pairs of them inside one curve
@@ -268,24 +283,40 @@ def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):
     list of Curve
         The same list, curves with spikes replaced by copies without them.
     """
-    out = []
-    for c in curves:
-        X, ids = c.points, c.indices
-        m = len(X)
-        if m <= 2:  # a spike needs a point between two others
-            out.append(c)
-            continue
-        a, b, x = X[:-2], X[2:], X[1:-1]
-        ab = b - a
-        L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
-        t = np.clip(((x - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
-        dist = np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
-        mid = ids[1:-1]
-        hh = np.where(mid >= 0, h[np.maximum(mid, 0)], np.inf)
-        spike = (mid >= 0) & (dist > CURVES.spike * (hh + noise))
-        if not spike.any():
-            out.append(c)
-            continue
-        keep = np.r_[True, ~spike, True]
-        out.append(Curve(X[keep], c.start, c.end, c.closed, ids[keep]))
+    out = list(curves)
+    lens = np.fromiter((len(c.points) for c in curves), dtype=np.int64, count=len(curves))
+    # all curves at once, in blocks of about LAYOUT.curve_block samples (the same arithmetic,
+    # sample by sample, as curve by curve)
+    i = 0
+    while i < len(curves):
+        j = i + max(1, int(np.searchsorted(np.cumsum(lens[i:]), LAYOUT.curve_block, side="right")))
+        for ci, keep in _spike_free(curves[i:j], lens[i:j], h, noise):
+            c = curves[i + ci]
+            out[i + ci] = Curve(c.points[keep], c.start, c.end, c.closed, c.indices[keep])
+        i = j
     return out
+
+
+def _spike_free(curves, lens, h, noise):
+    """``(curve, keep)`` for each of ``curves`` (``lens`` samples each) with a spike: the mask
+    of its samples kept (see :func:`drop_spikes`)."""
+    off = np.r_[0, np.cumsum(lens)]
+    if off[-1] < 3:
+        return []
+    X = np.concatenate([c.points for c in curves])
+    ids = np.concatenate([c.indices for c in curves])
+    a, b, x = X[:-2], X[2:], X[1:-1]  # x: every sample but the first and last of the block
+    ab = b - a
+    L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
+    t = np.clip(((x - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
+    dist = np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
+    mid = ids[1:-1]
+    hh = np.where(mid >= 0, h[np.maximum(mid, 0)], np.inf)
+    spike = (mid >= 0) & (dist > CURVES.spike * (hh + noise))
+    # the first and last sample of every curve are not tested (x runs from sample 1)
+    ends = np.r_[off[:-1], off[1:] - 1] - 1
+    spike[ends[(ends >= 0) & (ends < len(spike))]] = False
+    full = np.r_[False, spike, False]  # (by sample)
+    cs = np.r_[0, np.cumsum(full)]
+    hit = np.flatnonzero(cs[off[1:]] > cs[off[:-1]])
+    return [(ci, ~full[off[ci]:off[ci + 1]]) for ci in hit.tolist()]

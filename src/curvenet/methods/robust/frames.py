@@ -20,25 +20,40 @@ from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
 __all__ = ["Neighbours", "Frames", "neighbours", "frames", "duplicates", "local_spacing", "tangents",
-           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "lex_order"]
+           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "lex_order", "pair_distances"]
 
 
 class Neighbours(NamedTuple):
     """The k nearest neighbours of every point and its local spacing.
 
+    Their distances are not kept (at 16 neighbours, 128 bytes a point: the largest array of the
+    method): :meth:`distances` recomputes them, the same bits as the query's.
+
     Attributes
     ----------
     tree : scipy.spatial.cKDTree
-    dist, idx : (N, k) ndarray
-        Distances (ascending) and ids of the k nearest neighbours, self excluded.
+        Over the points (``tree.data``).
+    idx : (N, k) ndarray of int32
+        Ids of the k nearest neighbours (self excluded), by ascending distance (int32: half the
+        size of int64).
     h : (N,) ndarray of float
         Local spacing (or the user's spacing everywhere).
     """
 
     tree: object
-    dist: np.ndarray
     idx: np.ndarray
     h: np.ndarray
+
+    def distances(self, rows=None, col=None) -> np.ndarray:
+        """Distances of the neighbours (of the points ``rows``; of column ``col`` only), as the
+        query gave them.
+
+        Returns
+        -------
+        (N, k), (R, k), (N,) or (R,) ndarray of float
+        """
+        I = self.idx if rows is None else self.idx[rows]
+        return pair_distances(self.tree.data, rows, I if col is None else I[:, col])
 
 
 class Frames(NamedTuple):
@@ -68,9 +83,34 @@ class Frames(NamedTuple):
 def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
     """Stage 1: the k-d tree, the k nearest neighbours and the local spacing of the points ``P``."""
     tree = build_tree(P)  # kept for the repairs (repairs.attach_dangling)
-    dist, idx = knn(P, prm.k, ordered=True, tree=tree)
+    dist, idx = knn(P, prm.k, ordered=True, tree=tree, index_dtype=_k.INDEX)
     h = local_spacing(dist, idx) if prm.spacing is None else np.full(len(P), float(prm.spacing))
-    return Neighbours(tree, dist, idx, h)
+    return Neighbours(tree, idx, h)  # (the distances go: Neighbours.distances recomputes them)
+
+
+def pair_distances(P: np.ndarray, rows, I: np.ndarray) -> np.ndarray:
+    """``|P[I] - P[rows]|`` summed as scipy's k-d tree query sums it (the squared coordinate
+    differences, first to last, then the root): the same bits as the distances it returns.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    rows : (R,) ndarray of int or None
+        The points (None: all, R = N).
+    I : (R,) or (R, m) ndarray of int
+        Ids of other points, a row (or one id) for each.
+
+    Returns
+    -------
+    ndarray of float, the shape of ``I``
+    """
+    Q = P if rows is None else P[rows]
+    s = np.zeros(I.shape)
+    for c in range(P.shape[1]):
+        q = Q[:, c] if I.ndim == 1 else Q[:, c, None]
+        v = P[I, c] - q
+        s += v * v
+    return np.sqrt(s)
 
 
 def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None) -> Frames:
@@ -111,7 +151,7 @@ def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:
     r = dedup_radius(Estimates(fr.hmed, fr.sigma))
     if r is None:
         return None
-    dup = coincident(nb.dist, nb.idx, r)
+    dup = coincident(nb, r)
     if not dedup_applies(len(dup), int(np.count_nonzero(dup))):
         return None
     return np.flatnonzero(~dup)
@@ -160,7 +200,7 @@ def local_spacing(dist: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """
     if _k.compiled_active() and dist.shape[1] <= SPACING.kernel_k_max:
         # compiled, one pass over the rows, the same numbers as the numpy formula below
-        h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+        h = _k.spacing(np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX),
                        float(SPACING.dup), float(SPACING.dup_k))
         return _spacing_floor(h)
     m = min(SPACING.n_mean, dist.shape[1])
@@ -225,7 +265,7 @@ def tangents(P: np.ndarray, idx: np.ndarray, h: np.ndarray, m: int = TANGENTS.st
     # and the noise: distance of each point from the chord between its nearest strip neighbours
     # on either side (NaN without both; curvature adds only h^2 / 2R there); for Gaussian
     # noise of std sigma per coordinate its RMS is sigma * sqrt(1.5 (d - 1))
-    t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64),
+    t, lin, cr, gain = _k.tangents(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX),
                                    np.ascontiguousarray(h, dtype=np.float64), m, order, margin=margin)
     dim = P.shape[1]
     # (x 1.28: picking the nearest neighbour on each side favours points pulled towards p)
@@ -261,13 +301,13 @@ def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
     # l2 <= (1 - TANGENTS.vote_coh) l1, hence t^T C t <= (m + 1) (c^2 + (1 - TANGENTS.vote_coh) (1 - c^2)); the
     # eigen-decomposition is computed only for the points below that bound (few on clean data);
     # t^T C t = sum_k (T_k . t)^2 is computed in a compiled loop (no (N, m + 1, d) array)
-    agree = _k.vote_agreement(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m)
+    agree = _k.vote_agreement(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX), m)
     bound = (m + 1) * (TANGENTS.vote_cos**2 + (1.0 - TANGENTS.vote_coh) * (1.0 - TANGENTS.vote_cos**2))
     cand = np.flatnonzero(agree <= bound * (1 + NUMERIC.rel))
     if len(cand) == 0:
         return t, lin
     # the top eigenpair of C for the candidates (compiled, closed form: kernels.linalg._eig_top)
-    u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=np.int64), m,
+    u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX), m,
                          cand.astype(np.int64))
     swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < TANGENTS.vote_cos) & (coh >= TANGENTS.vote_coh)
     sw = cand[swap]
@@ -289,7 +329,8 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
     points more than 30 degrees off; 0.1% with these). Used as the tangents of the whole method
     they cost the mug's junctions (bench samplings 0 and 1), so they serve this test only.
 
-    The method's own neighbours (``dist``, ``idx``: (N, k), sorted by distance) serve the
+    The method's own neighbours (``idx``: (N, k), sorted by distance; ``dist`` their distances,
+    or None: recomputed where needed, :func:`pair_distances`) serve the
     points whose last one (or ``TANGENTS.noisy_k``-th) lies beyond the kernel's reach
     (:func:`kernels.noisy_reach`): the farther ones would change nothing (on a lone
     curve, most points). The others get their ``TANGENTS.noisy_k`` nearest from ``tree``, in blocks.
@@ -310,37 +351,39 @@ def noisy_tangents(P, h, sig, tree, dist, idx):
     if kk >= k:
         short = np.ones(N, dtype=bool)  # (as many as the kernel's)
     elif kk >= min(_k.NOISY_CAND, k) and kk > 0:
-        short = dist[:, kk - 1] > _k.noisy_reach(h, sig)
+        far = pair_distances(P, None, idx[:, kk - 1]) if dist is None else dist[:, kk - 1]
+        short = far > _k.noisy_reach(h, sig)
     else:
         short = np.zeros(N, dtype=bool)
     rows = np.flatnonzero(short)
     if len(rows):
-        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows, :kk], dtype=np.int64), h, sig)
+        T[rows], lin[rows] = _k.noisy_tangents(P, rows, np.ascontiguousarray(idx[rows, :kk], dtype=_k.INDEX), h, sig)
     rows = np.flatnonzero(~short)
     for s in range(0, len(rows), TANGENTS.noisy_block):  # blocks: the (rows, 32) neighbour ids stay small
         r = rows[s:s + TANGENTS.noisy_block]
-        _, nb = knn(P, k, tree=tree, rows=r)
+        _, nb = knn(P, k, tree=tree, rows=r, index_dtype=_k.INDEX)
         T[r], lin[r] = _k.noisy_tangents(P, r, nb, h, sig)
     return T, lin
 
 
-def coincident(dist, idx, r):
+def coincident(nb: Neighbours, r):
     """Points with a neighbour earlier in the (internal) order closer than ``r``.
 
     Parameters
     ----------
-    dist, idx : (N, k) ndarray
-        Distances and indices of the k nearest neighbours, ascending.
+    nb : Neighbours
     r : float
 
     Returns
     -------
     (N,) bool ndarray
     """
-    dup = np.zeros(len(dist), dtype=bool)
-    rows = np.flatnonzero(dist[:, 0] < r)
+    dup = np.zeros(len(nb.idx), dtype=bool)
+    if nb.idx.shape[1] == 0:
+        return dup
+    rows = np.flatnonzero(nb.distances(col=0) < r)
     if len(rows):
-        dup[rows] = ((dist[rows] < r) & (idx[rows] < rows[:, None])).any(axis=1)
+        dup[rows] = ((nb.distances(rows) < r) & (nb.idx[rows] < rows[:, None])).any(axis=1)
     return dup
 
 

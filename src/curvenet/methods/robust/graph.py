@@ -25,11 +25,12 @@ class Graph(NamedTuple):
 
     Attributes
     ----------
-    src, dst : (E,) ndarray of int64
+    src, dst : (E,) ndarray of int32
         Directed links (kept by the tests; both directions of a pair may be there).
     dd : (E,) ndarray of float
         Their lengths.
-    indptr, indices : ndarray of int64
+    indptr : (N + 1,) ndarray of int64
+    indices : ndarray of int32
         CSR adjacency of the undirected union of the links.
     """
 
@@ -57,18 +58,18 @@ def linked_graph(P: np.ndarray, nb: Neighbours, fr: Frames, prm: RobustParams) -
     """
     N = len(P)
     noise = NOISE.scale * fr.sigma
-    src, dst, dd = linked_edges(P, nb.h, nb.dist, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
+    src, dst, dd = linked_edges(P, nb.h, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
                                 LINKS.strip_noise * noise, LINKS.gap_noise * noise)
     if not fr.clean:  # links between two close parallel strands are cut
         with _k.compiled_for(N, _k.NUMBA_MIN_POINTS_NOISY, _k.STRAND_KERNELS):  # (slow in plain Python)
-            tn, ln = noisy_tangents(P, nb.h, fr.sigma, nb.tree, nb.dist, nb.idx)
+            tn, ln = noisy_tangents(P, nb.h, fr.sigma, nb.tree, None, nb.idx)
             tn, _ = vote_tangents(tn, ln, nb.idx, m=min(TANGENTS.vote_m_noisy, nb.idx.shape[1]))
             src, dst, dd = cut_strand_links(P, nb.h, nb.idx, tn, src, dst, dd, fr.sigma)
-    indptr, indices = _k.csr_union(N, np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64))
+    indptr, indices = _k.csr_union(N, np.asarray(src, dtype=_k.INDEX), np.asarray(dst, dtype=_k.INDEX))
     return Graph(src, dst, dd, indptr, indices)
 
 
-def linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
+def linked_edges(P, h, idx, t, lin, link, width, wmin=0.0, gap=0.0):
     """Directed kNN edges kept by the distance and tangent tests: (src, dst, length).
 
     A link is at most ``link * h + gap`` long (``gap`` widens it for noise, which opens random
@@ -81,7 +82,7 @@ def linked_edges(P, h, dist, idx, t, lin, link, width, wmin=0.0, gap=0.0):
     # line through either end within max(width * h, wmin) (or an end not linear, LINKS.lin_min); short
     # links need one tangent test, longer ones (up to link * h + gap) both; plus the nearest
     # strip neighbour on each side along the tangent (rows are sorted by distance)
-    return _k.linked_edges(P, np.ascontiguousarray(h, dtype=np.float64), dist, idx, t, lin, float(link),
+    return _k.linked_edges(P, np.ascontiguousarray(h, dtype=np.float64), idx, t, lin, float(link),
                            float(width), float(wmin), float(gap), float(LINKS.directional), float(LINKS.lin_min))
 
 
@@ -93,8 +94,8 @@ def cut_strand_links(P, h, idx, tn, src, dst, dd, sig):
     if len(src) == 0:
         return src, dst, dd
     cut = _k.strand_cuts(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
-                         np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(tn, dtype=np.float64),
-                         np.asarray(src, dtype=np.int64), np.asarray(dst, dtype=np.int64), float(sig))
+                         np.ascontiguousarray(idx, dtype=_k.INDEX), np.ascontiguousarray(tn, dtype=np.float64),
+                         np.asarray(src, dtype=_k.INDEX), np.asarray(dst, dtype=_k.INDEX), float(sig))
     if not cut.any():
         return src, dst, dd
     n = np.int64(len(P))
@@ -110,6 +111,6 @@ def components(n, a, b, mask):
     Returns labels (-1 outside mask), ordered so that component ids follow the lowest point id,
     and their number (compiled union-find).
     """
-    lab, count = _k.components(int(n), np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64),
+    lab, count = _k.components(int(n), np.asarray(a, dtype=_k.INDEX), np.asarray(b, dtype=_k.INDEX),
                                np.ascontiguousarray(mask, dtype=np.bool_))
     return lab, int(count)

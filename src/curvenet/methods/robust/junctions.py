@@ -61,7 +61,7 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     groups = shell_group_counts(P, hs, graph.indptr, graph.indices, prm.shell_inner, prm.shell_outer,
                                 order=np.arange(N, dtype=np.int64))
     flagged = groups != 2
-    ka, kb = _k.short_links(nb.h, nb.dist, nb.idx, float(prm.link))
+    ka, kb = _k.short_links(P, nb.h, nb.idx, float(prm.link))
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
                                               noisy=not fr.clean, noise=NOISE.scale * fr.sigma)
     return Regions(groups, flagged, reg, n_reg)

@@ -133,7 +133,7 @@ class Scales:
         The input is noise-free (``sigma`` under ``SPACING.dedup_noise`` median spacings).
     width : float
         The link width in spacings (``max(link_width, 0)``).
-    indptr, indices : ndarray of int64
+    indptr, indices : ndarray of int64, ndarray of int32
         CSR adjacency of the linked graph.
     tree : scipy.spatial.cKDTree
         The k-d tree over the points (of the k-nearest-neighbour query).

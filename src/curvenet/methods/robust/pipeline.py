@@ -278,13 +278,14 @@ def point_estimates(points, *, dedup_radius: float | None = None, k: int | None 
         P = P0[order]
         nb = neighbours(P, prm)
         if dedup_radius is not None:
-            keep = ~coincident(nb.dist, nb.idx, dedup_radius)
+            keep = ~coincident(nb, dedup_radius)
             P, order = P[keep], order[keep]
             nb = neighbours(P, prm)
         rms = tangents(P, nb.idx, nb.h, order=np.arange(len(P), dtype=np.int64))[2]
+    dist = nb.distances()
     rows = np.arange(len(P))[:, None]
-    earlier = np.where(nb.idx < rows, nb.dist, np.inf).min(axis=1)
-    return PointEstimates(order, nb.h, rms, earlier, nb.dist[:, -1].copy())
+    earlier = np.where(nb.idx < rows, dist, np.inf).min(axis=1)
+    return PointEstimates(order, nb.h, rms, earlier, dist[:, -1].copy())
 
 
 def estimate(points, *, spacing: float | None = None, k: int | None = None) -> Estimates:

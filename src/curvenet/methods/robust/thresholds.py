@@ -51,6 +51,8 @@ class Layout(NamedTuple):
 
     #: clouds of more points are numbered cell by cell (6% faster at 34,000 points, 15% at 1e6)
     local_min: int = 20_000
+    #: curve samples per block of the vectorized per-curve tests (their temporaries stay small)
+    curve_block: int = 1 << 18
 
 
 LAYOUT = Layout()

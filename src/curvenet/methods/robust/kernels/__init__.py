@@ -12,6 +12,8 @@ functions below are its dispatch. The kernels' fixed constants are the groups of
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..thresholds import NOISY, STRIP
 from .frames import noisy_reach
 from .nodes import JunctionParams
@@ -22,6 +24,10 @@ from .registry import (
     untangle, vote_agreement, vote_eig,
 )
 
+#: dtype of the neighbour ids handed to the kernels (the (N, k) kNN ids are the method's largest
+#: array: int32 halves them; a cloud holds fewer than 2**31 points, see ``MAX_SHELL_POINTS``)
+INDEX = np.int32
+
 #: score a neighbour's direction needs above the 4-neighbour direction's to replace it (the
 #: tangents' default margin; ``STRIP.cand_margin``)
 CAND_MARGIN = STRIP.cand_margin
@@ -29,7 +35,7 @@ CAND_MARGIN = STRIP.cand_margin
 NOISY_CAND = NOISY.cand
 
 __all__ = [
-    "CAND_MARGIN", "NOISY_CAND", "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS",
+    "CAND_MARGIN", "INDEX", "NOISY_CAND", "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS",
     "HAVE_NUMBA", "JunctionParams", "chain_ends", "chain_order", "compiled_active", "compiled_for",
     "components", "csr_union", "end_count", "end_counts", "junction_nodes", "linked_edges",
     "noisy_reach", "noisy_tangents", "shell_groups", "short_links", "spacing", "strand_cuts",

@@ -14,10 +14,22 @@ from .linalg import _pca01
 prange = range  # numba.prange in the compiled copies (parallel loops over independent rows)
 
 
-def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, lin_min):  # pragma: no cover - compiled
+def _dist(P, p, q):  # pragma: no cover - compiled
+    """``|P_q - P_p|`` summed as scipy's k-d tree query sums it (squares of the coordinate
+    differences, first to last, then the root): the same bits as its distances."""
+    s = 0.0
+    for c in range(P.shape[1]):
+        v = P[q, c] - P[p, c]
+        s += v * v
+    return np.sqrt(s)
+
+
+def _linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lin_min):  # pragma: no cover - compiled
     """Directed kNN edges kept by the distance and tangent tests (see graph.linked_edges).
 
-    For the edge from ``p`` to its neighbour ``q`` at distance ``d`` (rows sorted by distance):
+    For the edge from ``p`` to its neighbour ``q`` at distance ``d`` (rows sorted by distance;
+    ``d`` recomputed from ``P`` as the k-d tree query computes it, the same bits, so that the
+    (N, k) distances need not be kept: :func:`_dist`):
     ``reach = link * (h_p + h_q) / 2 + gap``; edges longer than ``extra_len * reach`` (and
     self-pairs) are out. ``ps``, ``pd`` are the distances of the far end from the tangent lines
     at ``p`` and ``q``; ``w = max(width * (h_p + h_q) / 2, wmin)``. An edge is kept if it is
@@ -28,7 +40,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
 
     Returns
     -------
-    src, dst : (E,) ndarray of int64
+    src, dst : (E,) ndarray of the dtype of ``idx``
     dd : (E,) ndarray of float
     """
     n = idx.shape[0]
@@ -42,7 +54,7 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
         row = 0
         for j in range(k):
             q = idx[p, j]
-            dd = dist[p, j]
+            dd = _dist(P, p, q)
             hh = 0.5 * (h[p] + h[q])
             reach = link * hh + gap
             if not (dd <= extra_len * reach) or p == q:
@@ -78,8 +90,8 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
     for p in range(n):
         cnt[p + 1] += cnt[p]
     total = cnt[n]
-    src = np.empty(total, dtype=np.int64)
-    dst = np.empty(total, dtype=np.int64)
+    src = np.empty(total, dtype=idx.dtype)
+    dst = np.empty(total, dtype=idx.dtype)
     out_d = np.empty(total)
     for p in prange(n):
         e = cnt[p]
@@ -87,31 +99,32 @@ def _linked_edges(P, h, dist, idx, t, lin, link, width, wmin, gap, extra_len, li
             if sel[p, j]:
                 src[e] = p
                 dst[e] = idx[p, j]
-                out_d[e] = dist[p, j]
+                out_d[e] = _dist(P, p, idx[p, j])
                 e += 1
     return src, dst, out_d
 
 
-def _short_links(h, dist, idx, link):  # pragma: no cover - compiled
-    """The kNN pairs ``(p, q)`` with ``dist <= link * 0.5 * (h_p + h_q)``, in row order."""
+def _short_links(P, h, idx, link):  # pragma: no cover - compiled
+    """The kNN pairs ``(p, q)`` with ``|P_p - P_q| <= link * 0.5 * (h_p + h_q)``, in row order (ids
+    of the dtype of ``idx``; distances by :func:`_dist`)."""
     n = idx.shape[0]
     k = idx.shape[1]
     cnt = np.zeros(n + 1, dtype=np.int64)  # pairs of row p at cnt[p + 1]
     for p in prange(n):  # rows are independent (parallel when compiled so)
         row = 0
         for j in range(k):
-            if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
+            if _dist(P, p, idx[p, j]) <= link * 0.5 * (h[p] + h[idx[p, j]]):
                 row += 1
         cnt[p + 1] = row
     for p in range(n):
         cnt[p + 1] += cnt[p]
     total = cnt[n]
-    a = np.empty(total, dtype=np.int64)
-    b = np.empty(total, dtype=np.int64)
+    a = np.empty(total, dtype=idx.dtype)
+    b = np.empty(total, dtype=idx.dtype)
     for p in prange(n):
         e = cnt[p]
         for j in range(k):
-            if dist[p, j] <= link * 0.5 * (h[p] + h[idx[p, j]]):
+            if _dist(P, p, idx[p, j]) <= link * 0.5 * (h[p] + h[idx[p, j]]):
                 a[e] = p
                 b[e] = idx[p, j]
                 e += 1
@@ -122,7 +135,7 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
     """CSR adjacency of the undirected graph with edges (src[i], dst[i]) (both directions).
 
     Within a row, the out-edges come first in edge order, then the in-edges in edge order
-    (a counting sort, stable).
+    (a counting sort, stable). ``indptr`` is int64, ``indices`` of the dtype of ``src``.
     """
     m = src.shape[0]
     deg = np.zeros(n + 1, dtype=np.int64)
@@ -132,7 +145,7 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
     for i in range(n):
         deg[i + 1] += deg[i]
     fill = deg[:-1].copy()
-    out = np.empty(2 * m, dtype=np.int64)
+    out = np.empty(2 * m, dtype=src.dtype)
     for i in range(m):
         a = src[i]
         out[fill[a]] = dst[i]
