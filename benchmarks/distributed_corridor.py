@@ -159,7 +159,8 @@ def main(argv=None) -> int:
               f"{cpeak:.2f} GB; {net.n_nodes} nodes, {net.n_curves} curves, {net.stats['unmatched_ports']} "
               f"unmatched ports", flush=True)
         print("  passes: " + ", ".join(f"{k} {v:.1f} s" for k, v in net.stats["time"].items()), flush=True)
-        print(f"  estimates over {p['estimates_points']:,} points (exact: {p.get('estimates_exact')}): spacing {p['spacing']:.4f}, "
+        print(f"  estimates over {p['estimates_points']:,} points (exact: {p.get('estimates_exact')}): "
+              f"spacing {p['spacing']:.4f}, "
               f"noise {p['noise']:.4f}, clean {p['clean']}", flush=True)
         if args.single:
             from curvenet.distributed import network_difference
