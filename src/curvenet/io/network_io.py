@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import CurveNetwork, _jsonable
-from .numbers import shortest_rows
+from .numbers import int_lists, rows_text
 from .points import check_readable
 
 __all__ = ["network_to_json", "network_to_obj", "network_to_ply", "read_network", "polyline_vertices"]
@@ -85,12 +85,11 @@ def network_to_obj(net: CurveNetwork) -> str:
     and see the vertices alone: give them the ``.ply`` (trimesh, Open3D) or ``.vtu`` (meshio).
     """
     v, lines = polyline_vertices(net)
-    out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves", f"# nodes are vertices 1..{net.n_nodes}"]
-    out.append("\n".join(shortest_rows(v, "v ")))
-    for i, ids in enumerate(lines):
-        out.append(f"o curve_{i}")
-        out.append("l " + " ".join(str(j + 1) for j in ids))
-    return "\n".join(s for s in out if s) + "\n"
+    out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves\n# nodes are vertices 1..{net.n_nodes}\n"]
+    out.append(rows_text(v, "v "))
+    for i, ids in enumerate(int_lists([ids + 1 for ids in lines])):
+        out.append(f"o curve_{i}\nl {ids}\n")
+    return "".join(out)
 
 
 def network_to_ply(net: CurveNetwork, *, curve_ids: bool = False) -> bytes:
