@@ -119,10 +119,12 @@ def load_network(path: Path):
     """Inverse of :func:`save_network`."""
     from curvenet import Curve, CurveNetwork
 
-    z = np.load(path)
+    with np.load(path) as f:
+        z = {k: f[k] for k in f.files}  # (each f[k] reads the whole array again)
     off = z["offsets"]
+    pts, ind = z["points"], z["indices"]
     curves = [
-        Curve(z["points"][a:b], None if s < 0 else int(s), None if e < 0 else int(e), bool(c), z["indices"][a:b])
+        Curve(pts[a:b].copy(), None if s < 0 else int(s), None if e < 0 else int(e), bool(c), ind[a:b].copy())
         for a, b, s, e, c in zip(off[:-1], off[1:], z["start"], z["end"], z["closed"])
     ]
     meta = json.loads(str(z["meta"]))

@@ -79,6 +79,39 @@ def test_outputs_unchanged(expected, orjson, monkeypatch):
     assert not differ
 
 
+def _random_networks(count: int = 150) -> list:
+    from curvenet import Curve, CurveNetwork
+
+    rng = np.random.default_rng(5)
+    nets = list(writer_networks().values())
+    for _ in range(count):
+        d, n = int(rng.integers(2, 4)), int(rng.integers(0, 6))
+        curves = []
+        for _ in range(int(rng.integers(0, 8))):
+            m = int(rng.integers(0, 6))
+            if n and rng.random() < 0.7:
+                s, e = (int(x) for x in rng.integers(0, n, 2))
+                curves.append(Curve(rng.normal(size=(m, d)), s, e, bool(rng.random() < 0.3)))
+            else:
+                curves.append(Curve(rng.normal(size=(m, d)), None, None, bool(rng.random() < 0.5)))
+        nets.append(CurveNetwork(rng.normal(size=(n, d)), curves))
+    return nets
+
+
+def test_batched_polylines_and_lengths_are_the_network_s():
+    from curvenet.io.polylines import curve_lengths, polyline_vertices, segments
+
+    for net in _random_networks():
+        v, lines = net.polyline_vertices()
+        v2, lines2 = polyline_vertices(net)
+        assert v.shape == v2.shape and np.array_equal(v, v2)
+        assert len(lines) == len(lines2)
+        assert all(a.dtype == b.dtype and np.array_equal(a, b) for a, b in zip(lines, lines2))
+        for a, b in zip(net.segments(), segments(net)):
+            assert a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b)
+        assert np.array_equal(curve_lengths(net.curves), [c.length for c in net.curves])  # bit for bit
+
+
 def test_empty_obj():
     net = writer_networks()["empty"]
     assert WRITERS[".obj"][0](net) == "# curvenet network: 0 nodes, 0 curves\n# nodes are vertices 1..0\n"

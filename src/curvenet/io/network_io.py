@@ -73,7 +73,9 @@ def polyline_vertices(net: CurveNetwork) -> tuple[np.ndarray, list[np.ndarray]]:
     polylines : list of (m,) ndarray of int
         Vertex indices of each curve in order; a closed curve repeats its first vertex at the end.
     """
-    return net.polyline_vertices()
+    from .polylines import polyline_vertices as _fast
+
+    return _fast(net)
 
 
 def network_to_obj(net: CurveNetwork) -> str:
@@ -84,11 +86,13 @@ def network_to_obj(net: CurveNetwork) -> str:
     (ParaView, PyVista) read the ``l`` lines as edges; trimesh and meshio read OBJ faces only
     and see the vertices alone: give them the ``.ply`` (trimesh, Open3D) or ``.vtu`` (meshio).
     """
-    v, lines = polyline_vertices(net)
+    from .polylines import polyline_arrays
+
+    v, ids, off = polyline_arrays(net)
     out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves\n# nodes are vertices 1..{net.n_nodes}\n"]
     out.append(rows_text(v, "v "))
-    for i, ids in enumerate(int_lists([ids + 1 for ids in lines])):
-        out.append(f"o curve_{i}\nl {ids}\n")
+    for i, text in enumerate(int_lists(np.split(ids + 1, off[1:-1]) if net.n_curves else [])):
+        out.append(f"o curve_{i}\nl {text}\n")
     return "".join(out)
 
 
@@ -111,7 +115,9 @@ def network_to_ply(net: CurveNetwork, *, curve_ids: bool = False) -> bytes:
     -------
     bytes
     """
-    v, seg, cid = net.segments()
+    from .polylines import segments
+
+    v, seg, cid = segments(net)
     vert = np.zeros(len(v), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("node", "u1")])
     vert["x"], vert["y"], vert["z"] = v.T
     vert["node"][: net.n_nodes] = 1

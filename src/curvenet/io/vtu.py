@@ -10,6 +10,7 @@ import numpy as np
 
 from ..network import CurveNetwork
 from .numbers import ints_text, shortest
+from .polylines import segments
 
 __all__ = ["network_to_vtu", "VTK_LINE"]
 
@@ -35,7 +36,7 @@ def network_to_vtu(net: CurveNetwork) -> str:
     -------
     str
     """
-    v, seg, cid = net.segments()
+    v, seg, cid = segments(net)
     node_id = np.full(len(v), -1, dtype=np.int64)
     node_id[: net.n_nodes] = np.arange(net.n_nodes)
 
