@@ -44,6 +44,7 @@ def test_floats_are_repr(kind, bulk):
     assert rows_text(rows, "v ", " ", "\n") == "".join("v " + " ".join(map(repr, r)) + "\n" for r in rows.tolist())
     assert shortest(a, ";") == ";".join(map(repr, a.tolist()))
     assert shortest_rows(rows, "[", ", ") == ["[" + ", ".join(map(repr, r)) for r in rows.tolist()]
+    assert shortest_rows(rows, "", "\n") == ["\n".join(map(repr, r)) for r in rows.tolist()]
     finite = a[np.isfinite(a)]
     back = np.array([float(t) for t in shortest(finite).split()])
     assert np.array_equal(back.view(np.int64), finite.view(np.int64))  # bit for bit, signs of zero too

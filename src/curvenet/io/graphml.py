@@ -80,14 +80,14 @@ def network_to_graphml(net: CurveNetwork) -> str:
     pos = np.zeros((len(nodes), 3))
     if nodes:
         pos[:, :d] = np.array([p for p, _, _, _ in nodes], dtype=float).reshape(len(nodes), d)
-    xyz = shortest_rows(pos, "", "\n") if len(pos) else []
+    xyz = shortest_rows(pos) if len(pos) else []
     out = ['<?xml version="1.0" encoding="UTF-8"?>\n', f'<graphml xmlns="{_NS}">\n']
     for kid, kfor, name, typ in _KEYS:
         out.append(f'  <key id="{kid}" for="{kfor}" attr.name="{name}" attr.type="{typ}" />\n')
     out.append('  <graph id="curvenet" edgedefault="undirected">\n')
     out.append(f'    <data key="dimension">{d}</data>\n')
     for j, ((_, v, kind, anchor), coords) in enumerate(zip(nodes, xyz)):
-        x, y, z = coords.split("\n")
+        x, y, z = coords.split(" ")
         out.append(
             f'    <node id="{j}">\n      <data key="x">{x}</data>\n      <data key="y">{y}</data>\n'
             f'      <data key="z">{z}</data>\n      <data key="valence">{v}</data>\n'

@@ -150,7 +150,7 @@ def shortest_rows(rows: ArrayLike, prefix: str = "", sep: str = " ") -> list[str
     a = _as_rows(np.asarray(rows, dtype=np.float64))
     if a.size < _SMALL or _orjson() is None:
         return [prefix + _repr_row(r, sep) for r in a]
-    return rows_text(a, prefix, sep, "\n").split("\n")[:-1]
+    return rows_text(a, prefix, sep, "\x00").split("\x00")[:-1]
 
 
 def ints_text(values: ArrayLike, sep: str = " ") -> str:
