@@ -46,8 +46,8 @@ def network_to_geojson(net: CurveNetwork) -> str:
         if len(pts) == 1:  # a LineString needs two positions
             pts = np.vstack([pts, pts])
         lines.append(pts)
-    flat = [p for p in lines if len(p)] + [np.asarray(net.nodes, dtype=float)]
-    if not all(np.isfinite(p).all() for p in flat):
+    flat = [p.ravel() for p in lines if len(p)] + [np.asarray(net.nodes, dtype=float).ravel()]
+    if not np.isfinite(np.concatenate(flat)).all():
         return _geojson_slow(net, lines)  # json refuses them (as before)
     lengths = curve_lengths(net.curves).tolist()
     features = []

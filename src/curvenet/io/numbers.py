@@ -69,6 +69,20 @@ def _repr_row(row: np.ndarray, sep: str) -> str:
     return sep.join(map(repr, row.tolist()))
 
 
+def _patch_rows(body: bytes, bad: np.ndarray, a: np.ndarray, sep: str) -> bytes:
+    """``body`` (rows apart by :data:`_MARK`) with the rows ``bad`` rewritten by ``repr``."""
+    marks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == _MARK[0])
+    starts = np.concatenate([[0], marks + 1])
+    ends = np.concatenate([marks, [len(body)]])
+    pieces = []
+    prev = 0
+    for i in bad.tolist():
+        pieces += [body[prev:starts[i]], _repr_row(a[i], sep).encode()]
+        prev = int(ends[i])
+    pieces.append(body[prev:])
+    return b"".join(pieces)
+
+
 def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n") -> str:
     """Each row of an (n, m) array as a line: ``prefix``, the row's shortest decimals joined by
     ``sep``, then ``end``.
@@ -98,10 +112,7 @@ def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n"
     body = _dumps(a)[2:-2].replace(b"],[", _MARK).replace(b",", sep.encode())
     bad = np.flatnonzero(_unlike_repr(a).any(axis=1))
     if len(bad):
-        lines = body.split(_MARK)
-        for i in bad.tolist():
-            lines[i] = _repr_row(a[i], sep).encode()
-        body = _MARK.join(lines)
+        body = _patch_rows(body, bad, a, sep)
     return prefix + body.replace(_MARK, (end + prefix).encode()).decode("ascii") + end
 
 
@@ -226,13 +237,9 @@ def join_columns(blocks: Sequence[str], sep: str = " ", end: str = "\n") -> str:
     -------
     str
     """
-    cols = [np.array(b.encode("ascii").split(end.encode())[:-1], dtype=bytes) for b in blocks]
-    if not cols or not len(cols[0]):
+    cols = [b.split(end)[:-1] if b else [] for b in blocks]
+    if not cols or not cols[0]:
         return ""
     if any(len(c) != len(cols[0]) for c in cols):
         raise ValueError("blocks of different numbers of lines")
-    out = cols[0]
-    s = np.array(sep.encode())
-    for c in cols[1:]:
-        out = np.char.add(np.char.add(out, s), c)
-    return (end.encode().join(out.tolist()) + end.encode()).decode("ascii")
+    return end.join(map(sep.join, zip(*cols))) + end

@@ -90,7 +90,7 @@ def network_to_svg(
         raise InputError(f"SVG width must be a positive integer, got {width!r}")
     d = net.dimension
     projection = VIEWS.get(projection, projection)
-    curves_uv = [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
+    curves_uv = _project_curves(net, projection)
     nodes_uv = project(net.nodes, projection) if len(net.nodes) else np.zeros((0, 2))
     allp = np.vstack([nodes_uv, *curves_uv]) if (len(nodes_uv) or curves_uv) else np.zeros((0, 2))
     if len(allp) == 0:
@@ -153,4 +153,20 @@ def _point_lists(curves_uv: list[np.ndarray]) -> list[str]:
     for uv in curves_uv:
         out.append(" ".join(pairs[pos:pos + len(uv)]))
         pos += len(uv)
+    return out
+
+
+def _project_curves(net: CurveNetwork, projection: str) -> list[np.ndarray]:
+    """:func:`project` of each curve's points; the projections that keep coordinates (all but
+    ``iso``) of all curves at once."""
+    full = [c.points for c in net.curves if len(c.points)]
+    if projection == "iso" or not full or any(p.shape[1] != full[0].shape[1] for p in full):
+        return [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
+    uv = project(np.concatenate(full), projection)
+    out = []
+    pos = 0
+    for c in net.curves:
+        k = len(c.points)
+        out.append(uv[pos:pos + k] if k else np.zeros((0, 2)))
+        pos += k
     return out

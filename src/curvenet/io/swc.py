@@ -73,8 +73,7 @@ def network_to_swc(
     val = net.valence
     n = net.n_nodes
     if radius is None:
-        steps = [np.linalg.norm(np.diff(c.points, axis=0), axis=1) for c in net.curves if len(c.points) > 1]
-        step = float(np.median(np.concatenate(steps))) if steps else 0.0
+        step = _median_step(net.curves)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type))
     at_node: list[list[int]] = [[] for _ in range(n)]
@@ -154,3 +153,14 @@ def _sample_lines(blocks, count: int, d: int, radius: str) -> str:
         rows_text(xyz, "", " ", f" {radius}\n"),
         int_rows_text(parents.reshape(-1, 1)),
     ])
+
+
+def _median_step(curves) -> float:
+    """Median distance between consecutive points of the same curve (0 without any)."""
+    long = [c.points for c in curves if len(c.points) > 1]
+    if not long:
+        return 0.0
+    P = np.concatenate(long)
+    steps = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    last = np.cumsum([len(p) for p in long])[:-1] - 1  # the step from one curve to the next
+    return float(np.median(np.delete(steps, last)))
