@@ -217,7 +217,7 @@ def _timed(cmd: list[str], env: dict, repeat: int) -> tuple[float, float, float]
     return min(w for w, _ in runs), statistics.median(w for w, _ in runs), min(c for _, c in runs)
 
 
-def fresh_cli(n: int, repeat: int, tmp: Path) -> dict:
+def fresh_cli(n: int, repeat: int, tmp: Path, plain: bool = True) -> dict:
     """A fresh ``curvenet reconstruct`` process on an ``n``-point file, and its breakdown."""
     import perf
 
@@ -241,6 +241,8 @@ def fresh_cli(n: int, repeat: int, tmp: Path) -> dict:
         ("curvenet reconstruct (numba)", cli, env),
         ("curvenet reconstruct (CURVENET_NO_NUMBA=1)", cli, _env(CURVENET_NO_NUMBA="1")),
     ):
+        if "NO_NUMBA" in label and not plain:
+            continue
         if "NO_NUMBA" in label and n > 5000:  # minutes in plain Python: once
             best, cpu = _run(cmd, e)
             med = best
@@ -381,6 +383,8 @@ def main(argv=None) -> int:
     ap.add_argument("--formats", default="", help="writers to time, e.g. .obj,.vtu (default: all)")
     ap.add_argument("--cache", type=Path, default=Path(tempfile.gettempdir()))
     ap.add_argument("--quick", action="store_true", help="tiny sizes (CI)")
+    ap.add_argument("--skip-plain", action="store_true",
+                    help="leave out the CLI run without numba (about 40 s of processor time at 34k points)")
     args = ap.parse_args(argv)
     if args.quick:
         args.n, args.cli_n, args.repeat = 3e3, 3e3, 2
@@ -392,7 +396,7 @@ def main(argv=None) -> int:
             writers(int(args.n), args.repeat, args.cache, tmp, [e for e in args.formats.split(",") if e])
         if args.part in ("cli", "all"):
             print(f"\n== a fresh curvenet reconstruct process, best and median of {args.repeat} ==")
-            fresh_cli(int(args.cli_n), args.repeat, tmp)
+            fresh_cli(int(args.cli_n), args.repeat, tmp, plain=not args.skip_plain)
         if args.part in ("compile", "all"):
             print("\n== the first run after a fresh install (empty numba cache) ==")
             first_run(int(args.n), tmp)
