@@ -79,7 +79,7 @@ def network_to_geojson(net: CurveNetwork) -> str:
 _HOLE = "@coordinates@"
 
 
-def _positions(arrays, single: bool = False) -> list[str]:
+def _positions(arrays: list, single: bool = False) -> list[str]:
     """JSON text of the positions of each (m, d) array as ``json`` writes them
     (``[[x, y], [x, y]]``), or with ``single`` of each row of the one array (``[x, y]``)."""
     blocks = [np.asarray(a, dtype=float) for a in arrays]

@@ -16,7 +16,7 @@ of random doubles); the rows holding any other value (``1e-07``, ``1e+16``, subn
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -36,7 +36,7 @@ _SMALL = 64
 _MARK = b"\x00"
 
 
-def _orjson():
+def _orjson() -> Any:
     """orjson with its numpy option, or None when it is not installed."""
     try:
         import orjson
@@ -45,7 +45,7 @@ def _orjson():
     return orjson
 
 
-def _dumps(a) -> bytes:
+def _dumps(a: Any) -> bytes:
     import orjson
 
     return orjson.dumps(a, option=orjson.OPT_SERIALIZE_NUMPY)

@@ -132,7 +132,7 @@ def network_to_swc(
     return "\n".join(out) + "\n" + _sample_lines(blocks, count, d, shortest([radius]))
 
 
-def _sample_lines(blocks, count: int, d: int, radius: str) -> str:
+def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
     """The sample lines ``n T x y z R P`` of the runs of samples ``blocks`` (see
     :func:`network_to_swc`), ``count`` samples in all."""
     if not count:
@@ -155,7 +155,7 @@ def _sample_lines(blocks, count: int, d: int, radius: str) -> str:
     ])
 
 
-def _median_step(curves) -> float:
+def _median_step(curves: list) -> float:
     """Median distance between consecutive points of the same curve (0 without any)."""
     long = [c.points for c in curves if len(c.points) > 1]
     if not long:
