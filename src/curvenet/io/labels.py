@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import InputError
 from ..network import CurveNetwork
+from .numbers import int_rows_text
 
 __all__ = ["point_labels", "labels_to_csv", "labels_to_npy", "LABEL_REACH"]
 
@@ -96,10 +97,7 @@ def _spacing(net: CurveNetwork) -> float:
 def labels_to_csv(labels: np.ndarray) -> str:
     """CSV text with header ``point,curve,node``: one row per input point, in input order."""
     lab = np.asarray(labels, dtype=np.int64).reshape(-1, 2)
-    buf = io.StringIO()
-    buf.write("point,curve,node\n")
-    np.savetxt(buf, np.column_stack([np.arange(len(lab)), lab]), fmt="%d", delimiter=",")
-    return buf.getvalue()
+    return "point,curve,node\n" + int_rows_text(np.column_stack([np.arange(len(lab)), lab]), ",")
 
 
 def labels_to_npy(labels: np.ndarray) -> bytes:

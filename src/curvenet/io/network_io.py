@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import CurveNetwork, _jsonable
-from .numbers import shortest_rows
+from .numbers import int_lists, rows_text
 from .points import check_readable
 
 __all__ = ["network_to_json", "network_to_obj", "network_to_ply", "read_network", "polyline_vertices"]
@@ -73,7 +73,9 @@ def polyline_vertices(net: CurveNetwork) -> tuple[np.ndarray, list[np.ndarray]]:
     polylines : list of (m,) ndarray of int
         Vertex indices of each curve in order; a closed curve repeats its first vertex at the end.
     """
-    return net.polyline_vertices()
+    from .polylines import polyline_vertices as _fast
+
+    return _fast(net)
 
 
 def network_to_obj(net: CurveNetwork) -> str:
@@ -86,13 +88,14 @@ def network_to_obj(net: CurveNetwork) -> str:
     (ParaView, PyVista) read the ``l`` lines as edges; trimesh and meshio read OBJ faces only
     and see the vertices alone: give them the ``.ply`` (trimesh, Open3D) or ``.vtu`` (meshio).
     """
-    v, lines = polyline_vertices(net)
-    out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves", f"# nodes are vertices 1..{net.n_nodes}"]
-    out.append("\n".join(shortest_rows(v, "v ")))
-    for i, ids in enumerate(lines):
-        out.append(f"g curve_{i}")
-        out.append("l " + " ".join(str(j + 1) for j in ids))
-    return "\n".join(s for s in out if s) + "\n"
+    from .polylines import polyline_arrays
+
+    v, ids, off = polyline_arrays(net)
+    out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves\n# nodes are vertices 1..{net.n_nodes}\n"]
+    out.append(rows_text(v, "v "))
+    for i, text in enumerate(int_lists(np.split(ids + 1, off[1:-1]) if net.n_curves else [])):
+        out.append(f"g curve_{i}\nl {text}\n")
+    return "".join(out)
 
 
 def network_to_ply(net: CurveNetwork, *, curve_ids: bool = False) -> bytes:
@@ -114,7 +117,9 @@ def network_to_ply(net: CurveNetwork, *, curve_ids: bool = False) -> bytes:
     -------
     bytes
     """
-    v, seg, cid = net.segments()
+    from .polylines import segments
+
+    v, seg, cid = segments(net)
     vert = np.zeros(len(v), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("node", "u1")])
     vert["x"], vert["y"], vert["z"] = v.T
     vert["node"][: net.n_nodes] = 1

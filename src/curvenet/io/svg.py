@@ -90,7 +90,7 @@ def network_to_svg(
         raise InputError(f"SVG width must be a positive integer, got {width!r}")
     d = net.dimension
     projection = VIEWS.get(projection, projection)
-    curves_uv = [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
+    curves_uv = _project_curves(net, projection)
     nodes_uv = project(net.nodes, projection) if len(net.nodes) else np.zeros((0, 2))
     allp = np.vstack([nodes_uv, *curves_uv]) if (len(nodes_uv) or curves_uv) else np.zeros((0, 2))
     if len(allp) == 0:
@@ -108,9 +108,6 @@ def network_to_svg(
     def num(v: float) -> str:
         return f"{v:.9g}"
 
-    def pts(uv) -> str:
-        return " ".join(f"{num(u)},{num(0.0 - v)}" for u, v in uv)
-
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
@@ -119,12 +116,12 @@ def network_to_svg(
         f'<g id="curves" fill="none" stroke-width="{num(sw)}" stroke-linecap="round" stroke-linejoin="round">',
     ]
     colors = curve_colors(net)
-    for i, (c, uv) in enumerate(zip(net.curves, curves_uv)):
+    for i, (c, points) in enumerate(zip(net.curves, _point_lists(curves_uv))):
         tag = "polygon" if c.closed else "polyline"
         ends = "free loop" if c.start is None else f"nodes {c.start}-{c.end}"
         data = "" if c.start is None else f' data-start="{int(c.start)}" data-end="{int(c.end)}"'
         out.append(
-            f'<{tag} id="curve-{i}" class="curve" stroke="{colors[i]}"{data} points="{pts(uv)}">'
+            f'<{tag} id="curve-{i}" class="curve" stroke="{colors[i]}"{data} points="{points}">'
             f"<title>{escape(f'curve {i}: {ends}')}</title></{tag}>"
         )
     out.append("</g>")
@@ -140,3 +137,36 @@ def network_to_svg(
         out.append("</g>")
     out.append("</svg>")
     return "\n".join(out) + "\n"
+
+
+def _point_lists(curves_uv: list[np.ndarray]) -> list[str]:
+    """The ``points`` attribute of each curve: ``u,-v`` pairs with 9 significant digits (as
+    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one call."""
+    full = [uv for uv in curves_uv if len(uv)]
+    if not full:
+        return ["" for _ in curves_uv]
+    flat = np.concatenate(full)
+    vals = np.column_stack([flat[:, 0], 0.0 - flat[:, 1]]).ravel().tolist()
+    pairs = (("%.9g,%.9g\n" * len(flat)) % tuple(vals)).split("\n")
+    out = []
+    pos = 0
+    for uv in curves_uv:
+        out.append(" ".join(pairs[pos:pos + len(uv)]))
+        pos += len(uv)
+    return out
+
+
+def _project_curves(net: CurveNetwork, projection: str) -> list[np.ndarray]:
+    """:func:`project` of each curve's points; the projections that keep coordinates (all but
+    ``iso``) of all curves at once."""
+    full = [c.points for c in net.curves if len(c.points)]
+    if projection == "iso" or not full or any(p.shape[1] != full[0].shape[1] for p in full):
+        return [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
+    uv = project(np.concatenate(full), projection)
+    out = []
+    pos = 0
+    for c in net.curves:
+        k = len(c.points)
+        out.append(uv[pos:pos + k] if k else np.zeros((0, 2)))
+        pos += k
+    return out

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
-from .numbers import shortest
+from .numbers import int_rows_text, join_columns, rows_text, shortest
 
 __all__ = ["network_to_swc", "SWC_UNDEFINED", "SWC_FORK", "SWC_END", "SWC_RADIUS_FRACTION"]
 
@@ -73,8 +73,7 @@ def network_to_swc(
     val = net.valence
     n = net.n_nodes
     if radius is None:
-        steps = [np.linalg.norm(np.diff(c.points, axis=0), axis=1) for c in net.curves if len(c.points) > 1]
-        step = float(np.median(np.concatenate(steps))) if steps else 0.0
+        step = _median_step(net.curves)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type))
     at_node: list[list[int]] = [[] for _ in range(n)]
@@ -83,20 +82,26 @@ def network_to_swc(
             at_node[int(c.start)].append(i)
             if int(c.end) != int(c.start):
                 at_node[int(c.end)].append(i)
-    rows: list[tuple[int, int, np.ndarray, int]] = []  # (id, type, position, parent)
+    blocks: list[tuple[np.ndarray, int, int]] = []  # runs of samples: (positions, type, parent of the first)
+    count = 0  # samples so far
     sample_of_node = np.zeros(n, dtype=np.int64)  # 0: not written yet
     used = np.zeros(len(net.curves), dtype=bool)
     cut = 0
 
-    def add(t: int, p: np.ndarray, parent: int) -> int:
-        rows.append((len(rows) + 1, int(t), p, parent))
-        return len(rows)
+    def add(pts: np.ndarray, t: int, parent: int) -> int:
+        """Samples at ``pts`` in a chain (each the parent of the next); returns the last id."""
+        nonlocal count
+        if not len(pts):
+            return parent
+        blocks.append((pts, int(t), parent))
+        count += len(pts)
+        return count
 
     roots = sorted(range(n), key=lambda j: (val[j] != 1, j))
     for root in roots:
         if sample_of_node[root]:
             continue
-        sample_of_node[root] = add(node_type[root], net.nodes[root], -1)
+        sample_of_node[root] = add(net.nodes[root:root + 1], node_type[root], -1)
         queue = deque([root])
         while queue:
             j = queue.popleft()
@@ -108,29 +113,54 @@ def network_to_swc(
                 a, b = int(c.start or 0), int(c.end or 0)  # curves listed at a node have both
                 pts = c.points if a == j else c.points[::-1]
                 other = b if a == j else a
-                parent = int(sample_of_node[j])
-                for p in pts[1:-1]:
-                    parent = add(sample_type, p, parent)
+                parent = add(pts[1:-1], sample_type, int(sample_of_node[j]))
                 if sample_of_node[other]:
                     cut += 1
                 else:
-                    sample_of_node[other] = add(node_type[other], net.nodes[other], parent)
+                    sample_of_node[other] = add(net.nodes[other:other + 1], node_type[other], parent)
                     queue.append(other)
     for i, c in enumerate(net.curves):  # loops that meet no node
         if c.start is None and len(c.points):
-            parent = -1
-            for p in c.points:
-                parent = add(sample_type, p, parent)
+            add(c.points, sample_type, -1)
             cut += bool(c.closed)
     out = [
-        f"# curvenet network: {n} nodes, {net.n_curves} curves; {len(rows)} samples",
+        f"# curvenet network: {n} nodes, {net.n_curves} curves; {count} samples",
         f"# types: {sample_type} curve sample, {fork_type} junction, {end_type} free end",
         f"# cycles cut: {cut} (links to an already written sample left out)",
         "# n T x y z R P",
     ]
-    r = shortest([radius])
-    for sid, t, p, parent in rows:
-        xyz = np.zeros(3)
-        xyz[:d] = p
-        out.append(f"{sid} {t} {shortest(xyz)} {r} {parent}")
-    return "\n".join(out) + "\n"
+    return "\n".join(out) + "\n" + _sample_lines(blocks, count, d, shortest([radius]))
+
+
+def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
+    """The sample lines ``n T x y z R P`` of the runs of samples ``blocks`` (see
+    :func:`network_to_swc`), ``count`` samples in all."""
+    if not count:
+        return ""
+    xyz = np.zeros((count, 3))
+    types = np.empty(count, dtype=np.int64)
+    parents = np.arange(count, dtype=np.int64)  # within a run, the sample before
+    pos = 0
+    for pts, t, parent in blocks:
+        k = len(pts)
+        xyz[pos:pos + k, :d] = pts
+        types[pos:pos + k] = t
+        parents[pos] = parent
+        pos += k
+    ids = np.arange(1, count + 1)
+    return join_columns([
+        int_rows_text(np.column_stack([ids, types])),
+        rows_text(xyz, "", " ", f" {radius}\n"),
+        int_rows_text(parents.reshape(-1, 1)),
+    ])
+
+
+def _median_step(curves: list) -> float:
+    """Median distance between consecutive points of the same curve (0 without any)."""
+    long = [c.points for c in curves if len(c.points) > 1]
+    if not long:
+        return 0.0
+    P = np.concatenate(long)
+    steps = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    last = np.cumsum([len(p) for p in long])[:-1] - 1  # the step from one curve to the next
+    return float(np.median(np.delete(steps, last)))

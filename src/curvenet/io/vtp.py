@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..network import CurveNetwork
 from .network_io import polyline_vertices
-from .numbers import shortest
+from .numbers import ints_text, shortest
 
 __all__ = ["network_to_vtp"]
 
@@ -65,7 +65,8 @@ def network_to_vtp(net: CurveNetwork, *, encoding: Literal["ascii", "base64"] = 
     line_off = np.cumsum([len(ids) for ids in lines]).astype("<i8") if lines else np.zeros(0, "<i8")
     cell_curve = np.concatenate([np.full(n, -1), np.asarray(keep, dtype=np.int64)]).astype("<i8")
     cell_node = np.concatenate([np.arange(n), np.full(len(lines), -1)]).astype("<i8")
-    cell_closed = np.concatenate([np.zeros(n), [net.curves[i].closed for i in keep]]).astype("u1")
+    closed = np.array([net.curves[i].closed for i in keep], dtype=bool)
+    cell_closed = np.concatenate([np.zeros(n), closed]).astype("u1")
 
     def arr(name, a, ncomp=1):
         a = np.ascontiguousarray(a)
@@ -76,7 +77,7 @@ def network_to_vtp(net: CurveNetwork, *, encoding: Literal["ascii", "base64"] = 
             if a.dtype.kind == "f":
                 body = shortest(a)
             else:
-                body = " ".join(str(int(x)) for x in a.ravel())
+                body = ints_text(a)
             return f'{head} format="ascii">{body}</DataArray>'
         raw = a.tobytes()
         body = base64.b64encode(np.uint64(len(raw)).astype("<u8").tobytes() + raw).decode("ascii")

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..network import CurveNetwork
-from .numbers import shortest
+from .numbers import ints_text, shortest
+from .polylines import segments
 
 __all__ = ["network_to_vtu", "VTK_LINE"]
 
@@ -35,12 +36,11 @@ def network_to_vtu(net: CurveNetwork) -> str:
     -------
     str
     """
-    v, seg, cid = net.segments()
+    v, seg, cid = segments(net)
     node_id = np.full(len(v), -1, dtype=np.int64)
     node_id[: net.n_nodes] = np.arange(net.n_nodes)
 
-    def ints(a: np.ndarray) -> str:
-        return " ".join(map(str, np.asarray(a, dtype=np.int64).ravel().tolist()))
+    ints = ints_text
 
     out = [
         '<?xml version="1.0"?>',

@@ -1,0 +1,104 @@
+"""Per-curve values of many curves at once, for the writers (the same floats as one curve at a
+time)."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ..network import Curve, CurveNetwork
+
+__all__ = ["curve_lengths", "polyline_arrays", "polyline_vertices", "segments"]
+
+
+def curve_lengths(curves: Sequence[Curve]) -> np.ndarray:
+    """:attr:`Curve.length` of every curve, computed for all curves of one size together.
+
+    Parameters
+    ----------
+    curves : sequence of Curve
+
+    Returns
+    -------
+    (c,) ndarray of float
+        Bit for bit the value of each curve's ``length`` (the same operations in the same
+        order on each curve's points: numpy sums each row of a stack as it sums one array).
+    """
+    out = np.zeros(len(curves))
+    groups: dict[tuple[int, bool, int], list[int]] = {}
+    for i, c in enumerate(curves):
+        if len(c.points) >= 2:
+            groups.setdefault((len(c.points), bool(c.closed), c.points.shape[1]), []).append(i)
+    for (m, closed, _), ids in groups.items():
+        P = np.stack([curves[i].points for i in ids])
+        if closed:
+            P = np.concatenate([P, P[:, :1]], axis=1)
+        out[ids] = np.linalg.norm(np.diff(P, axis=1), axis=2).sum(axis=1)
+    return out
+
+
+def polyline_arrays(net: CurveNetwork) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`CurveNetwork.polyline_vertices` as flat arrays, built without a loop over curves.
+
+    Returns
+    -------
+    vertices : (V, 3) ndarray of float
+        Node positions first, then the inner points of each curve (2D networks get z = 0).
+    ids : (L,) ndarray of int64
+        The vertex indices of all polylines, one after the other.
+    offsets : (c + 1,) ndarray of int64
+        Polyline ``i`` is ``ids[offsets[i]:offsets[i + 1]]``: the same as polyline ``i`` of
+        :meth:`CurveNetwork.polyline_vertices` (a closed loop without node repeats its first
+        vertex at the end).
+    """
+    d = net.dimension
+    curves = net.curves
+    n = net.n_nodes
+    nc = len(curves)
+    sizes = np.fromiter((len(c.points) for c in curves), dtype=np.int64, count=nc)
+    has = np.fromiter((c.start is not None for c in curves), dtype=bool, count=nc)
+    closed = np.fromiter((bool(c.closed) for c in curves), dtype=bool, count=nc)
+    starts = np.fromiter((-1 if c.start is None else int(c.start) for c in curves), dtype=np.int64, count=nc)
+    ends = np.fromiter((-1 if c.end is None else int(c.end) for c in curves), dtype=np.int64, count=nc)
+    full = [c.points.reshape(-1, d) for c in curves if len(c.points)]
+    P = np.concatenate(full) if full else np.zeros((0, d))
+    off = np.concatenate([[0], np.cumsum(sizes)])
+    keep = np.ones(len(P), dtype=bool)
+    ends_cut = has & (sizes > 0)  # a curve between nodes gives its inner points only
+    keep[off[:-1][ends_cut]] = False
+    keep[off[1:][ends_cut] - 1] = False
+    n_inner = np.where(has, np.maximum(sizes - 2, 0), sizes)
+    base = n + np.concatenate([[0], np.cumsum(n_inner)])[:-1]
+    plen = np.where(has, n_inner + 2, sizes + (closed & (sizes > 0)))
+    poff = np.concatenate([[0], np.cumsum(plen)]).astype(np.int64)
+    cur = np.repeat(np.arange(nc), plen)
+    k = np.arange(int(poff[-1]), dtype=np.int64) - np.repeat(poff[:-1], plen)
+    h = has[cur]
+    ids = np.where(h, base[cur] + k - 1, base[cur] + np.where(k < sizes[cur], k, 0))
+    ids = np.where(h & (k == 0), starts[cur], ids)
+    ids = np.where(h & (k == plen[cur] - 1), ends[cur], ids)
+    v = np.vstack([net.nodes.reshape(-1, d), P[keep]])
+    if d == 2:
+        v = np.column_stack([v, np.zeros(len(v))])
+    return v, ids.astype(np.int64), poff
+
+
+def polyline_vertices(net: CurveNetwork) -> tuple[np.ndarray, list[np.ndarray]]:
+    """:meth:`CurveNetwork.polyline_vertices` (the same arrays), from :func:`polyline_arrays`."""
+    v, ids, off = polyline_arrays(net)
+    return v, np.split(ids, off[1:-1]) if len(off) > 1 else []
+
+
+def segments(net: CurveNetwork) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`CurveNetwork.segments` (the same arrays), from :func:`polyline_arrays`."""
+    v, ids, off = polyline_arrays(net)
+    plen = np.diff(off)
+    cur = np.repeat(np.arange(len(plen)), plen)
+    last = np.zeros(len(ids), dtype=bool)
+    last[off[1:][plen > 0] - 1] = True
+    first = ~last[:-1] if len(ids) else np.zeros(0, dtype=bool)
+    if not first.any():
+        return v, np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    seg = np.column_stack([ids[:-1][first], ids[1:][first]]).astype(np.int64)
+    return v, seg, cur[:-1][first].astype(np.int64)

@@ -1,0 +1,72 @@
+"""curvenet.io.numbers: the text of every float is ``repr``'s (so it reads back bit for bit), with
+orjson's bulk path and without it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curvenet.io import numbers
+from curvenet.io.numbers import int_lists, int_rows_text, ints_text, join_columns, rows_text, shortest, shortest_rows
+
+EDGES = [0.0, -0.0, 5e-324, -5e-324, 2.2250738585072014e-308, 2.225073858507201e-308, 1.7976931348623157e308,
+         -1.7976931348623157e308, np.inf, -np.inf, np.nan, 1e-4, -1e-4, 9.999999999999999e-05, 1e16, -1e16,
+         9999999999999998.0, 1e15, 123456789012345678.0, 0.1, 0.3, 1 / 3, 2.0**53, 2.0**53 + 2, 1e22, 1e23, 5e-5,
+         1e-7, 0.5, 1.0, 100.0, 123456.789]
+
+
+def _values(rng, n: int) -> dict:
+    return {
+        "normal": rng.normal(size=n) * 10,
+        # random bit patterns: every exponent, subnormals, inf and nan
+        "bits": rng.integers(-2**63, 2**63, size=n, dtype=np.int64).view(np.float64),
+        "subnormal": rng.integers(1, 2**52, size=n, dtype=np.int64).view(np.float64) * rng.choice([-1.0, 1.0], n),
+        "float32": rng.normal(size=n).astype(np.float32).astype(np.float64),
+        "wide": rng.normal(size=n) * 10.0 ** rng.integers(-8, 20, size=n),
+        "short": np.round(rng.normal(size=n) * 100, 3),
+        "edges": np.array(EDGES * 4),
+    }
+
+
+@pytest.fixture(params=[True, False], ids=["orjson", "repr"])
+def bulk(request, monkeypatch):
+    if request.param:
+        pytest.importorskip("orjson")
+    else:
+        monkeypatch.setattr(numbers, "_orjson", lambda: None)
+    return request.param
+
+
+@pytest.mark.parametrize("kind", list(_values(np.random.default_rng(0), 1)))
+def test_floats_are_repr(kind, bulk):
+    a = _values(np.random.default_rng(1), 15_000)[kind]
+    rows = a[: len(a) // 3 * 3].reshape(-1, 3)
+    assert rows_text(rows, "v ", " ", "\n") == "".join("v " + " ".join(map(repr, r)) + "\n" for r in rows.tolist())
+    assert shortest(a, ";") == ";".join(map(repr, a.tolist()))
+    assert shortest_rows(rows, "[", ", ") == ["[" + ", ".join(map(repr, r)) for r in rows.tolist()]
+    assert shortest_rows(rows, "", "\n") == ["\n".join(map(repr, r)) for r in rows.tolist()]
+    finite = a[np.isfinite(a)]
+    back = np.array([float(t) for t in shortest(finite).split()])
+    assert np.array_equal(back.view(np.int64), finite.view(np.int64))  # bit for bit, signs of zero too
+
+
+def test_integers(bulk):
+    rng = np.random.default_rng(2)
+    i = np.concatenate([rng.integers(-2**63, 2**63, size=3000, dtype=np.int64),
+                        np.array([0, -1, 2**63 - 1, -2**63], dtype=np.int64)])
+    assert ints_text(i, ",") == ",".join(map(str, i.tolist()))
+    parts = [i[:0], i[:5], i[5:5], i[5:100], i[100:], i[:0]]
+    assert int_lists(parts) == [" ".join(map(str, p.tolist())) for p in parts]
+    r = i[:3000].reshape(-1, 3)
+    assert int_rows_text(r, ",") == "".join(",".join(map(str, x)) + "\n" for x in r.tolist())
+
+
+def test_empty_and_small(bulk):
+    assert rows_text(np.zeros((0, 3)), "v ") == ""
+    assert shortest([]) == ""
+    assert shortest_rows(np.zeros((0, 2))) == []
+    assert ints_text([]) == ""
+    assert int_lists([]) == []
+    assert rows_text([[1.0, 2.0]], "v ") == "v 1.0 2.0\n"
+    assert join_columns(["a\nbb\n", "1\n2\n"]) == "a 1\nbb 2\n"
+    assert join_columns(["", ""]) == ""
