@@ -227,7 +227,9 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     where the two fits part (across the curve) by more than the noise explains, the wide fit
     rounds a bend or a corner, and the width is cut to the one that minimises the expected
     squared error: bias growing as ``b^4``, noise variance falling as ``1 / b``. On a straight
-    or gently bent stretch the width stays ``FIT.band``.
+    or gently bent stretch the width stays ``FIT.band``; within a few samples of a held end it
+    is at most ``FIT.end_taper`` times their number (a node placed a little off the samples
+    pulls only the last few).
 
     Parameters
     ----------
@@ -259,11 +261,11 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     X = np.concatenate([curves[i].points for i in sel])
     m = np.array([len(curves[i].points) for i in sel], dtype=np.int64)
     closed = np.array([bool(curves[i].closed) for i in sel])
-    sys_ = _Chains(X, m, closed)
+    ch = _Chains(X, m, closed)
     if band is not None:
-        Y = sys_.solve(np.full(len(X), float(band)))
+        Y = ch.solve(np.full(len(X), float(band)))
     else:
-        Y = sys_.solve(_widths(sys_, float(sigma)))
+        Y = ch.solve(_widths(ch, float(sigma)))
     out = list(curves)
     off = np.r_[0, np.cumsum(m)].tolist()
     for k, i in enumerate(sel):
@@ -293,7 +295,10 @@ def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
     bias2 = np.maximum(part2 - noise2, NUMERIC.tiny)
     # the width of least expected squared error: bias (b / wide)^4 B, variance kernel_l2 sigma^2 / b
     best = wide * ((d - 1) * FIT.kernel_l2 * sigma**2 / (8.0 * wide * bias2)) ** (1.0 / 9.0)
-    return np.clip(best, narrow, wide)
+    # near a held end no wider than its distance from it in samples: a node placed off the
+    # samples then pulls only the last few of them
+    k = np.where(ch.held_curve, np.minimum(ch.idx - ch.first, ch.last - ch.idx), np.inf)
+    return np.clip(np.minimum(best, FIT.end_taper * k), narrow, wide)
 
 
 class _Chains:
@@ -318,15 +323,18 @@ class _Chains:
         # one penalty row per sample of a loop and per inner sample of an open curve
         self.rows = np.flatnonzero(loop | ((idx != first) & (idx != last)))
         self.held = ~loop & ((idx == first) | (idx == last))  # open curves' ends: at their nodes
+        self.held_curve = ~loop
         self.free = np.flatnonzero(~self.held)
 
     def solve(self, band: np.ndarray) -> np.ndarray:
-        """(M, d) fitted samples for the kernel width ``band`` (M,) of each sample (spacings)."""
+        """(M, d) fitted samples for the kernel width ``band`` (M,) of each sample (spacings);
+        the held ends stay where they are."""
         from scipy.sparse import coo_matrix, identity
         from scipy.sparse.linalg import splu
 
         rows, M = self.rows, self.M
-        Y = self.X.copy()
+        X = self.X
+        Y = X.copy()
         if not len(self.free):
             return Y
         # band^2 s_j^2 times the second divided difference: unitless weights, any scale
@@ -339,7 +347,7 @@ class _Chains:
                        shape=(len(rows), M)).tocsr()
         A = (identity(M, format="csr") + R.T @ R).tocsr()
         Af = A[self.free]
-        rhs = self.X[self.free] - Af[:, np.flatnonzero(self.held)] @ self.X[self.held]
+        rhs = X[self.free] - Af[:, np.flatnonzero(self.held)] @ X[self.held]
         Y[self.free] = splu(Af[:, self.free].tocsc()).solve(np.ascontiguousarray(rhs))
         return Y
 

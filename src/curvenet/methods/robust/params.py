@@ -58,7 +58,8 @@ class RobustParams:
         ------
         InputError
             A radius or count that is not a positive finite number, ``k`` under 4, the outer
-            shell not larger than the inner one, a bad spacing or smoothing width.
+            shell not larger than the inner one, a bad spacing or smoothing width, a ``fit``
+            that is not a bool or None.
         """
         vals: dict[str, Any] = {}
         for name in _POSITIVE:
@@ -81,6 +82,8 @@ class RobustParams:
         if smoothing is not None and (not np.isfinite(smoothing) or smoothing < 0):
             raise InputError(f"smoothing must be a non-negative number of spacings, got {smoothing!r}")
         fit = given.get("fit")
+        if fit is not None and not isinstance(fit, (bool, np.bool_)):
+            raise InputError(f"fit must be true, false or none (none: where noise is detected), got {fit!r}")
         return cls(spacing=spacing, smoothing=smoothing, fit=None if fit is None else bool(fit), **vals)
 
     def report(self) -> dict[str, Any]:

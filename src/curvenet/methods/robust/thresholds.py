@@ -452,6 +452,9 @@ class Fit(NamedTuple):
     band: float = 4.0
     #: narrowest kernel, in local spacings: the width at sharp bends and corners (benchmark)
     band_min: float = 1.5
+    #: within a few samples of a held end (a node) the kernel is at most this many spacings wide
+    #: per sample from the end (benchmark)
+    end_taper: float = 1.0
     #: squared L2 norm of the spline's equivalent kernel of width 1 (Silverman's kernel,
     #: ``3 / (8 sqrt(2))``): a fit of width ``b`` spacings keeps ``kernel_l2 / b`` of the
     #: noise variance
