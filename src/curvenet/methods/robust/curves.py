@@ -325,12 +325,14 @@ class _Chains:
         self.held = ~loop & ((idx == first) | (idx == last))  # open curves' ends: at their nodes
         self.held_curve = ~loop
         self.free = np.flatnonzero(~self.held)
+        # the open curves' free samples (a banded system: no wrap-around) and the loops'
+        self.free_open = np.flatnonzero(~self.held & ~loop)
+        self.free_loop = np.flatnonzero(loop)
 
     def solve(self, band: np.ndarray) -> np.ndarray:
         """(M, d) fitted samples for the kernel width ``band`` (M,) of each sample (spacings);
         the held ends stay where they are."""
         from scipy.sparse import coo_matrix, identity
-        from scipy.sparse.linalg import splu
 
         rows, M = self.rows, self.M
         X = self.X
@@ -346,10 +348,33 @@ class _Chains:
                         (np.tile(r, 3), np.concatenate([self.prv[rows], rows, self.nxt[rows]]))),
                        shape=(len(rows), M)).tocsr()
         A = (identity(M, format="csr") + R.T @ R).tocsr()
-        Af = A[self.free]
-        rhs = X[self.free] - Af[:, np.flatnonzero(self.held)] @ X[self.held]
-        Y[self.free] = splu(Af[:, self.free].tocsc()).solve(np.ascontiguousarray(rhs))
+        held = np.flatnonzero(self.held)
+        for part in (self.free_open, self.free_loop):
+            if not len(part):
+                continue
+            Ap = A[part]
+            rhs = X[part] - Ap[:, held] @ X[held] if len(held) else X[part]
+            Y[part] = _spd_solve(Ap[:, part], rhs, banded=part is self.free_open)
         return Y
+
+
+def _spd_solve(A, rhs: np.ndarray, *, banded: bool) -> np.ndarray:
+    """Solve the symmetric positive definite sparse system ``A`` (n, n) for ``rhs`` (n, d):
+    by the banded Cholesky (LAPACK) where ``A`` has at most two diagonals on either side of its
+    own (the open curves), else by a sparse LU without reordering or pivoting (the loops: banded
+    but for their wrap-around, whose fill stays in their last rows)."""
+    from scipy.linalg import solveh_banded
+    from scipy.sparse.linalg import splu
+
+    if banded:
+        n = A.shape[0]
+        ab = np.zeros((3, n))
+        ab[2] = A.diagonal(0)
+        ab[1, 1:] = A.diagonal(1)
+        ab[0, 2:] = A.diagonal(2)
+        return solveh_banded(ab, np.ascontiguousarray(rhs), check_finite=False)
+    lu = splu(A.tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    return lu.solve(np.ascontiguousarray(rhs))
 
 
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):
