@@ -3,7 +3,7 @@ with the fit of stage 8 (issue 25).
 
 Usage::
 
-    python benchmarks/fit_eval.py [--models cube,knot] [--conditions "noise 0.2h"] [--md]
+    python benchmarks/fit_eval.py [--models cube,knot] [--conditions "noise 0.2h"]
     python benchmarks/fit_eval.py --quick        # two models, one condition (CI-sized)
     python benchmarks/fit_eval.py --timing 100000 # the fit's time against the whole run's
 
@@ -16,7 +16,7 @@ largest value, in units of h. The target: a mean at most half the noise's standa
 The two runs must have the same topology (nodes, curves, end nodes and input indices): the
 script says so, or exits 1.
 
-``--md`` prints the markdown table of docs/benchmarks.md. ``--timing N`` reconstructs a noisy
+The summary is the markdown table of docs/method.md (stage 8). ``--timing N`` reconstructs a noisy
 sampling of about N points (the tree model tiled) and prints the fit's seconds against the
 whole run's and against the k=16 cKDTree query of the same points, measured in the same run.
 """
@@ -122,7 +122,6 @@ def main(argv=None) -> int:
     ap.add_argument("--models", default="")
     ap.add_argument("--conditions", default="")
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--md", action="store_true")
     ap.add_argument("--timing", type=int, default=0, metavar="N")
     args = ap.parse_args(argv)
     if args.timing:
