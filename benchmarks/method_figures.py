@@ -33,7 +33,7 @@ from curvenet import synth
 from curvenet.methods.robust import kernels as _k
 from curvenet.methods.robust import pipeline, thresholds
 from curvenet.methods.robust.chains import trace_chains
-from curvenet.methods.robust.curves import build_curves
+from curvenet.methods.robust.curves import build_curves, drop_spikes, fit_curves
 from curvenet.methods.robust.frames import duplicates, frames, neighbours
 from curvenet.methods.robust.graph import components, linked_edges, linked_graph
 from curvenet.methods.robust.junctions import junction_regions
@@ -88,7 +88,7 @@ SECTIONS = {
     "CHAINS": ("CHAINS", "ENDS"),
     "REPAIRS": ("REPAIRS",),
     "NODES": ("NODES",),
-    "CURVES": ("CURVES", "UNTANGLE"),
+    "CURVES": ("CURVES", "FIT", "UNTANGLE"),
     "NUMERIC": ("NUMERIC", "LINALG"),
 }
 
@@ -267,7 +267,7 @@ def _pairs(src, dst) -> np.ndarray:
 def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
     """Run the stages of :func:`~curvenet.methods.robust.pipeline.reconstruct_robust` one by one.
 
-    The same calls in the same order as the pipeline (default keywords, no smoothing), keeping
+    The same calls in the same order as the pipeline (default keywords), keeping
     every stage's output; besides, the links before the strand cut and the regions before the
     split, for the pictures.
 
@@ -315,8 +315,10 @@ def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
             repair(topo, sc, prm)
             states.append((repair.__name__, TopoState.of(topo)))
         placement = place_nodes(topo, sc, prm)
-        curves = build_curves(P, nb.h, placement)
+        curves = drop_spikes(build_curves(P, nb.h, placement), P, nb.h, noise)
         pipeline._to_input_ids(curves, order)
+        if not fr.clean:  # under noise, fitted (stage 8's last step)
+            curves = fit_curves(curves, fr.sigma)
     net = CurveNetwork(placement.nodes, curves, {}, {})
     return StageRun(ex, P_in, dropped, P, nb.h, fr.t, fr.lin, fr.sigma, fr.hmed, fr.clean, links, cut,
                     reg.groups, reg0, reg.reg, traced, states, placement.nodes, net)

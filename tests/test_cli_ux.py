@@ -35,12 +35,12 @@ def theta_points(n=60):
 
 @pytest.fixture(scope="module")
 def run_all(tmp_path_factory):
-    """One reconstruct run (default method, --smooth) that writes every format and a PNG (the doc
+    """One reconstruct run (default method, --fit) that writes every format and a PNG (the doc
     test adds the viewer)."""
     d = tmp_path_factory.mktemp("ux")
     np.savetxt(d / "theta.xyz", theta_points())
     outs = ["n.json", "n.obj", "n.ply", "n.dxf", "n.svg", "n.vtp", "n.graphml"]
-    args = ["reconstruct", "theta.xyz"] + [a for o in outs for a in ("-o", o)] + ["--png", "n.png", "--dpi", "40", "--smooth"]
+    args = ["reconstruct", "theta.xyz"] + [a for o in outs for a in ("-o", o)] + ["--png", "n.png", "--dpi", "40", "--fit"]
     r = cli(*args, cwd=d)
     return d, r, outs
 
@@ -55,8 +55,8 @@ def test_reconstruct_writes_every_format_and_pictures(run_all):
         assert (d / o).stat().st_size > 0, o
     assert (d / "n.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "<svg" in (d / "n.svg").read_text() and "PolyData" in (d / "n.vtp").read_text()
-    # --smooth made smooth curves: the DXF has splines through them
-    assert net.parameters.get("smooth") is True
+    # --fit fitted the curves: the DXF has splines through them
+    assert net.parameters.get("fit") is True
     dxf = (d / "n.dxf").read_text()
     assert dxf.count("\nSPLINE\n") == net.n_curves and "\nPOLYLINE\n" not in dxf
     assert not [p.name for p in d.iterdir() if p.name.startswith(".")]  # no temporary files left

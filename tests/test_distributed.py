@@ -152,10 +152,13 @@ def test_3d_equal_for_tile_sides_origin_shifts_and_input_order(client, tree3d, t
     origin = P.min(axis=0) - np.asarray(shift) * side_u
     net = reconstruct_tiled(_save(tmp_path, P[perm]), tiles=side_u, origin=origin, client=client)
     _assert_same(one, net, h)
-    # indices are rows of the (permuted) input
-    for c in net.curves:
-        m = c.indices >= 0
-        assert np.array_equal(P[perm][c.indices[m]], c.points[m])
+    # indices are rows of the (permuted) input: the cloud is noisy, so the stitched curves are
+    # fitted and each point is its input point moved onto the fit (by about the noise; a
+    # neighbouring sample lies ten noise deviations away)
+    assert net.parameters["fit"] is True
+    moved = np.concatenate([np.linalg.norm(P[perm][c.indices[c.indices >= 0]] - c.points[c.indices >= 0], axis=1)
+                            for c in net.curves])
+    assert np.median(moved) < 2.0 * net.parameters["noise"]
 
 
 @pytest.mark.slow

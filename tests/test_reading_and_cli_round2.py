@@ -159,7 +159,7 @@ def test_help_lists_robust_parameters_and_ends_with_examples(capsys):
     with pytest.raises(SystemExit):
         main(["reconstruct", "--help"])
     out = capsys.readouterr().out
-    for opt in ("--spacing", "--shell-inner", "--shell-outer", "--link ", "--link-width", "--min-spur", "--smooth",
+    for opt in ("--spacing", "--shell-inner", "--shell-outer", "--link ", "--link-width", "--min-spur", "--fit",
                 "--smoothing", "--k", "--epsilon", "--tau-s", "--theta"):
         assert opt in out, opt
     assert "robust (the default" in out and "auto (default)" not in out

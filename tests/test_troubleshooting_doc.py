@@ -15,7 +15,7 @@ DOC = ROOT / "docs" / "troubleshooting.md"
 def test_recommended_options_exist(capsys):
     text = DOC.read_text()
     options = set(re.findall(r"`(--[a-z][a-z-]*)", text))
-    assert {"--shell-inner", "--min-spur", "--link-width", "--spacing", "--tau-s", "--smooth"} <= options
+    assert {"--shell-inner", "--min-spur", "--link-width", "--spacing", "--tau-s", "--fit"} <= options
     helps = ""
     for cmd in ("reconstruct", "render", "view"):
         with pytest.raises(SystemExit):

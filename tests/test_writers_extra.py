@@ -70,34 +70,80 @@ def test_dxf_polylines_and_points(net, tmp_path):
     assert doc.layers.has_entry("CURVES") and doc.layers.has_entry("NODES")
 
 
-def test_dxf_smooth_splines_through_the_points(net, tmp_path):
+def test_dxf_splines_are_b_splines_through_the_points(net, tmp_path):
     ezdxf = pytest.importorskip("ezdxf")
-    path = write_network(net, tmp_path / "s.dxf", smooth=True)
+    path = write_network(net, tmp_path / "s.dxf", splines=True)
     msp = ezdxf.readfile(path).modelspace()
     splines = msp.query("SPLINE")
     assert len(splines) == net.n_curves and not msp.query("POLYLINE")
     for sp, c in zip(splines, net.curves):
-        fit = np.array(sp.fit_points)
         want = xyz(c.points)
         if c.closed and np.linalg.norm(want[0] - want[-1]) > 1e-9:
             want = np.vstack([want, want[:1]])
-        np.testing.assert_allclose(fit, want, atol=1e-12)
-        assert sp.dxf.layer == "CURVES"
-        # the spline passes through its fit points
-        curve = sp.construction_tool()
-        samples = np.array(list(curve.flattening(1e-4)))
-        for q in want[:: max(1, len(want) // 5)]:
-            assert np.linalg.norm(samples - q, axis=1).min() < 1e-3
+        np.testing.assert_allclose(np.array(sp.fit_points), want, atol=1e-12)
+        assert sp.dxf.layer == "CURVES" and sp.dxf.degree == 3 and bool(sp.closed) == c.closed
+        # a true B-spline: control points and clamped knots (what a CAD program draws)
+        knots = np.array(sp.knots)
+        assert len(knots) == len(sp.control_points) + 4
+        assert np.all(np.diff(knots) >= 0) and np.all(knots[:4] == knots[0]) and np.all(knots[-4:] == knots[-1])
+        # evaluated from them (not from the fit points), the spline passes through every point
+        # of the curve and stays near its polyline
+        ctrl_only = ezdxf.math.BSpline(np.array(sp.control_points), order=4, knots=knots)
+        samples = np.array(list(ctrl_only.flattening(1e-6)))
+        from scipy.spatial import cKDTree
+
+        u = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(want, axis=0), axis=1))]  # chord length
+        np.testing.assert_allclose(knots[[0, -1]], u[[0, -1]], rtol=1e-12)
+        np.testing.assert_allclose([ctrl_only.point(x) for x in u], want, atol=1e-9)
+        from curvenet.metrics import densify
+
+        poly = densify(want, 1e-3)
+        assert cKDTree(poly).query(samples)[0].max() < 0.2 * np.linalg.norm(np.diff(want, axis=0), axis=1).max()
+        if c.closed:  # periodic: the same tangent on both sides of the seam
+            d0 = np.array(ctrl_only.derivative(knots[0], 1)[1])
+            d1 = np.array(ctrl_only.derivative(knots[-1], 1)[1])
+            np.testing.assert_allclose(d0, d1, rtol=1e-6, atol=1e-9)
 
 
-def test_dxf_smooth_default_follows_the_network_parameters(tmp_path):
+def test_dxf_splines_default_follows_the_fit(tmp_path):
     ezdxf = pytest.importorskip("ezdxf")
     n = sample_network(3)
-    n.parameters["smooth"] = True
+    n.parameters["fit"] = True
     msp = ezdxf.readfile(write_network(n, tmp_path / "a.dxf")).modelspace()
     assert len(msp.query("SPLINE")) == n.n_curves
-    msp = ezdxf.readfile(write_network(n, tmp_path / "b.dxf", smooth=False)).modelspace()
+    msp = ezdxf.readfile(write_network(n, tmp_path / "b.dxf", splines=False)).modelspace()
     assert len(msp.query("POLYLINE")) == n.n_curves
+
+
+def test_dxf_of_a_fitted_noisy_network_round_trips(tmp_path):
+    """A noisy reconstruction is fitted by default; its DXF holds one spline per curve, each
+    within a small fraction of a spacing of the fitted samples and ending at its nodes."""
+    ezdxf = pytest.importorskip("ezdxf")
+    from scipy.spatial import cKDTree
+
+    from curvenet import reconstruct, synth
+
+    truth = synth.model("crossing")
+    h = synth.h_of(truth)
+    pts, _ = synth.sample(truth, noise=0.3, rng=5)
+    net = reconstruct(pts)
+    assert net.parameters["fit"] is True
+    msp = ezdxf.readfile(write_network(net, tmp_path / "f.dxf")).modelspace()
+    splines = msp.query("SPLINE")
+    assert len(splines) == net.n_curves
+    for sp, c in zip(splines, net.curves):
+        tool = sp.construction_tool()
+        samples = np.array(list(tool.flattening(1e-4 * h)))
+        P = xyz(c.points)
+        u = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(np.array(sp.fit_points), axis=0), axis=1))]
+        on = np.array([tool.point(x) for x in u])
+        assert cKDTree(on).query(P)[0].max() < 1e-6 * h  # through every fitted sample
+        from curvenet.metrics import densify
+
+        assert cKDTree(densify(P, 0.01 * h)).query(samples)[0].max() < 0.5 * h  # near the polyline
+        if c.start is not None:
+            np.testing.assert_allclose(samples[0], xyz(net.nodes[[c.start]])[0], atol=1e-9 * h)
+            np.testing.assert_allclose(samples[-1], xyz(net.nodes[[c.end]])[0], atol=1e-9 * h)
 
 
 # ----------------------------------------------------------------------------- SVG

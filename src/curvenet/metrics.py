@@ -26,7 +26,7 @@ import numpy as np
 from .errors import InputError
 from .network import Curve, CurveNetwork
 
-__all__ = ["compare", "contract", "hausdorff", "densify"]
+__all__ = ["compare", "contract", "hausdorff", "densify", "distance_to_curves", "deviation"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -138,6 +138,70 @@ def densify(points: np.ndarray, step: float, *, closed: bool = False) -> np.ndar
     if closed:
         return out
     return np.vstack([out, p[-1:]])
+
+
+def distance_to_curves(points: np.ndarray, net: CurveNetwork, *, neighbours: int = 8) -> np.ndarray:
+    """Exact distance of each point to the nearest curve of a network (its polyline segments).
+
+    Parameters
+    ----------
+    points : (k, d) ndarray
+    net : CurveNetwork
+        Polylines whose segments are short next to the distances measured (the true networks
+        of :mod:`curvenet.synth` are sampled every h / 10).
+    neighbours : int
+        Segments tried per point: those of the nearest segment midpoints (the nearest segment
+        is among them when the segments are short next to their distance apart).
+
+    Returns
+    -------
+    (k,) ndarray of float
+        Infinite when the network has no segment.
+    """
+    from scipy.spatial import cKDTree
+
+    P = np.asarray(points, dtype=float)
+    segs = []
+    for c in net.curves:
+        p = c.points
+        if c.closed and len(p) > 1:
+            p = np.vstack([p, p[:1]])
+        if len(p) >= 2:
+            segs.append(np.stack([p[:-1], p[1:]], axis=1))
+    if not segs or not len(P):
+        return np.full(len(P), np.inf)
+    S = np.concatenate(segs)  # (s, 2, d)
+    k = min(neighbours, len(S))
+    _, j = cKDTree(S.mean(axis=1)).query(P, k=k)
+    j = j.reshape(len(P), k)
+    a, ab = S[j, 0], S[j, 1] - S[j, 0]  # (k_points, k, d)
+    t = np.clip(((P[:, None] - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0.0, 1.0)
+    return np.linalg.norm(P[:, None] - (a + t[..., None] * ab), axis=-1).min(axis=1)
+
+
+def deviation(result: CurveNetwork, truth: CurveNetwork, *, h: float, step: float = 0.1) -> tuple[float, float]:
+    """Mean (along arc length) and largest distance of the found curves from the true curves.
+
+    Parameters
+    ----------
+    result, truth : CurveNetwork
+    h : float
+        The sampling spacing: the unit of the distances returned.
+    step : float
+        The found polylines are sampled every ``step * h`` (vertices included).
+
+    Returns
+    -------
+    mean, max : float
+        In units of h; NaN when ``result`` has no curve.
+    """
+    if not (h > 0 and np.isfinite(h)):
+        raise InputError(f"h must be a positive number, got {h!r}")
+    pts = [densify(c.points, step * h, closed=c.closed) for c in result.curves if len(c.points)]
+    if not pts:
+        return float("nan"), float("nan")
+    d = distance_to_curves(np.vstack(pts), truth) / h
+    return float(d.mean()), float(d.max())
 
 
 def hausdorff(a: np.ndarray, b: np.ndarray) -> float:

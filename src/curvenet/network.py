@@ -63,7 +63,8 @@ class Curve:
         True for a loop (the last point joins the first).
     indices : (m,) ndarray of int
         Index of the input point behind each polyline point, ``-1`` where the point is not an
-        input point (a node position computed by the method, or a smoothed sample).
+        input point (a node position computed by the method). A curve fitted under noise
+        keeps its samples' indices, its points moved onto the fit.
     """
 
     points: np.ndarray

@@ -24,7 +24,7 @@ def ring(tmp_path):
     ("k=abc", "parameter 'k' of method 'robust' must be an integer or none, got 'abc'"),
     ("k=5.5", "parameter 'k' of method 'robust' must be an integer"),
     ("spacing=wide", "parameter 'spacing' of method 'robust' must be a number"),
-    ("smooth=3", "parameter 'smooth' of method 'robust' must be true or false"),
+    ("fit=3", "parameter 'fit' of method 'robust' must be true or false or none"),
 ])
 def test_bad_param_values_exit_2_naming_the_parameter(ring, capsys, param, words):
     """On main: an internal TypeError (exit 1)."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -64,9 +65,12 @@ def register(sub) -> None:
                          "(default 1.0, widened with noise)")
     g2.add_argument("--min-spur", type=float, default=None, metavar="SPACINGS",
                     help="drop spurs and isolated pieces shorter than this many spacings (default 3)")
-    g2.add_argument("--smooth", action="store_true", help="fit smoothing splines that end at the nodes")
-    g2.add_argument("--smoothing", type=float, default=None,
-                    help="smoothing per point of --smooth, in squared spacings (default: from the noise)")
+    g2.add_argument("--fit", action=argparse.BooleanOptionalAction, default=None,
+                    help="fit each curve by a smoothing spline ending at its nodes (each sample moved onto it; "
+                         "DXF output as splines); default: on where the points are noisy, off on noise-free points")
+    g2.add_argument("--smoothing", type=float, default=None, metavar="SPACINGS",
+                    help="width of the fit's smoothing kernel, in spacings (default: chosen per sample from the "
+                         "noise, 1.5 to 4)")
     g = p.add_argument_group("parameters of the paper's method (--method paper)")
     g.add_argument("--epsilon", type=float, default=None,
                    help="point-variation threshold for candidate nodes, eq. 2 (default 1e-3 in 3D, 2e-2 in 2D)")
@@ -141,8 +145,8 @@ def collect_params(args) -> dict:
     for name, value in getattr(args, "param", []):
         if value is not None:
             params[name] = value
-    if getattr(args, "smooth", False):
-        params["smooth"] = True
+    if getattr(args, "fit", None) is not None:
+        params["fit"] = bool(args.fit)
     return params
 
 

@@ -73,7 +73,7 @@ def dispatch(args) -> int | None:
         raise InputError(f"--tiles runs the default method only, got --method {args.method}")
     if _method_parameters(args):
         raise InputError("--tiles runs the default method with its estimated parameters; "
-                         "method parameters (--spacing, --param, --smooth ...) are not taken")
+                         "method parameters (--spacing, --param, --fit ...) are not taken")
     for opt in ("png", "html"):
         if getattr(args, opt):
             raise InputError(f"--{opt} draws the input points, which a tiled run never holds; "
@@ -86,9 +86,9 @@ _METHOD_OPTIONS = ("k", "epsilon", "tau_s", "theta", "spacing")
 
 
 def _method_parameters(args) -> bool:
-    """Whether any method parameter was given (options, ``--param``, ``--smooth``)."""
+    """Whether any method parameter was given (options, ``--param``, ``--fit``)."""
     return (any(getattr(args, o, None) is not None for o in _METHOD_OPTIONS)
-            or any(v is not None for _, v in getattr(args, "param", [])) or bool(getattr(args, "smooth", False)))
+            or any(v is not None for _, v in getattr(args, "param", [])) or getattr(args, "fit", None) is not None)
 
 
 def _run(args) -> int:

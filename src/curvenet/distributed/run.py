@@ -12,6 +12,7 @@ import numpy as np
 from .._sigint import checkpoint
 from ..errors import CurvenetError, InputError, MethodError, require
 from ..methods.robust import Estimates
+from ..methods.robust.curves import fit_curves
 from ..network import CurveNetwork
 from . import tasks
 from .grid import TileGrid
@@ -285,12 +286,17 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     t1 = time.perf_counter()
     net = stitch(list(parts.values()), est.hmed, join=stitching)
     tm["stitch"] = time.perf_counter() - t1
+    if not est.clean:  # 6. the fit of the method's stage 8, on the whole stitched curves
+        t1 = time.perf_counter()
+        net.curves = fit_curves(net.curves, est.sigma)
+        tm["fit"] = time.perf_counter() - t1
     tm["total"] = time.perf_counter() - t0
     net.parameters.update({
         "method": "robust",
         "spacing": est.hmed,
         "noise": est.sigma,
         "clean": est.clean,
+        "fit": not est.clean,
         "estimates_points": n_est,
         "estimates_tiles": len(sample),
         "estimates_exact": inexact == 0,

@@ -90,11 +90,11 @@ def estimate_sample(root: str, keys: list) -> tuple[Estimates, int]:
 
 def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, occupied) -> TilePieces:
     """Reconstruct tile ``key`` with its halo (the default method, the whole cloud's
-    estimates) and cut the network at the tile's box (``occupied``: the keys of every tile
+    estimates, curves not fitted: :func:`.run.reconstruct_tiled` fits the stitched ones) and cut the network at the tile's box (``occupied``: the keys of every tile
     that holds input points, see :func:`.cut.cut_network`)."""
     P, ids = tile_points(root, grid, key, halo)
     with METHOD_LOCK:
-        net = reconstruct_robust(P, estimates=estimates)
+        net = reconstruct_robust(P, estimates=estimates, fit=False)  # fitted once stitched
     out = cut_network(net, grid, key, ids, occupied)
     out.n_points = int(len(P))
     return out

@@ -1,12 +1,12 @@
-"""Stage 8: the curves, each ending exactly at its nodes; optional smoothing.
+"""Stage 8: the curves, each ending exactly at its nodes; fitted under noise.
 
 Chain points lying behind their junction node (an overshoot into another branch) are trimmed
 (:func:`build_curves`); every open curve runs from its node through the free-end extension,
 the chain and the other extension to its other node (:func:`open_curves`); a curve or loop
 that turns back on itself is reordered into a shorter path (:func:`untangle_loops`); curves
 are sorted canonically (:func:`sort_curves`); samples far off the chord of their neighbours
-(outliers a chain took in) are dropped (:func:`drop_spikes`); curves may be smoothed
-(:func:`smooth_curve`).
+(outliers a chain took in) are dropped (:func:`drop_spikes`); under noise, each curve's samples
+are moved onto a smoothing spline fitted through them (:func:`fit_curves`).
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ import numpy as np
 from ...network import Curve
 from . import kernels as _k
 from .nodes import Placement
-from .thresholds import CURVES, LAYOUT, NODES, NOISE, NUMERIC
+from .thresholds import CURVES, FIT, LAYOUT, NODES, NUMERIC
 
-__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "smooth_curve", "drop_spikes"]
+__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "fit_curves", "drop_spikes"]
 
 
 def build_curves(P: np.ndarray, h: np.ndarray, pl: Placement) -> list[Curve]:
@@ -222,42 +222,174 @@ def sort_curves(curves):
     return [curves[i] for i in o.tolist()]
 
 
-def smooth_curve(c: Curve, nodes: np.ndarray, s_per_point: float) -> Curve:
-    """A smoothing spline of one curve, pinned at its end nodes, evaluated densely.
+def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> list[Curve]:
+    """The curves fitted by penalised smoothing splines: the noise of their samples averaged out.
 
-    An open curve is fitted with heavy weights on its two end points (the nodes) and its
-    first and last samples are set exactly to them. A closed loop is padded on both sides by
-    a quarter of itself, fitted as an open curve, and the middle turn is kept.
+    Each curve keeps its samples (and their input ``indices``); their positions become the
+    values, at the same samples, of the sequence ``y`` that minimises
+
+    ``sum_i |y_i - x_i|^2 + sum_j (b_j s_j)^4 |D2 y_j|^2``
+
+    over the curve's samples ``x``, where ``D2 y_j`` is the second divided difference of ``y``
+    at sample ``j`` in the chord-length parameter and ``s_j`` the mean of the two steps at
+    ``j``: a discrete cubic smoothing spline (Reinsch 1967) whose equivalent kernel is about
+    ``b_j`` local spacings wide (Silverman 1984), so a sample's noise is averaged with that of
+    its neighbours along the curve. An open curve's two ends are held where they are (at its
+    nodes); a closed loop is periodic (no seam).
+
+    The width ``b_j`` is chosen per sample from the noise ``sigma`` (Lepski's idea): the curves
+    are fitted with the widest kernel ``FIT.band`` and with the narrowest ``FIT.band_min``;
+    where the two fits part (across the curve) by more than the noise explains, the wide fit
+    rounds a bend or a corner, and the width is cut to the one that minimises the expected
+    squared error: bias growing as ``b^4``, noise variance falling as ``1 / b``. On a straight
+    or gently bent stretch the width stays ``FIT.band``; within a few samples of a held end it
+    is at most ``FIT.end_taper`` times their number (a node placed a little off the samples
+    pulls only the last few).
+
+    Parameters
+    ----------
+    curves : list of Curve
+        Each open curve's first and last points are its nodes' positions.
+    sigma : float
+        Standard deviation of the noise per coordinate (the method's estimate), in the units
+        of the points.
+    band : float, optional
+        One width for every sample, in local spacings, instead of the choice above; 0 leaves
+        the curves as they are.
+
+    Returns
+    -------
+    list of Curve
+        New curves, in the same order, with the same ends, closedness and ``indices`` and
+        (m, d) fitted points; curves of fewer than ``FIT.min_points`` samples are the same
+        objects.
+
+    Notes
+    -----
+    Every curve is solved at once, in one sparse symmetric system of as many unknowns as
+    samples (banded but for the wrap-around of the loops): three solves in all, linear in the
+    number of samples.
     """
-    from scipy.interpolate import splev, splprep
-
-    X = c.points
-    keep = np.r_[True, np.linalg.norm(np.diff(X, axis=0), axis=1) > 0]
-    X = X[keep]
-    m = len(X)
-    if m < NOISE.smooth_min_points:
-        return c
-    q = 0
-    if c.closed:
-        q = max(m // NOISE.smooth_pad_div, NOISE.smooth_degree)
-        X = np.vstack([X[-q:], X, X[:q + 1]])
-    w = np.ones(len(X))
-    if not c.closed:
-        w[0] = w[-1] = NOISE.smooth_pin  # pin the ends at the nodes
-    try:
-        tck, u = splprep(list(X.T), w=w, s=s_per_point * len(X), k=NOISE.smooth_degree, quiet=2)
-    except Exception:  # pragma: no cover - degenerate input
-        return c
-    n_out = max(int(NOISE.smooth_dense * m), NOISE.smooth_min_out)
-    if c.closed:
-        uu = np.linspace(u[q], u[q + m], n_out + 1)[:-1]
+    sel = [i for i, c in enumerate(curves) if len(c.points) >= FIT.min_points]
+    if (band is not None and band <= 0) or not sel:
+        return list(curves)
+    X = np.concatenate([curves[i].points for i in sel])
+    m = np.array([len(curves[i].points) for i in sel], dtype=np.int64)
+    closed = np.array([bool(curves[i].closed) for i in sel])
+    ch = _Chains(X, m, closed)
+    if band is not None:
+        Y = ch.solve(np.full(len(X), float(band)))
     else:
-        uu = np.linspace(u[0], u[-1], n_out)
-    Y = np.asarray(splev(uu, tck)).T
-    if not c.closed:
-        Y[0] = c.points[0]
-        Y[-1] = c.points[-1]
-    return Curve(Y, c.start, c.end, c.closed, np.full(len(Y), -1, dtype=np.int64))
+        Y = ch.solve(_widths(ch, float(sigma)))
+    out = list(curves)
+    off = np.r_[0, np.cumsum(m)].tolist()
+    for k, i in enumerate(sel):
+        c = curves[i]
+        out[i] = Curve(Y[off[k]:off[k + 1]], c.start, c.end, c.closed, c.indices.copy())
+    return out
+
+
+def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
+    """(M,) kernel width per sample, in local spacings (see :func:`fit_curves`)."""
+    wide, narrow = FIT.band, FIT.band_min
+    Yw = ch.solve(np.full(ch.M, wide))
+    Yn = ch.solve(np.full(ch.M, narrow))
+    d = ch.X.shape[1]
+    t = Yw[ch.nxt_open] - Yw[ch.prv_open]
+    t /= np.maximum(np.linalg.norm(t, axis=1), NUMERIC.tiny)[:, None]
+    D = Yn - Yw
+    D -= (D * t).sum(axis=1)[:, None] * t  # across the curve only
+    # mean over a window of the wide kernel's reach along the curve (within the curve)
+    w = int(np.ceil(wide))
+    cum = np.r_[0.0, np.cumsum((D * D).sum(axis=1))]
+    lo = np.maximum(ch.idx - w, ch.first)
+    hi = np.minimum(ch.idx + w, ch.last)
+    part2 = (cum[hi + 1] - cum[lo]) / (hi - lo + 1)
+    # what the noise alone puts between the two fits, and the wide fit's bias beyond it
+    noise2 = (d - 1) * FIT.kernel_l2 * sigma**2 * (1.0 / narrow - 1.0 / wide)
+    bias2 = np.maximum(part2 - noise2, NUMERIC.tiny)
+    # the width of least expected squared error: bias (b / wide)^4 B, variance kernel_l2 sigma^2 / b
+    best = wide * ((d - 1) * FIT.kernel_l2 * sigma**2 / (8.0 * wide * bias2)) ** (1.0 / 9.0)
+    # near a held end no wider than its distance from it in samples: a node placed off the
+    # samples then pulls only the last few of them
+    k = np.where(ch.held_curve, np.minimum(ch.idx - ch.first, ch.last - ch.idx), np.inf)
+    return np.clip(np.minimum(best, FIT.end_taper * k), narrow, wide)
+
+
+class _Chains:
+    """The curves' samples concatenated, with the sparse system of :func:`fit_curves`'s
+    energy for a given kernel width per sample."""
+
+    def __init__(self, X: np.ndarray, m: np.ndarray, closed: np.ndarray):
+        self.X, self.M = X, len(X)
+        cid = np.repeat(np.arange(len(m)), m)
+        self.idx = idx = np.arange(self.M)
+        self.first = first = np.repeat(np.r_[0, np.cumsum(m)[:-1]], m)
+        self.last = last = first + m[cid] - 1
+        loop = closed[cid]
+        self.prv = np.where(idx == first, last, idx - 1)  # neighbours along the curve (cyclic on loops)
+        self.nxt = np.where(idx == last, first, idx + 1)
+        self.prv_open = np.where((idx == first) & ~loop, idx, self.prv)
+        self.nxt_open = np.where((idx == last) & ~loop, idx, self.nxt)
+        step = np.linalg.norm(X[self.nxt] - X, axis=1)  # from each sample to the next
+        real = loop | (idx != last)  # steps of the curve (an open curve has no wrap-around)
+        mean = np.bincount(cid, step * real, len(m)) / np.maximum(np.bincount(cid, real, len(m)), 1)
+        self.step = np.maximum(step, FIT.step_floor * mean[cid] + NUMERIC.tiny)
+        # one penalty row per sample of a loop and per inner sample of an open curve
+        self.rows = np.flatnonzero(loop | ((idx != first) & (idx != last)))
+        self.held = ~loop & ((idx == first) | (idx == last))  # open curves' ends: at their nodes
+        self.held_curve = ~loop
+        self.free = np.flatnonzero(~self.held)
+        # the open curves' free samples (a banded system: no wrap-around) and the loops'
+        self.free_open = np.flatnonzero(~self.held & ~loop)
+        self.free_loop = np.flatnonzero(loop)
+
+    def solve(self, band: np.ndarray) -> np.ndarray:
+        """(M, d) fitted samples for the kernel width ``band`` (M,) of each sample (spacings);
+        the held ends stay where they are."""
+        from scipy.sparse import coo_matrix, identity
+
+        rows, M = self.rows, self.M
+        X = self.X
+        Y = X.copy()
+        if not len(self.free):
+            return Y
+        # band^2 s_j^2 times the second divided difference: unitless weights, any scale
+        dp, dn, b2 = self.step[self.prv[rows]], self.step[rows], band[rows] ** 2
+        a = b2 * (dp + dn) / (2.0 * dp)
+        c = b2 * (dp + dn) / (2.0 * dn)
+        r = np.arange(len(rows))
+        R = coo_matrix((np.concatenate([a, -(a + c), c]),
+                        (np.tile(r, 3), np.concatenate([self.prv[rows], rows, self.nxt[rows]]))),
+                       shape=(len(rows), M)).tocsr()
+        A = (identity(M, format="csr") + R.T @ R).tocsr()
+        held = np.flatnonzero(self.held)
+        for part in (self.free_open, self.free_loop):
+            if not len(part):
+                continue
+            Ap = A[part]
+            rhs = X[part] - Ap[:, held] @ X[held] if len(held) else X[part]
+            Y[part] = _spd_solve(Ap[:, part], rhs, banded=part is self.free_open)
+        return Y
+
+
+def _spd_solve(A, rhs: np.ndarray, *, banded: bool) -> np.ndarray:
+    """Solve the symmetric positive definite sparse system ``A`` (n, n) for ``rhs`` (n, d):
+    by the banded Cholesky (LAPACK) where ``A`` has at most two diagonals on either side of its
+    own (the open curves), else by a sparse LU without reordering or pivoting (the loops: banded
+    but for their wrap-around, whose fill stays in their last rows)."""
+    from scipy.linalg import solveh_banded
+    from scipy.sparse.linalg import splu
+
+    if banded:
+        n = A.shape[0]
+        ab = np.zeros((3, n))
+        ab[2] = A.diagonal(0)
+        ab[1, 1:] = A.diagonal(1)
+        ab[0, 2:] = A.diagonal(2)
+        return solveh_banded(ab, np.ascontiguousarray(rhs), check_finite=False)
+    lu = splu(A.tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    return lu.solve(np.ascontiguousarray(rhs))
 
 
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):

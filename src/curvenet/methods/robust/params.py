@@ -33,10 +33,11 @@ class RobustParams:
         A link's far end lies within this many spacings of the tangent line through one end.
     min_spur : float
         Spurs and isolated pieces shorter than this are dropped.
-    smooth : bool
-        Replace each curve by a smoothing spline through its end nodes.
+    fit : bool or None
+        Fit each curve by a smoothing spline, ends held at its nodes (each sample moved onto
+        it); None: where noise is detected.
     smoothing : float or None
-        Smoothing factor per point in squared spacings (None: from the noise estimate).
+        Width of the fit's smoothing kernel, in spacings (None: the default of the method).
     """
 
     spacing: float | None = None
@@ -46,7 +47,7 @@ class RobustParams:
     link: float = DEFAULTS.link
     link_width: float = DEFAULTS.link_width
     min_spur: float = DEFAULTS.min_spur
-    smooth: bool = False
+    fit: bool | None = None
     smoothing: float | None = None
 
     @classmethod
@@ -57,7 +58,8 @@ class RobustParams:
         ------
         InputError
             A radius or count that is not a positive finite number, ``k`` under 4, the outer
-            shell not larger than the inner one, a bad spacing or smoothing factor.
+            shell not larger than the inner one, a bad spacing or smoothing width, a ``fit``
+            that is not a bool or None.
         """
         vals: dict[str, Any] = {}
         for name in _POSITIVE:
@@ -78,13 +80,16 @@ class RobustParams:
         if spacing is not None and (not np.isfinite(spacing) or spacing <= 0):
             raise InputError(f"spacing must be a positive number, got {spacing!r}")
         if smoothing is not None and (not np.isfinite(smoothing) or smoothing < 0):
-            raise InputError(f"smoothing must be a non-negative number, got {smoothing!r}")
-        return cls(spacing=spacing, smoothing=smoothing, smooth=bool(given.get("smooth", False)), **vals)
+            raise InputError(f"smoothing must be a non-negative number of spacings, got {smoothing!r}")
+        fit = given.get("fit")
+        if fit is not None and not isinstance(fit, (bool, np.bool_)):
+            raise InputError(f"fit must be true, false or none (none: where noise is detected), got {fit!r}")
+        return cls(spacing=spacing, smoothing=smoothing, fit=None if fit is None else bool(fit), **vals)
 
     def report(self) -> dict[str, Any]:
         """The keywords as reported in the network's ``parameters`` (before the estimates)."""
         out = {name: getattr(self, name) for name in _POSITIVE}
-        out["smooth"] = self.smooth
+        out["fit"] = self.fit
         return out
 
 

@@ -11,8 +11,8 @@ small example):
 5. :mod:`.topology` and :mod:`.repairs` -- regions and chains as one topology object, repaired
    where noise and sparse sampling broke it;
 6. :mod:`.nodes` -- node positions;
-7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), optionally
-   smoothed.
+7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
+   by smoothing splines under noise.
 
 The result does not depend on the order of the input points: they are sorted by coordinates
 first and every tie is broken by that order. The fixed constants are in :mod:`.thresholds`,
@@ -34,7 +34,7 @@ from ...validate import as_points
 from ..stages import ROBUST_SHARES, OnStage, report_stage
 from . import kernels as _k
 from .chains import trace_chains
-from .curves import build_curves, drop_spikes, smooth_curve
+from .curves import build_curves, drop_spikes, fit_curves
 from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, lex_order, local_spacing,
                      median_noise, median_spacing, neighbours, tangents)
 from .graph import linked_graph
@@ -42,7 +42,7 @@ from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
 from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
-from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
+from .thresholds import DEFAULTS, FIT, LAYOUT, NOISE, SPACING
 from .topology import Topology
 
 __all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts"]
@@ -58,7 +58,7 @@ def _reconstruct_robust(
     link: float | None = None,
     link_width: float | None = None,
     min_spur: float | None = None,
-    smooth: bool = False,
+    fit: bool | None = None,
     smoothing: float | None = None,
     estimates: Estimates | None = None,
     on_stage: OnStage | None = None,
@@ -84,12 +84,15 @@ def _reconstruct_robust(
     min_spur : float, optional
         Spurs (junction to free end) and isolated pieces shorter than this many spacings are
         dropped (default 3).
-    smooth : bool
-        Replace each curve by a smoothing spline through its end nodes, densely evaluated.
+    fit : bool, optional
+        Fit each curve by a smoothing spline whose ends are held at the curve's nodes
+        (:func:`.curves.fit_curves`): each sample keeps its input index and is moved onto the
+        fit, so the curves no longer zigzag with the noise. Default (None): on where noise is
+        detected (the estimated noise is at least ``SPACING.dedup_noise`` median spacings), off
+        on noise-free input, whose curves stay the input points.
     smoothing : float, optional
-        Smoothing factor per point in squared spacings (default: the mean squared distance
-        of a sample from its curve, estimated from the spread around the local tangents);
-        used only with ``smooth=True``.
+        Width of the fit's smoothing kernel, in spacings (default ``FIT.band``); 0 fits
+        nothing.
     estimates : Estimates, optional
         The median spacing and noise level of a larger cloud this one is a part of (a tile):
         the decisions taken from them (noise gates, duplicate rule, radii) are then the whole
@@ -109,7 +112,7 @@ def _reconstruct_robust(
     t0 = time.perf_counter()
     P0 = as_points(points)
     prm = RobustParams.from_keywords(spacing=spacing, k=k, shell_inner=shell_inner, shell_outer=shell_outer,
-                                     link=link, link_width=link_width, min_spur=min_spur, smooth=smooth,
+                                     link=link, link_width=link_width, min_spur=min_spur, fit=fit,
                                      smoothing=smoothing)
     N, dim = P0.shape
     order = _internal_order(P0)
@@ -154,13 +157,14 @@ def _reconstruct_robust(
     tm["assemble"] = time.perf_counter() - t1
     _to_input_ids(curves, order)
 
-    if prm.smooth:
-        report_stage(on_stage, ROBUST_SHARES, "smooth")
+    fitted = (not fr.clean) if prm.fit is None else prm.fit
+    params_out["fit"] = fitted
+    if fitted:  # 8b. under noise: the curves fitted (same samples, same input indices)
+        report_stage(on_stage, ROBUST_SHARES, "fit")
         t1 = time.perf_counter()
-        s = _smoothing(prm, fr, dim)
-        params_out["smoothing"] = s
-        curves = [smooth_curve(c, nodes, s * fr.hmed**2) for c in curves]
-        tm["smooth"] = time.perf_counter() - t1
+        params_out["smoothing"] = prm.smoothing
+        curves = fit_curves(curves, fr.sigma, prm.smoothing)
+        tm["fit"] = time.perf_counter() - t1
     # (counts of the small non-negative group numbers: a bincount, not a sort of all points)
     params_out["groups_histogram"] = {str(g): c for g, c in enumerate(np.bincount(reg.groups).tolist()) if c}
     return CurveNetwork(nodes, curves, params_out, {"time": tm})
@@ -211,15 +215,6 @@ def _to_input_ids(curves, order: np.ndarray) -> None:
     off = np.r_[0, np.cumsum([len(c.indices) for c in curves])].tolist()
     for i, c in enumerate(curves):
         c.indices = ind[off[i]:off[i + 1]]
-
-
-def _smoothing(prm: RobustParams, fr, dim: int) -> float:
-    """The smoothing factor per point in squared median spacings: the user's, or the mean
-    squared distance of a sample from the true curve, from the noise estimate."""
-    if prm.smoothing is not None:
-        return float(prm.smoothing)
-    hm = fr.hmed
-    return max(fr.sigma**2 * max(dim - 1, 1), NOISE.smooth_min * hm**2) / hm**2
 
 
 class PointEstimates(NamedTuple):

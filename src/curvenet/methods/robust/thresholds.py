@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Nodes", "NODES", "Curves", "CURVES", "Untangle", "UNTANGLE", "Numeric", "NUMERIC", "Linalg", "LINALG"]
+__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Numeric", "NUMERIC", "Linalg", "LINALG"]
 
 class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
@@ -202,19 +202,6 @@ class Noise(NamedTuple):
 
     #: the noise scale is this many times the estimated noise std
     scale: float = 1.2
-    #: smoothing (``smooth=True``): the default factor is at least this many squared spacings
-    smooth_min: float = 1e-4
-    #: the smoothing spline's weight on the two end points (pins them at the nodes)
-    smooth_pin: float = 1e3
-    #: a smoothed curve is evaluated at this many times its samples (at least ``smooth_min_out``)
-    smooth_dense: int = 3
-    smooth_min_out: int = 8
-    #: curves of fewer distinct samples are not smoothed
-    smooth_min_points: int = 6
-    #: a closed loop is padded on both sides by this fraction of itself (at least 3 samples)
-    smooth_pad_div: int = 4
-    #: degree of the smoothing spline
-    smooth_degree: int = 3
 
 
 NOISE = Noise()
@@ -455,6 +442,33 @@ class Curves(NamedTuple):
 
 
 CURVES = Curves()
+
+
+class Fit(NamedTuple):
+    """Stage 8, under noise: each curve fitted by a penalised smoothing spline through its
+    samples (:func:`.curves.fit_curves`)."""
+
+    #: widest kernel of the fit, in local spacings (the equivalent kernel of a cubic smoothing
+    #: spline, Silverman 1984: it averages about this many samples on either side), the width
+    #: on straight and gently bent stretches (benchmark)
+    band: float = 4.0
+    #: narrowest kernel, in local spacings: the width at sharp bends and corners (benchmark)
+    band_min: float = 1.5
+    #: within a few samples of a held end (a node) the kernel is at most this many spacings wide
+    #: per sample from the end (benchmark)
+    end_taper: float = 1.0
+    #: squared L2 norm of the spline's equivalent kernel of width 1 (Silverman's kernel,
+    #: ``3 / (8 sqrt(2))``): a fit of width ``b`` spacings keeps ``kernel_l2 / b`` of the
+    #: noise variance
+    kernel_l2: float = 0.265
+    #: curves of fewer samples are left as they are (points: an open curve's two ends are held)
+    min_points: int = 3
+    #: a step between two samples counts as at least this fraction of the curve's median step
+    #: (repeated samples: the divided differences stay finite)
+    step_floor: float = 1e-3
+
+
+FIT = Fit()
 
 
 class Untangle(NamedTuple):
