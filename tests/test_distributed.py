@@ -322,7 +322,7 @@ def test_cli_mixed_2d_and_3d_inputs_exit_2(tmp_path):
 
 def _fails_on_tile_5_1(root, grid, key, halo, est, occ):
     """A tile task that fails for good on tile (5, 1) (module level: Dask pickles it)."""
-    from curvenet.distributed.tasks import _METHOD_LOCK  # noqa: F401  (the real module is loaded)
+    from curvenet.distributed.tasks import METHOD_LOCK  # noqa: F401  (the real module is loaded)
 
     if tuple(key) == (5, 1):
         raise RuntimeError("disk on fire")

@@ -49,10 +49,10 @@ def test_methods_report_their_stages_in_order(method, shares):
     assert net == curvenet.reconstruct(tee_points(), method=method)  # the callback changes nothing
 
 
-def test_smooth_is_reported_and_emst_calls_nothing():
+def test_fit_is_reported_and_emst_calls_nothing():
     seen = []
-    curvenet.reconstruct(tee_points(), smooth=True, on_stage=lambda n, s: seen.append(n))
-    assert seen == ROBUST_STAGES + ["smooth"]
+    curvenet.reconstruct(tee_points(), fit=True, on_stage=lambda n, s: seen.append(n))
+    assert seen == ROBUST_STAGES + ["fit"]
     seen.clear()
     curvenet.reconstruct(tee_points(), method="emst", on_stage=lambda n, s: seen.append(n))
     assert seen == []
