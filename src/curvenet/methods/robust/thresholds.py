@@ -258,6 +258,17 @@ class Strand(NamedTuple):
     #: links per parallel block (one set of scratch arrays each; results never depend on it;
     #: former ``STRAND_ROWS``)
     rows: int = 1024
+    #: A link whose two modes cannot lie the needed separation apart (both are weighted means
+    #: of the window's offsets or their starts, so they lie within the diameter of those points,
+    #: and the mode from q within the furthest of them from the mode from p) skips the mean
+    #: shifts. The bound must clear that separation by this relative margin, far more than the
+    #: rounding of a mean (about 1e-14 relative; results never depend on it) (unitless).
+    bound_margin: float = 1e-9
+    #: The bound is used only when the needed separation is within this many kernel widths
+    #: (squared): then every weight of a mean within the bound is a normal number (above
+    #: exp(-2 bound_reach)), so its rounding stays relative. The defaults need at most
+    #: (1.5 / 0.35)^2 = 18.4 (unitless).
+    bound_reach: float = 100.0
 
 
 STRAND = Strand()

@@ -232,6 +232,25 @@ def _shift_mode(L, cnt, x0, b, out, sd):  # pragma: no cover - compiled
             break
 
 
+def _dist2_to(x, y):  # pragma: no cover - compiled
+    """``|x - y|^2`` of two (d,) vectors."""
+    s = 0.0
+    for c in range(x.shape[0]):
+        z = x[c] - y[c]
+        s += z * z
+    return s
+
+
+def _spread2(L, cnt, x):  # pragma: no cover - compiled
+    """The largest ``|L_i - x|^2`` over the rows ``L[:cnt]`` (0 for none; inf if one is NaN)."""
+    f = 0.0
+    for i in range(cnt):
+        r2 = _dist2_to(L[i], x)
+        if not (r2 <= f):
+            f = r2 if r2 == r2 else np.inf
+    return f
+
+
 def _density(L, cnt, x, b):  # pragma: no cover - compiled
     """Kernel density (unnormalized) of the rows ``L[:cnt]`` at ``x``."""
     d = L.shape[1]
@@ -307,6 +326,15 @@ def _strand_cuts(P, h, idx, t, src, dst, sig, sd, la):  # pragma: no cover - com
         ms = np.zeros(d)
         mq = np.zeros(d)
         mid = np.zeros(d)
+        wp = -1  # the point whose window L, X, A (cnt rows), b, sl2, dw hold
+        cnt = 0
+        b = 1.0
+        sl2 = 0.0
+        dw = 0.0
+        have_ms = False  # ms (the mode from p) and rs computed for wp
+        rs = 0.0
+        have_fs = False  # fs (the density at ms) computed for wp
+        fs = 0.0
         for e in range(bi * sd.rows, min(ne, (bi + 1) * sd.rows)):
             p = src[e]
             q = dst[e]
@@ -329,24 +357,67 @@ def _strand_cuts(P, h, idx, t, src, dst, sig, sd, la):  # pragma: no cover - com
                 continue
             al_pq = al
             _mean_line_offset(P, t, p, q, tb, lq)  # q's offset
-            # the window: p and its neighbours within sd.a h_p along t_p
-            cnt = 0
-            for j in range(-1, k):
-                i = p if j < 0 else idx[p, j]
-                aj = 0.0
-                for c in range(d):
-                    aj += (P[i, c] - P[p, c]) * t[p, c]
-                if aj > sd.a * h[p] or aj < -sd.a * h[p]:
-                    continue
-                _mean_line_offset(P, t, p, i, tb, L[cnt])
-                for c in range(d):
-                    X[cnt, c] = P[i, c]
-                A[cnt] = aj
-                cnt += 1
-            b = sd.b * sig
-            if sd.bh * h[p] > b:
-                b = sd.bh * h[p]
-            _shift_mode(L, cnt, zero, b, ms, sd)
+            if p != wp:  # the window of p (and all that depends on p alone), once per p
+                wp = p
+                have_ms = False
+                # the window: p and its neighbours within sd.a h_p along t_p
+                cnt = 0
+                for j in range(-1, k):
+                    i = p if j < 0 else idx[p, j]
+                    aj = 0.0
+                    for c in range(d):
+                        aj += (P[i, c] - P[p, c]) * t[p, c]
+                    if aj > sd.a * h[p] or aj < -sd.a * h[p]:
+                        continue
+                    _mean_line_offset(P, t, p, i, tb, L[cnt])
+                    for c in range(d):
+                        X[cnt, c] = P[i, c]
+                    A[cnt] = aj
+                    cnt += 1
+                b = sd.b * sig
+                if sd.bh * h[p] > b:
+                    b = sd.bh * h[p]
+                sl = sd.thr * sig
+                if sd.dmin * h[p] > sl:
+                    sl = sd.dmin * h[p]
+                sl2 = sl * sl * (1.0 - sd.bound_margin)
+                if not (sl * sl < sd.bound_reach * b * b):
+                    sl2 = -1.0  # no bound: a mean's weights could underflow (not with the defaults)
+                dw = _spread2(L, cnt, zero)  # squared diameter of the window's offsets and the origin
+                for i in range(cnt):
+                    r2 = _spread2(L, i, L[i])
+                    if not (r2 <= dw):
+                        dw = r2 if r2 == r2 else np.inf
+            # Both modes are weighted means of the window's offsets (or their starts, the origin
+            # and q's offset): they cannot lie further apart than the diameter of those points,
+            # nor further from the mode from p than its furthest point. When that bound is short
+            # of the separation the test needs, the link cannot be cut (exact: the bound is kept
+            # a relative sd.bound_margin clear of the rounding of the means).
+            r2 = _spread2(L, cnt, lq)
+            z = _dist2_to(lq, zero)
+            if not (z <= r2):
+                r2 = z if z == z else np.inf
+            if not (r2 <= dw):
+                r2 = r2 if r2 == r2 else np.inf
+            else:
+                r2 = dw
+            if r2 < sl2:
+                continue
+            if not have_ms:
+                _shift_mode(L, cnt, zero, b, ms, sd)
+                have_ms = True
+                have_fs = False
+                rs = _spread2(L, cnt, ms)
+                z = _dist2_to(ms, zero)
+                if not (z <= rs):
+                    rs = z if z == z else np.inf
+            r2 = _dist2_to(lq, ms)
+            if not (r2 <= rs):
+                r2 = r2 if r2 == r2 else np.inf
+            else:
+                r2 = rs
+            if r2 < sl2:
+                continue
             _shift_mode(L, cnt, lq, b, mq, sd)
             sep = 0.0
             for c in range(d):
@@ -358,7 +429,9 @@ def _strand_cuts(P, h, idx, t, src, dst, sig, sd, la):  # pragma: no cover - com
                 lim = sd.dmin * h[p]
             if not (sep > lim * lim):
                 continue
-            fs = _density(L, cnt, ms, b)
+            if not have_fs:
+                fs = _density(L, cnt, ms, b)
+                have_fs = True
             fq = _density(L, cnt, mq, b)
             if not (_density(L, cnt, mid, b) < min(fs, fq)):
                 continue
