@@ -21,6 +21,7 @@ the user's keywords in :class:`.params.RobustParams`.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from typing import NamedTuple
@@ -117,6 +118,7 @@ def _reconstruct_robust(
     N, dim = P0.shape
     order = _internal_order(P0)
     P = P0[order]
+    del P0  # (a copy when the input was not float64)
     params_out = prm.report()
     if N < DEFAULTS.min_points:
         params_out["spacing"] = float(spacing) if spacing is not None else None
@@ -135,38 +137,55 @@ def _reconstruct_robust(
         params_out["estimates_given"] = True
     graph = linked_graph(P, nb, fr, prm)  # 3. links
     tm["graph"] = time.perf_counter() - t1
+    # memory: every intermediate is dropped as soon as no later stage reads it (at 1e7 points
+    # the peak is in the last stages); from here on the tangents are not read
+    sigma, hmed, clean, lin = fr.sigma, fr.hmed, fr.clean, fr.lin
+    fr = fr._replace(t=None)  # (stage 4 reads sigma and clean only)
 
     report_stage(on_stage, ROBUST_SHARES, "nodes")
     t1 = time.perf_counter()
     reg = junction_regions(P, nb, fr, graph, prm)  # 4. the shell test and its regions
+    del fr
     tm["nodes"] = time.perf_counter() - t1
+    # (counts of the small non-negative group numbers: a bincount, not a sort of all points)
+    groups_histogram = {str(g): c for g, c in enumerate(np.bincount(reg.groups).tolist()) if c}
+    flagged, reg_of, n_reg = reg.flagged, reg.reg, reg.n_reg
+    del reg
     report_stage(on_stage, ROBUST_SHARES, "tracing")
     t1 = time.perf_counter()
     tree, h = nb.tree, nb.h
-    del nb  # memory: the kNN lists are not needed below
-    chains, regions = trace_chains(P, h, graph, reg.flagged, reg.reg, reg.n_reg, fr.lin)  # 5. chains
+    del nb  # the kNN lists are not needed below
+    chains, regions = trace_chains(P, h, graph, flagged, reg_of, n_reg, lin)  # 5. chains
+    indptr, indices = graph.indptr, graph.indices
+    del graph, flagged, reg_of, lin  # the directed links, region labels and linearity
     tm["tracing"] = time.perf_counter() - t1
 
     report_stage(on_stage, ROBUST_SHARES, "assemble")
     t1 = time.perf_counter()
-    sc = Scales(h=h, hmed=fr.hmed, sigma=fr.sigma, noise=NOISE.scale * fr.sigma, clean=fr.clean,
-                width=max(prm.link_width, 0.0), indptr=graph.indptr, indices=graph.indices, tree=tree)
+    sc = Scales(h=h, hmed=hmed, sigma=sigma, noise=NOISE.scale * sigma, clean=clean,
+                width=max(prm.link_width, 0.0), indptr=indptr, indices=indices, tree=tree)
+    del indptr, indices, tree  # (held by sc alone, dropped with it)
     topo = run_repairs(Topology(P, chains, regions), sc, prm)  # 6. repairs
+    del chains, regions
+    sc = dataclasses.replace(sc, tree=None)  # the k-d tree: read by the repairs alone
     placement = place_nodes(topo, sc, prm)  # 7. nodes
-    nodes, curves = placement.nodes, drop_spikes(build_curves(P, h, placement), P, h, sc.noise)  # 8. curves
+    noise = sc.noise
+    del topo, sc  # the linked graph: read by the repairs and node placement alone
+    nodes, curves = placement.nodes, drop_spikes(build_curves(P, h, placement), P, h, noise)  # 8. curves
+    del placement, P, h
     tm["assemble"] = time.perf_counter() - t1
     _to_input_ids(curves, order)
+    del order
 
-    fitted = (not fr.clean) if prm.fit is None else prm.fit
+    fitted = (not clean) if prm.fit is None else prm.fit
     params_out["fit"] = fitted
     if fitted:  # 8b. under noise: the curves fitted (same samples, same input indices)
         report_stage(on_stage, ROBUST_SHARES, "fit")
         t1 = time.perf_counter()
         params_out["smoothing"] = prm.smoothing
-        curves = fit_curves(curves, fr.sigma, prm.smoothing)
+        curves = fit_curves(curves, sigma, prm.smoothing)
         tm["fit"] = time.perf_counter() - t1
-    # (counts of the small non-negative group numbers: a bincount, not a sort of all points)
-    params_out["groups_histogram"] = {str(g): c for g, c in enumerate(np.bincount(reg.groups).tolist()) if c}
+    params_out["groups_histogram"] = groups_histogram
     return CurveNetwork(nodes, curves, params_out, {"time": tm})
 
 
