@@ -9,7 +9,7 @@ distributed = pytest.importorskip("distributed")
 
 from curvenet import synth  # noqa: E402
 from curvenet.distributed import estimates as de  # noqa: E402
-from curvenet.distributed import reconstruct_tiled  # noqa: E402
+from curvenet.distributed import TileGrid, reconstruct_tiled  # noqa: E402
 from curvenet.distributed import run as drun  # noqa: E402
 from curvenet.methods.robust import estimate  # noqa: E402
 
@@ -74,7 +74,7 @@ def test_the_sample_alone_would_differ():
               for i, m in enumerate(("tree", "torus", "cube", "mug"))]
     P = np.vstack(clouds)
     one = estimate(P)
-    keys_of = np.floor((P - P.min(0)) / (40 * one.hmed)).astype(np.int64)
+    keys_of = TileGrid(tuple(P.min(0)), 40 * one.hmed).keys_of(P)  # the run's grid
     uk, inv, cnt = np.unique(keys_of, axis=0, return_inverse=True, return_counts=True)
     keys = [tuple(k) for k in uk.tolist()]
     count = dict(zip(keys, cnt.tolist()))

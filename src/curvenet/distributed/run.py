@@ -247,23 +247,20 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     #    is small), then, for a larger cloud, exactly from every tile (see .estimates)
     t1 = time.perf_counter()
     sample = _sample_tiles(keys, tile_count)
-    est_f = client.submit(tasks.estimate_sample, str(root), sample, pure=False, retries=TASK_RETRIES)
-    est, n_est = _gather(client, {"estimates": est_f},
-                         lambda _, exc: exc if isinstance(exc, CurvenetError)
-                         else MethodError(f"the whole-cloud estimates failed ({_one_line(exc)})"))["estimates"]
-    est = Estimates(float(est.hmed), float(est.sigma))
+
+    def submit(fn, *args):
+        return client.submit(fn, *args, pure=False, retries=TASK_RETRIES)
+
+    def gather(futures):
+        return _gather(client, futures, lambda _, exc: exc if isinstance(exc, CurvenetError)
+                       else MethodError(f"the whole-cloud estimates failed ({_one_line(exc)})"))
+
+    est, n_est = gather({"estimates": submit(tasks.estimate_sample, str(root), sample)})["estimates"]
     inexact = 0
     if len(sample) < len(keys):
         # the sample gave the scale; the medians over every tile give the values themselves
-        def submit(fn, *args):
-            return client.submit(fn, *args, pure=False, retries=TASK_RETRIES)
-
-        def gather(futures):
-            return _gather(client, futures, lambda _, exc: exc if isinstance(exc, CurvenetError)
-                           else MethodError(f"the whole-cloud estimates failed ({_one_line(exc)})"))
-
         est, n_est, inexact = whole_cloud_estimates(submit, gather, str(root), grid, keys, halo_width(est), lo, hi)
-        est = Estimates(float(est.hmed), float(est.sigma))
+    est = Estimates(float(est.hmed), float(est.sigma))
     H = halo_width(est) if halo is None else float(halo)
     tm["estimate"] = time.perf_counter() - t1
 

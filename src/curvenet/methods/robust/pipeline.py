@@ -267,7 +267,8 @@ class PointEstimates(NamedTuple):
     reach: np.ndarray
 
 
-def point_estimates(points, *, dedup_radius: float | None = None, k: int | None = None) -> PointEstimates:
+def point_estimates(points, *, dedup_radius: float | None = None, spacing: float | None = None,
+                    k: int | None = None) -> PointEstimates:
     """The per-point values of :class:`PointEstimates` on ``points``.
 
     Parameters
@@ -276,15 +277,15 @@ def point_estimates(points, *, dedup_radius: float | None = None, k: int | None 
     dedup_radius : float, optional
         First drop the duplicates at this radius (the points with an earlier neighbour closer
         than it, see :func:`.frames.coincident`), then compute the values on the rest.
-    k : int, optional
-        As for :func:`reconstruct_robust`.
+    spacing, k : optional
+        As for :func:`reconstruct_robust` (the user's spacing is every point's ``h``).
 
     Returns
     -------
     PointEstimates
     """
     P0 = as_points(points)
-    prm = RobustParams.from_keywords(k=k)
+    prm = RobustParams.from_keywords(spacing=spacing, k=k)
     if len(P0) < DEFAULTS.min_points:
         raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
     with _k.compiled_for(len(P0)):
@@ -321,23 +322,12 @@ def estimate(points, *, spacing: float | None = None, k: int | None = None) -> E
     -------
     Estimates
     """
-    if spacing is not None:  # the user's spacing: only the noise is estimated
-        P0 = as_points(points)
-        prm = RobustParams.from_keywords(spacing=spacing, k=k)
-        if len(P0) < DEFAULTS.min_points:
-            raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
-        with _k.compiled_for(len(P0)):
-            order = _internal_order(P0)
-            P = P0[order]
-            nb = neighbours(P, prm)
-            _, _, _, fr = _without_duplicates(P, order, nb, frames(P, nb), prm, None)
-        return Estimates(hmed=fr.hmed, sigma=fr.sigma)
-    v = point_estimates(points, k=k)
+    v = point_estimates(points, spacing=spacing, k=k)
     first = Estimates(median_spacing(v.h), median_noise(v.rms))
     r = dedup_radius(first)
     if r is None or not dedup_applies(len(v.h), int(np.count_nonzero(v.earlier < r))):
         return first
-    v = point_estimates(points, dedup_radius=r, k=k)
+    v = point_estimates(points, dedup_radius=r, spacing=spacing, k=k)
     return Estimates(median_spacing(v.h), median_noise(v.rms))
 
 
