@@ -34,7 +34,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import resource
 import statistics
 import subprocess
@@ -58,21 +57,11 @@ FIRST_RUN_TARGET = 2.0
 
 # ------------------------------------------------------------------------------ helpers
 def machine() -> str:
-    cpu = platform.processor() or "?"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover
-        cores = os.cpu_count()
-    load = " ".join(f"{x:.1f}" for x in os.getloadavg())
-    return (f"{cpu}, {cores} cores, load average {load}; Python {platform.python_version()}, "
-            f"numpy {np.__version__}")
+    """The machine in one line (from :func:`perf.machine`), with the load average now."""
+    import perf
+
+    m = perf.machine()
+    return f"{m['cpu']}, {m['cores']} cores, load average {m['load']}; Python {m['python']}, numpy {m['numpy']}"
 
 
 def knn_floor(P: np.ndarray) -> float:
