@@ -115,6 +115,10 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     for ci in np.flatnonzero(touch & (ends[:, 0] >= 0) & (ends[:, 0] == ends[:, 1])).tolist():
         _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
                    float(length[ci]), float(np.median(h[ids_o[bounds[ci]:bounds[ci + 1]]])))
+    # a chain of a point or two between two regions may have one end only
+    tiny = np.diff(bounds) <= CHAINS.pair_points
+    for ci in np.flatnonzero(touch & ((ends[:, 0] >= 0) != (ends[:, 1] >= 0)) & tiny).tolist():
+        _missing_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]])
     # no region at either end (a contact in the middle only: a clump beside a loop)
     free = ~touch | ((ends[:, 0] < 0) & (ends[:, 1] < 0))
     # may zigzag (checked below)
@@ -165,6 +169,23 @@ def _other_end(ci, ends, regs, par, length, hl):
     r2 = int(ru[np.argmax(rc)])
     side = 1 if par[regs == r2].mean() > par[regs == r].mean() else 0
     ends[ci, side] = r2
+
+
+def _missing_end(ci, ends, regs):
+    """A chain of ``CHAINS.pair_points`` points or fewer with one end only.
+
+    The chain's ends are read from the contacts near either end; on a chain of a point or two
+    both ends see the same contacts, and the region at the second end can be lost. Between
+    two junctions a few spacings apart a point or two can be the whole segment: the other
+    region it touches (most contacts; ties: lowest id) takes the missing end.
+    """
+    known = 0 if ends[ci, 0] >= 0 else 1
+    r = ends[ci, known]
+    other = regs != r
+    if not other.any():
+        return
+    ru, rc = np.unique(regs[other], return_counts=True)
+    ends[ci, 1 - known] = int(ru[np.argmax(rc)])
 
 
 def _loop_or_piece(P, h, g, seg, lin, start=None):

@@ -5,7 +5,8 @@ Around each point the points reached through the linked graph within a geodesic 
 groups are counted (:func:`shell_group_counts`): 1 at a free end, 2 on a curve, 3 or more near
 a junction. Points not in 2 groups, joined by short links, form regions (:func:`junction_regions`);
 a region too large for one junction is re-tested on smaller shells, scale by scale, and split
-(:func:`split_large_regions`). After the chains are known, a junction region may still hide a
+(:func:`split_large_regions`); junctions a few spacings apart, still one region at the finest
+scale, are separated on a smaller shell (:func:`separate_close_junctions`). After the chains are known, a junction region may still hide a
 whole short branch (:func:`swallowed_branches`) and a free end's region a fork
 (:func:`fork_possible`, :func:`hidden_fork`): the other places that decide junctions.
 """
@@ -24,7 +25,8 @@ from .graph import Graph, components
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NOISE, NUMERIC, SHELL, SPLIT
 
-__all__ = ["Regions", "junction_regions", "shell_group_counts", "split_large_regions", "fork_possible",
+__all__ = ["Regions", "junction_regions", "shell_group_counts", "split_large_regions", "separate_close_junctions",
+           "fork_possible",
            "hidden_fork", "swallowed_branches", "region_paths"]
 
 
@@ -64,6 +66,8 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     ka, kb = _k.short_links(P, nb.h, nb.idx, float(prm.link))
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
                                               noisy=not fr.clean, noise=NOISE.scale * fr.sigma)
+    flagged, reg, n_reg = separate_close_junctions(P, hs, graph.indptr, graph.indices, flagged, reg, n_reg, ka, kb,
+                                                   prm, noise=NOISE.scale * fr.sigma)
     return Regions(groups, flagged, reg, n_reg)
 
 
@@ -187,6 +191,90 @@ def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: Robust
     if np.array_equal(out, flagged):
         return flagged, reg, n_reg
     return (out, *components(N, ka, kb, out))
+
+
+def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: RobustParams,
+                             noise: float = 0.0):
+    """The junction flags, with regions holding several junctions a few spacings apart separated.
+
+    Junctions 3-5 h apart (a facade's ladder, a comb, short links of a street grid) lie
+    within one another's shells even at the finest scale of :func:`split_large_regions`, and
+    the short links (``link`` h) join their flagged points into one region. A region still
+    wider than one junction at scale ``SPLIT.close_scale`` (radius over ``SPLIT.radius`` times
+    that scale's outer radius) is re-tested on that scale's shell; its points flagged there,
+    joined only by links of at most ``SPLIT.close_link`` spacings (the next sample along a
+    curve: a freed point between two junctions parts them), form candidate junctions. When two
+    or more candidates of ``SPLIT.min_points`` points or more hold a junction point (3 or more
+    groups), they replace the region (its other points are freed: the short chains between the
+    junctions). Regions whose fine inner radius is not over ``SPLIT.fine_noise`` times the
+    noise scale are left whole (a finer shell inside the noise's blur would split one junction).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    hs : (N,) ndarray
+        Spacing of the shell test (widened for noise).
+    indptr, indices : ndarray
+        CSR adjacency of the linked graph.
+    flagged : (N,) bool ndarray
+        Region points (after :func:`split_large_regions`).
+    reg : (N,) int ndarray
+        Their regions (-1 elsewhere).
+    n_reg : int
+    ka, kb : (E,) int ndarray
+        Short kNN links (the region graph).
+    prm : RobustParams
+        ``shell_inner``, ``shell_outer``.
+    noise : float
+        The noise scale (absolute units).
+
+    Returns
+    -------
+    flagged, reg, n_reg
+        As given when nothing is separated.
+    """
+    N = len(P)
+    if n_reg == 0:
+        return flagged, reg, n_reg
+    sc = SPLIT.close_scale
+    ids = np.flatnonzero(flagged)
+    r = reg[ids]
+    rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
+    big = (rad > SPLIT.radius * sc * prm.shell_outer * hmean) & (sc * prm.shell_inner * hmean > SPLIT.fine_noise * noise)
+    if not big.any():
+        return flagged, reg, n_reg
+    sub = ids[big[r]]
+    fine = _k.shell_groups(P, hs, indptr, indices, sc * prm.shell_inner, sc * prm.shell_outer, subset=sub)
+    nf = np.zeros(N, dtype=bool)
+    nf[sub] = fine[sub] != 2
+    near = np.sqrt(((P[ka] - P[kb]) ** 2).sum(axis=1)) <= SPLIT.close_link * 0.5 * (hs[ka] + hs[kb])
+    cand, _ = components(N, ka[near], kb[near], nf)
+    is_j = np.zeros(N, dtype=bool)
+    is_j[sub] = fine[sub] >= SHELL.junction_groups
+    out = flagged.copy()
+    sep = np.zeros(N, dtype=bool)  # points of the separated regions
+    bsel = big[r]
+    bi, br = ids[bsel], r[bsel]
+    o = np.argsort(br, kind="stable")
+    bi, br = bi[o], br[o]
+    bcut = np.flatnonzero(np.r_[True, br[1:] != br[:-1], True])
+    for g0, g1 in zip(bcut[:-1], bcut[1:]):
+        pts = bi[g0:g1]
+        kept = pts[nf[pts]]
+        labs, cnt = np.unique(cand[kept], return_counts=True)
+        good = labs[(cnt >= SPLIT.min_points) & np.isin(labs, cand[kept[is_j[kept]]])]
+        if len(good) < 2:
+            continue
+        out[pts] = False
+        keep = kept[np.isin(cand[kept], good)]
+        out[keep] = True
+        sep[keep] = True
+    if not sep.any():
+        return flagged, reg, n_reg
+    # the separated regions are joined by the fine links only, the others as before
+    ea = np.r_[ka[~sep[ka] & ~sep[kb]], ka[near & sep[ka] & sep[kb]]]
+    eb = np.r_[kb[~sep[ka] & ~sep[kb]], kb[near & sep[ka] & sep[kb]]]
+    return (out, *components(N, ea, eb, out))
 
 
 class _Fine(NamedTuple):
