@@ -18,9 +18,12 @@ def test_a_finer_split_scale_separates_close_corners(monkeypatch):
     # the building outline's notches put coplanar right-angle corners 4-5h apart: one shell
     # re-test (0.7 of the shell) leaves several corners in one region, the second (0.5) splits
     # some of them (26 true nodes: 17 found with one re-test, 19 with two)
+    # (with separate_close_junctions off in both runs: it separates such corners too)
     assert len(thresholds.SPLIT.scales) >= 2
+    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(close_scales=()))
     now = _score("outline")
-    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(scales=thresholds.SPLIT.scales[:1]))
+    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(scales=thresholds.SPLIT.scales[:1],
+                                                                      close_scales=()))
     one = _score("outline")
     assert now["n_nodes_found"] >= 19 and one["n_nodes_found"] <= 17
     assert now["curve_f1"] > one["curve_f1"] + 0.05
@@ -54,3 +57,28 @@ def test_finer_split_scale_stays_clear_of_the_noise(monkeypatch):
     unguarded = compare(reconstruct(pts, method="robust"), truth, h=h)
     assert guarded["curve_f1"] == 1.0 and guarded["exact_topology"]
     assert unguarded["curve_f1"] < 0.9
+
+
+def test_junctions_a_few_spacings_apart_are_separated(monkeypatch):
+    # junctions 3-5h apart (a facade's ladder, a comb's spine, a street grid's short links):
+    # one shell test region holds several of them until separate_close_junctions re-tests it
+    # on smaller shells (main before it: ladder 10 of 20 nodes, comb 15 of 20, streets 19 of 20)
+    found = {m: _score(m) for m in ("ladder", "comb", "streets")}
+    assert found["ladder"]["n_nodes_found"] >= 14 and found["ladder"]["curve_f1"] > 0.5
+    assert found["comb"]["n_nodes_found"] >= 17 and found["comb"]["curve_f1"] > 0.6
+    assert found["streets"]["n_nodes_found"] == 20 and found["streets"]["node_f1"] == 1.0
+    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(close_scales=()))
+    for m in ("ladder", "comb"):
+        without = _score(m)
+        assert without["n_nodes_found"] <= found[m]["n_nodes_found"] - 2, m
+
+
+def test_a_single_sample_between_close_junctions_is_a_segment(monkeypatch):
+    # between two separated junctions a few spacings apart a single sample can be the whole
+    # segment: the chain's second end is the other junction (without: the comb's spine is cut)
+    from curvenet.methods.robust import chains
+
+    now = _score("comb")
+    monkeypatch.setattr(chains, "CHAINS", thresholds.CHAINS._replace(pair_points=0))
+    cut = _score("comb")
+    assert now["curve_f1"] > cut["curve_f1"] + 0.1

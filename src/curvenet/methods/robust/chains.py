@@ -43,7 +43,7 @@ class Chain:
 
 
 def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarray, n_reg: int,
-                 lin: np.ndarray) -> tuple[list[Chain], list[np.ndarray]]:
+                 lin: np.ndarray, close: np.ndarray | None = None) -> tuple[list[Chain], list[np.ndarray]]:
     """Stage 5: the chains (points outside every region, split by them) and the regions' points.
 
     Parameters
@@ -58,6 +58,10 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
     n_reg : int
     lin : (N,) ndarray
         Linearity (a loop is cut open at its straightest point).
+    close : (n_reg,) ndarray of bool, optional
+        Regions separated as junctions a few spacings apart (see
+        :func:`.junctions.separate_close_junctions`): a chain of a single point between two of
+        them is a segment (:func:`_missing_end`).
 
     Returns
     -------
@@ -67,7 +71,7 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
         The points of each region, ascending.
     """
     chn, n_chn = components(len(P), graph.src, graph.dst, ~flagged)
-    chains = order_chains(P, h, graph.src, graph.dst, graph.dd, chn, n_chn, reg, lin)
+    chains = order_chains(P, h, graph.src, graph.dst, graph.dd, chn, n_chn, reg, lin, close)
     # the points of each region, ascending (one stable sort, not one pass over N per region)
     o = np.argsort(reg, kind="stable")
     cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
@@ -75,7 +79,7 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
     return chains, regions
 
 
-def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
+def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):
     """Order every chain by geodesic distance from one end; find the regions its ends touch."""
     N = len(P)
     if n_chn == 0:
@@ -115,10 +119,13 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin):
     for ci in np.flatnonzero(touch & (ends[:, 0] >= 0) & (ends[:, 0] == ends[:, 1])).tolist():
         _other_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]],
                    float(length[ci]), float(np.median(h[ids_o[bounds[ci]:bounds[ci + 1]]])))
-    # a chain of a point or two between two regions may have one end only
-    tiny = np.diff(bounds) <= CHAINS.pair_points
-    for ci in np.flatnonzero(touch & ((ends[:, 0] >= 0) != (ends[:, 1] >= 0)) & tiny).tolist():
-        _missing_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]])
+    # a chain of a single point between two close junctions has one end only
+    one = (ends[:, 0] >= 0) != (ends[:, 1] >= 0)
+    tiny = np.flatnonzero(touch & one & (np.diff(bounds) <= CHAINS.pair_points)) if close is not None and close.any() else []
+    if len(tiny):
+        cen = _region_centroids(P, reg)
+        for ci in tiny.tolist():
+            _missing_end(ci, ends, c_reg[cb[ci]:cb[ci + 1]], P[ids_o[bounds[ci]:bounds[ci + 1]]].mean(axis=0), cen, close)
     # no region at either end (a contact in the middle only: a clump beside a loop)
     free = ~touch | ((ends[:, 0] < 0) & (ends[:, 1] < 0))
     # may zigzag (checked below)
@@ -171,21 +178,36 @@ def _other_end(ci, ends, regs, par, length, hl):
     ends[ci, side] = r2
 
 
-def _missing_end(ci, ends, regs):
+def _missing_end(ci, ends, regs, x, cen, close):
     """A chain of ``CHAINS.pair_points`` points or fewer with one end only.
 
-    The chain's ends are read from the contacts near either end; on a chain of a point or two
-    both ends see the same contacts, and the region at the second end can be lost. Between
-    two junctions a few spacings apart a point or two can be the whole segment: the other
-    region it touches (most contacts; ties: lowest id) takes the missing end.
+    The chain's ends are read from the contacts near either end; on a chain of a single point
+    both ends see the same contacts, and the region at the second end is lost. Between two
+    junctions a few spacings apart a single point can be the whole segment: the other region
+    it touches (most contacts; ties: lowest id) takes the missing end, when both are such
+    separated junctions (``close``) and the chain (at ``x``) lies between the two (``cen``:
+    region centroids; the two seen from ``x`` in opposite directions: a point beside two
+    regions joins neither). Elsewhere (hand-drawn strokes) such a point is left a spur.
     """
     known = 0 if ends[ci, 0] >= 0 else 1
     r = ends[ci, known]
+    if not close[r]:
+        return
     other = regs != r
     if not other.any():
         return
     ru, rc = np.unique(regs[other], return_counts=True)
-    ends[ci, 1 - known] = int(ru[np.argmax(rc)])
+    r2 = int(ru[np.argmax(rc)])
+    if close[r2] and float((cen[r] - x) @ (cen[r2] - x)) < 0:
+        ends[ci, 1 - known] = r2
+
+
+def _region_centroids(P, reg):
+    """(n_reg, d) centroid of every region (``reg``: region of each point, -1 for none)."""
+    fl = reg >= 0
+    n = int(reg.max()) + 1 if fl.any() else 0
+    cnt = np.maximum(np.bincount(reg[fl], minlength=n), 1).astype(float)
+    return np.stack([np.bincount(reg[fl], weights=P[fl, c], minlength=n) for c in range(P.shape[1])], axis=1) / cnt[:, None]
 
 
 def _loop_or_piece(P, h, g, seg, lin, start=None):

@@ -42,12 +42,16 @@ class Regions(NamedTuple):
     reg : (N,) ndarray of int64
         Region of each flagged point (-1 elsewhere), ids following the lowest point id.
     n_reg : int
+    close : (n_reg,) ndarray of bool
+        The regions separated as junctions a few spacings apart
+        (:func:`separate_close_junctions`): a single point between two of them is a segment.
     """
 
     groups: np.ndarray
     flagged: np.ndarray
     reg: np.ndarray
     n_reg: int
+    close: np.ndarray
 
 
 def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, prm: RobustParams) -> Regions:
@@ -66,9 +70,9 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     ka, kb = _k.short_links(P, nb.h, nb.idx, float(prm.link))
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
                                               noisy=not fr.clean, noise=NOISE.scale * fr.sigma)
-    flagged, reg, n_reg = separate_close_junctions(P, hs, graph.indptr, graph.indices, flagged, reg, n_reg, ka, kb,
-                                                   prm, noise=NOISE.scale * fr.sigma)
-    return Regions(groups, flagged, reg, n_reg)
+    flagged, reg, n_reg, close = separate_close_junctions(P, hs, graph.indptr, graph.indices, flagged, reg, n_reg,
+                                                          ka, kb, prm, noisy=not fr.clean)
+    return Regions(groups, flagged, reg, n_reg, close)
 
 
 def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None):
@@ -194,20 +198,24 @@ def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: Robust
 
 
 def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: RobustParams,
-                             noise: float = 0.0):
+                             noisy: bool = False):
     """The junction flags, with regions holding several junctions a few spacings apart separated.
 
     Junctions 3-5 h apart (a facade's ladder, a comb, short links of a street grid) lie
     within one another's shells even at the finest scale of :func:`split_large_regions`, and
     the short links (``link`` h) join their flagged points into one region. A region still
-    wider than one junction at scale ``SPLIT.close_scale`` (radius over ``SPLIT.radius`` times
-    that scale's outer radius) is re-tested on that scale's shell; its points flagged there,
-    joined only by links of at most ``SPLIT.close_link`` spacings (the next sample along a
-    curve: a freed point between two junctions parts them), form candidate junctions. When two
-    or more candidates of ``SPLIT.min_points`` points or more hold a junction point (3 or more
-    groups), they replace the region (its other points are freed: the short chains between the
-    junctions). Regions whose fine inner radius is not over ``SPLIT.fine_noise`` times the
-    noise scale are left whole (a finer shell inside the noise's blur would split one junction).
+    wider than one junction at the scales ``SPLIT.close_scales`` (radius over ``SPLIT.radius``
+    times the largest one's outer radius) is re-tested on each of their shells; its points
+    flagged at a scale, joined only by links of at most ``SPLIT.close_link`` spacings (the next
+    sample along a curve: a freed point between two junctions parts them), form candidate
+    junctions, kept when of ``SPLIT.fine_min_points`` points or more with a junction point (3 or
+    more groups). The scale giving the most candidates, two or more (ties: the first listed),
+    resolves the region: its candidates replace it (its other points are freed: the short
+    chains between the junctions). One scale alone is not enough: on samples ``h`` apart a
+    shell a few spacings wide misses a junction's own point at one scale and joins two
+    junctions at the next. A scale whose inner radius is not over ``SPLIT.fine_noise`` times
+    the noise scale is not tried (a finer shell inside the noise's blur would split one
+    junction).
 
     Parameters
     ----------
@@ -225,56 +233,135 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
         Short kNN links (the region graph).
     prm : RobustParams
         ``shell_inner``, ``shell_outer``.
-    noise : float
-        The noise scale (absolute units).
+    noisy : bool
+        The input is noisy (nothing is separated).
 
     Returns
     -------
     flagged, reg, n_reg
         As given when nothing is separated.
+    close : (n_reg,) bool ndarray
+        The regions that are such separated junctions.
     """
     N = len(P)
-    if n_reg == 0:
-        return flagged, reg, n_reg
-    sc = SPLIT.close_scale
+    none = (flagged, reg, n_reg, np.zeros(n_reg, dtype=bool))
+    if n_reg == 0 or noisy or not SPLIT.close_scales:
+        return none
     ids = np.flatnonzero(flagged)
     r = reg[ids]
     rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
-    big = (rad > SPLIT.radius * sc * prm.shell_outer * hmean) & (sc * prm.shell_inner * hmean > SPLIT.fine_noise * noise)
+    big = rad > SPLIT.radius * max(SPLIT.close_scales) * prm.shell_outer * hmean
     if not big.any():
-        return flagged, reg, n_reg
-    sub = ids[big[r]]
-    fine = _k.shell_groups(P, hs, indptr, indices, sc * prm.shell_inner, sc * prm.shell_outer, subset=sub)
-    nf = np.zeros(N, dtype=bool)
-    nf[sub] = fine[sub] != 2
+        return none
     near = np.sqrt(((P[ka] - P[kb]) ** 2).sum(axis=1)) <= SPLIT.close_link * 0.5 * (hs[ka] + hs[kb])
-    cand, _ = components(N, ka[near], kb[near], nf)
-    is_j = np.zeros(N, dtype=bool)
-    is_j[sub] = fine[sub] >= SHELL.junction_groups
+    # every scale's candidates; each big region takes the scale with the most (two or more)
+    best = np.ones(n_reg, dtype=np.int64)
+    pick = np.full(n_reg, -1, dtype=np.int64)
+    found = []
+    for k, sc in enumerate(SPLIT.close_scales):
+        ok = big
+        sel = ok[r]
+        cand, good = _close_candidates(P, hs, indptr, indices, ids[sel], ka[near], kb[near], prm, sc)
+        found.append((cand, good))
+        n_cand = _candidates_per_region(P, hs, indptr, indices, ids[sel], r[sel], cand, good, n_reg)
+        better = ok & (n_cand > best)
+        best[better] = n_cand[better]
+        pick[better] = k
+    if not (pick >= 0).any():
+        return none
     out = flagged.copy()
     sep = np.zeros(N, dtype=bool)  # points of the separated regions
-    bsel = big[r]
-    bi, br = ids[bsel], r[bsel]
-    o = np.argsort(br, kind="stable")
-    bi, br = bi[o], br[o]
-    bcut = np.flatnonzero(np.r_[True, br[1:] != br[:-1], True])
-    for g0, g1 in zip(bcut[:-1], bcut[1:]):
-        pts = bi[g0:g1]
-        kept = pts[nf[pts]]
-        labs, cnt = np.unique(cand[kept], return_counts=True)
-        good = labs[(cnt >= SPLIT.min_points) & np.isin(labs, cand[kept[is_j[kept]]])]
-        if len(good) < 2:
+    for k, f in enumerate(found):
+        sel = pick[r] == k
+        if f is None or not sel.any():
             continue
-        out[pts] = False
-        keep = kept[np.isin(cand[kept], good)]
+        cand, good = f
+        out[ids[sel]] = False
+        keep = ids[sel][np.isin(cand[ids[sel]], good)]
         out[keep] = True
         sep[keep] = True
-    if not sep.any():
-        return flagged, reg, n_reg
     # the separated regions are joined by the fine links only, the others as before
     ea = np.r_[ka[~sep[ka] & ~sep[kb]], ka[near & sep[ka] & sep[kb]]]
     eb = np.r_[kb[~sep[ka] & ~sep[kb]], kb[near & sep[ka] & sep[kb]]]
-    return (out, *components(N, ea, eb, out))
+    reg2, n2 = components(N, ea, eb, out)
+    close = np.zeros(n2, dtype=bool)
+    close[reg2[sep]] = True
+    return out, reg2, n2, close
+
+
+def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
+    """How many candidates (labels ``good`` of ``cand``) each region holds, 0 where they do not
+    read as separate junctions joined by segments: the region's other points (freed), in
+    chains of the linked graph, must join at most two candidates each, no two chains the same
+    two, and two candidates joined by a chain must lie over ``SPLIT.close_sep`` spacings
+    apart (a crossing or a hub seen in parts by the smaller shell: its parts lie closer, or
+    are joined twice)."""
+    N = len(cand)
+    n_cand = np.zeros(n_reg, dtype=np.int64)
+    if not len(good):
+        return n_cand
+    ing = np.zeros(N, dtype=bool)
+    ing[sub] = np.isin(cand[sub], good)
+    kept = sub[ing[sub]]
+    rk = rs[ing[sub]]
+    u = np.unique(np.stack([rk, cand[kept]], axis=1), axis=0)
+    np.add.at(n_cand, u[:, 0], 1)
+    # the freed points' chains (linked graph) and the candidates each touches
+    freed = np.zeros(N, dtype=bool)
+    freed[sub] = ~ing[sub]
+    fs = np.flatnonzero(freed)
+    lens = indptr[fs + 1] - indptr[fs]
+    ea = np.repeat(fs, lens)
+    eb = indices[np.repeat(indptr[fs] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
+    lab, _ = components(N, ea, eb, freed)
+    t = ing[eb]
+    touch = np.unique(np.stack([lab[ea[t]], cand[eb[t]]], axis=1), axis=0)
+    if not len(touch):
+        return n_cand
+    region_of = np.full(N, -1, dtype=np.int64)
+    region_of[sub] = rs
+    creg = region_of[ea[t]]
+    creg = np.unique(np.stack([lab[ea[t]], creg], axis=1), axis=0)
+    chain_reg = dict(zip(creg[:, 0].tolist(), creg[:, 1].tolist()))
+    cut = np.flatnonzero(np.r_[True, touch[1:, 0] != touch[:-1, 0], True])
+    pairs: dict[int, list] = {}
+    for c0, c1 in zip(cut[:-1], cut[1:]):
+        g = chain_reg[int(touch[c0, 0])]
+        if c1 - c0 > 2:
+            n_cand[g] = 0
+        elif c1 - c0 == 2:
+            pairs.setdefault(g, []).append((int(touch[c0, 1]), int(touch[c0 + 1, 1])))
+    # two candidates joined by a segment: clearly apart (parts of one junction lie closer)
+    for g in np.flatnonzero(n_cand).tolist():
+        pr = pairs.get(g, [])
+        if len(set(pr)) != len(pr):
+            n_cand[g] = 0
+            continue
+        for x, y in pr:
+            px, py = kept[cand[kept] == x], kept[cand[kept] == y]
+            far = SPLIT.close_sep * 0.5 * (hs[px].mean() + hs[py].mean())
+            if not np.linalg.norm(P[px].mean(axis=0) - P[py].mean(axis=0)) > far:
+                n_cand[g] = 0
+                break
+    return n_cand
+
+
+def _close_candidates(P, hs, indptr, indices, sub, na, nb_, prm, sc):
+    """The candidate junctions of :func:`separate_close_junctions` at shell scale ``sc``.
+
+    ``sub``: the points tested; ``na, nb_``: the fine links.
+    Returns the label of every point (-1: not flagged at that scale) and the labels of the
+    candidates kept: ``SPLIT.fine_min_points`` points or more, one of them in 3 or more groups.
+    """
+    N = len(P)
+    fine = _k.shell_groups(P, hs, indptr, indices, sc * prm.shell_inner, sc * prm.shell_outer, subset=sub)
+    nf = np.zeros(N, dtype=bool)
+    nf[sub] = fine[sub] != 2
+    cand, _ = components(N, na, nb_, nf)
+    kept = sub[nf[sub]]
+    labs, cnt = np.unique(cand[kept], return_counts=True)
+    jl = np.unique(cand[kept[fine[kept] >= SHELL.junction_groups]])
+    return cand, labs[(cnt >= SPLIT.fine_min_points) & np.isin(labs, jl)]
 
 
 class _Fine(NamedTuple):

@@ -149,15 +149,15 @@ def _reconstruct_robust(
     tm["nodes"] = time.perf_counter() - t1
     # (counts of the small non-negative group numbers: a bincount, not a sort of all points)
     groups_histogram = {str(g): c for g, c in enumerate(np.bincount(reg.groups).tolist()) if c}
-    flagged, reg_of, n_reg = reg.flagged, reg.reg, reg.n_reg
+    flagged, reg_of, n_reg, close = reg.flagged, reg.reg, reg.n_reg, reg.close
     del reg
     report_stage(on_stage, ROBUST_SHARES, "tracing")
     t1 = time.perf_counter()
     tree, h = nb.tree, nb.h
     del nb  # the kNN lists are not needed below
-    chains, regions = trace_chains(P, h, graph, flagged, reg_of, n_reg, lin)  # 5. chains
+    chains, regions = trace_chains(P, h, graph, flagged, reg_of, n_reg, lin, close=close)  # 5. chains
     indptr, indices = graph.indptr, graph.indices
-    del graph, flagged, reg_of, lin  # the directed links, region labels and linearity
+    del graph, flagged, reg_of, lin, close  # the directed links, region labels and linearity
     tm["tracing"] = time.perf_counter() - t1
 
     report_stage(on_stage, ROBUST_SHARES, "assemble")

@@ -312,15 +312,19 @@ class Split(NamedTuple):
     #: more than this many fine outer radii apart
     sep: float = 1.2
     #: junctions a few spacings apart (a facade's ladder, a comb, short street links): a region
-    #: still wider than one junction after the splits (radius over ``radius`` times this
-    #: scale's outer radius) is re-tested on a shell this many times the size (1.25 to 2.75 h
-    #: by default: a junction's flagged points stay within about 1.5 h of it) ...
-    close_scale: float = 0.5
-    #: ... and its points flagged at that scale, joined by links of at most this many h (the
+    #: still wider than one junction after the splits (radius over ``radius`` times the first
+    #: scale's outer radius) is re-tested on shells these many times the size (about 1.4 to
+    #: 3.3 h: a junction's flagged points stay within about 1.5 h of it); the scale separating
+    #: the most junctions is kept (benchmark: kinds ladder, comb, streets)
+    close_scales: tuple = (0.6, 0.55, 0.5)
+    #: ... its points flagged at that scale, joined by links of at most this many h (the
     #: next sample along a curve, not the one after), form one junction each; the region is
-    #: replaced by them when two or more hold a junction point (kept only where the fine inner
-    #: radius is over ``fine_noise`` times the noise scale) (benchmark: kinds ladder, comb)
+    #: replaced by them when two or more hold a junction point (noise-free input only)
     close_link: float = 1.5
+    #: ... and two of them joined by a segment lie more than this many h apart (centroids): the
+    #: parts of one crossing or hub seen by such a shell lie 2-2.7 h apart (benchmark: window
+    #: at density x3, CASSIE flower)
+    close_sep: float = 3.5
 
 
 SPLIT = Split()
@@ -348,9 +352,10 @@ class Chains(NamedTuple):
     #: an end of a chain reads its contacts within ``min(L / 2, end_reach h)`` of it
     #: (spacings)
     end_reach: float = 4.0
-    #: a chain of at most this many points with one end only takes the other region it touches
-    #: as its second end (a segment between two junctions a few spacings apart) (points)
-    pair_points: int = 2
+    #: a chain of at most this many points with one end only, between two junctions separated
+    #: a few spacings apart (``junctions.separate_close_junctions``), takes the other one as its
+    #: second end: a segment of a single sample (points)
+    pair_points: int = 1
 
 
 CHAINS = Chains()
