@@ -204,8 +204,8 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     Junctions 3-5 h apart (a facade's ladder, a comb, short links of a street grid) lie
     within one another's shells even at the finest scale of :func:`split_large_regions`, and
     the short links (``link`` h) join their flagged points into one region. A region still
-    wider than one junction at the scales ``SPLIT.close_scales`` (radius over ``SPLIT.radius``
-    times the largest one's outer radius) is re-tested on each of their shells (a multi-scale
+    wider than one junction (radius over ``SPLIT.close_radius`` outer shell radii) is re-tested
+    at the scales ``SPLIT.close_scales`` on each of their shells (a multi-scale
     test: one scale alone is not enough, on samples ``h`` apart a shell a few spacings wide
     misses a junction's own point at one scale and joins two junctions at the next). Its
     points flagged at a scale, joined only by links of at most ``SPLIT.close_link`` spacings
@@ -256,10 +256,17 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     ids = np.flatnonzero(flagged)
     r = reg[ids]
     rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
-    big = rad > SPLIT.radius * max(SPLIT.close_scales) * prm.shell_outer * hmean
+    big = rad > SPLIT.close_radius * prm.shell_outer * hmean
     if not big.any():
         return none
-    near = np.sqrt(((P[ka] - P[kb]) ** 2).sum(axis=1)) <= SPLIT.close_link * 0.5 * (hs[ka] + hs[kb])
+    # the fine links: short links among the big regions' points, at most close_link h long
+    inbig = np.zeros(N, dtype=bool)
+    inbig[ids[big[r]]] = True
+    m = inbig[ka] & inbig[kb]
+    fa, fb = ka[m], kb[m]
+    near = np.sqrt(((P[fa] - P[fb]) ** 2).sum(axis=1)) <= SPLIT.close_link * 0.5 * (hs[fa] + hs[fb])
+    fa, fb = fa[near], fb[near]
+    del inbig, m, near
     # every scale's candidates; each big region takes the scale with the most (two or more)
     best = np.ones(n_reg, dtype=np.int64)
     pick = np.full(n_reg, -1, dtype=np.int64)
@@ -268,7 +275,7 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     for k, sc in enumerate(SPLIT.close_scales):
         ok = big
         sel = ok[r]
-        cand, good, fine = _close_candidates(P, hs, indptr, indices, ids[sel], ka[near], kb[near], prm, sc)
+        cand, good, fine = _close_candidates(P, hs, indptr, indices, ids[sel], fa, fb, prm, sc)
         found.append((cand, good))
         n_cand = _candidates_per_region(P, hs, indptr, indices, ids[sel], r[sel], cand, good, n_reg)
         if exits is None:
@@ -300,13 +307,20 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
         keep = ids[sel][np.isin(cand[ids[sel]], good)]
         out[keep] = True
         sep[keep] = True
-    # the separated regions are joined by the fine links only, the others as before
-    ea = np.r_[ka[~sep[ka] & ~sep[kb]], ka[near & sep[ka] & sep[kb]]]
-    eb = np.r_[kb[~sep[ka] & ~sep[kb]], kb[near & sep[ka] & sep[kb]]]
-    reg2, n2 = components(N, ea, eb, out)
-    close = np.zeros(n2, dtype=bool)
+    # the separated regions are joined by the fine links only, the others stay as they were;
+    # region ids renumbered to follow the lowest point id again
+    j = sep[fa] & sep[fb]
+    sl, _ = components(N, fa[j], fb[j], sep)
+    fl = np.flatnonzero(out)
+    key = np.where(sep[fl], n_reg + sl[fl], reg[fl])
+    u, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    rank = np.empty(len(u), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(u))
+    reg2 = np.full(N, -1, dtype=reg.dtype)
+    reg2[fl] = rank[inv.ravel()]
+    close = np.zeros(len(u), dtype=bool)
     close[reg2[sep]] = True
-    return out, reg2, n2, close
+    return out, reg2, len(u), close
 
 
 def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
@@ -382,7 +396,8 @@ def _exits(indptr, indices, flagged, sub, rs, ka, kb, n_reg):
     region_of[sub] = rs
     pts = np.zeros(N, dtype=bool)
     pts[eb[out]] = True
-    lab, _ = components(N, ka, kb, pts)
+    m = pts[ka] & pts[kb]
+    lab, _ = components(N, ka[m], kb[m], pts)
     pairs = np.unique(np.stack([region_of[ea[out]], lab[eb[out]]], axis=1), axis=0)
     return np.bincount(pairs[:, 0], minlength=n_reg)
 

@@ -312,10 +312,13 @@ class Split(NamedTuple):
     #: more than this many fine outer radii apart
     sep: float = 1.2
     #: junctions a few spacings apart (a facade's ladder, a comb, short street links): a region
-    #: still wider than one junction after the splits (radius over ``radius`` times the first
-    #: scale's outer radius) is re-tested on shells these many times the size (about 1.4 to
-    #: 3.3 h: a junction's flagged points stay within about 1.5 h of it); the scale separating
-    #: the most junctions is kept (benchmark: kinds ladder, comb, streets)
+    #: still wider than one junction after the splits, its radius over this many outer shell
+    #: radii (2.4 h by default: one junction's region measures at most 2.3 h on the speed
+    #: benchmark's clean clouds, two junctions 3-5 h apart 2.4 h and more on the kinds) ...
+    close_radius: float = 0.44
+    #: ... is re-tested on shells these many times the size (about 1.4 to 3.3 h: a junction's
+    #: flagged points stay within about 1.5 h of it); the scale separating the most junctions
+    #: is kept (benchmark: kinds ladder, comb, streets)
     close_scales: tuple = (0.6, 0.55, 0.5)
     #: ... its points flagged at that scale, joined by links of at most this many h (the
     #: next sample along a curve, not the one after), form one junction each; the region is
