@@ -472,6 +472,11 @@ class Fit(NamedTuple):
     #: ``3 / (8 sqrt(2))``): a fit of width ``b`` spacings keeps ``kernel_l2 / b`` of the
     #: noise variance
     kernel_l2: float = 0.265
+    #: order of the spline's equivalent kernel (Silverman's kernel is of fourth order): the bias
+    #: of a fit of width ``b`` grows as ``b^q``, so the width of least expected squared error
+    #: minimises ``(b / wide)^(2q) bias2 + kernel_l2 sigma^2 / b`` (``bias2``: the squared bias
+    #: of the widest fit, of width ``wide``; a property of the kernel, not a tuning; unitless)
+    bias_order: float = 4.0
     #: curves of fewer samples are left as they are (points: an open curve's two ends are held)
     min_points: int = 3
     #: a step between two samples counts as at least this fraction of the curve's median step
@@ -532,6 +537,10 @@ class Linalg(NamedTuple):
     #: most Newton steps for the largest root of the 3 x 3 characteristic polynomial (it
     #: decreases monotonically from an upper bound; a handful suffice, a safety bound)
     newton_steps: int = 100
+    #: the largest size ``d`` of a matrix whose top eigenpair ``_eig_top`` finds in closed form
+    #: (its characteristic polynomial a cubic; the points are 2D or 3D); larger ones take the
+    #: Jacobi sweeps (a property of the code, not a tuning)
+    closed_dim: int = 3
     #: floor of a divisor that may vanish (a sum of weights, a top eigenvalue, a length): any
     #: positive double far below the data's scale (unitless)
     tiny: float = 1e-300

@@ -287,7 +287,8 @@ def _untangle(X, off, which, w, cos_back, ut):  # pragma: no cover - compiled
             if not found:
                 break
             improved = False
-            for i in range(n - 3):
+            # (a reversal of [i + 1, j] needs i + 2 <= j <= n - 2: the j loop is empty from i = n - 3 on)
+            for i in range(n - 2):
                 if not near[s0 + i]:
                     continue
                 j1 = i + w + 1
