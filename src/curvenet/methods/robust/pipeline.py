@@ -22,7 +22,6 @@ the user's keywords in :class:`.params.RobustParams`.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 from typing import NamedTuple
 
@@ -43,13 +42,13 @@ from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
 from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
-from .thresholds import DEFAULTS, FIT, LAYOUT, NOISE, SPACING
+from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
 
 __all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts"]
 
 
-def _reconstruct_robust(
+def reconstruct_robust(
     points,
     *,
     spacing: float | None = None,
@@ -109,19 +108,27 @@ def _reconstruct_robust(
         Nodes (junctions and free ends), curves ending exactly at their nodes (closed loops
         without node have ``start = end = None``), parameters used and stage timings.
     """
-    tm: dict[str, float] = {}
     t0 = time.perf_counter()
     P0 = as_points(points)
     prm = RobustParams.from_keywords(spacing=spacing, k=k, shell_inner=shell_inner, shell_outer=shell_outer,
                                      link=link, link_width=link_width, min_spur=min_spur, fit=fit,
                                      smoothing=smoothing)
+    # small inputs run the plain-Python kernels: no numba compile or cache load (same results)
+    with _k.compiled_for(len(P0)):
+        return _stages(P0, prm, estimates, on_stage, t0)
+
+
+def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_stage: OnStage | None,
+            t0: float) -> CurveNetwork:
+    """The stages in order on the points ``P0`` (N, d) (see :func:`reconstruct_robust`)."""
+    tm: dict[str, float] = {}
     N, dim = P0.shape
     order = _internal_order(P0)
     P = P0[order]
     del P0  # (a copy when the input was not float64)
     params_out = prm.report()
     if N < DEFAULTS.min_points:
-        params_out["spacing"] = float(spacing) if spacing is not None else None
+        params_out["spacing"] = float(prm.spacing) if prm.spacing is not None else None
         return CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
 
     report_stage(on_stage, ROBUST_SHARES, "neighbors")
@@ -329,10 +336,3 @@ def estimate(points, *, spacing: float | None = None, k: int | None = None) -> E
         return first
     v = point_estimates(points, dedup_radius=r, spacing=spacing, k=k)
     return Estimates(median_spacing(v.h), median_noise(v.rms))
-
-
-@functools.wraps(_reconstruct_robust)
-def reconstruct_robust(points, **params) -> CurveNetwork:
-    # small inputs run the plain-Python kernels: no numba compile or cache load (same results)
-    with _k.compiled_for(len(points)):
-        return _reconstruct_robust(points, **params)
