@@ -708,6 +708,10 @@ def field_comments(source: str) -> dict[str, dict[str, str]]:
     return out
 
 
+#: What starts the part of a field's comment that says where its value came from (the origin
+#: column of the tables).
+ORIGIN = " origin: "
+
 _ROLE = re.compile(r":\w+:`~?\.*([\w.]+)`")
 
 
@@ -732,9 +736,10 @@ def group_table(name: str) -> str:
     group = getattr(thresholds, name)
     comments = field_comments(Path(thresholds.__file__).read_text())[type(group).__name__]
     doc = " ".join((type(group).__doc__ or "").split())
-    rows = [f"*`thresholds.{name}`: {_md(doc)}*", "", "| name | value | meaning |", "|---|---|---|"]
+    rows = [f"*`thresholds.{name}`: {_md(doc)}*", "", "| name | value | meaning | origin |", "|---|---|---|---|"]
     for field, value in zip(group._fields, group):
-        rows.append(f"| `{field}` | {_value(value)} | {_md(comments[field])} |")
+        meaning, _, origin = comments[field].partition(ORIGIN)
+        rows.append(f"| `{field}` | {_value(value)} | {_md(meaning)} | {_md(origin)} |")
     return "\n".join(rows)
 
 

@@ -101,3 +101,33 @@ def test_the_package_is_scanned():
     names = {str(p.relative_to(ROBUST)) for p in _modules()}
     assert {"pipeline.py", "repairs.py", "curves.py", "kernels/linalg.py", "kernels/registry.py"} <= names
     assert "thresholds.py" not in names
+
+
+def test_every_threshold_says_where_its_value_came_from():
+    """Each field of thresholds.py has a ``#:`` comment (its meaning) ending in an ``origin:``
+    part, which docs/method.md shows in the origin column of its table."""
+    import re
+
+    from curvenet.methods.robust import thresholds
+
+    src = (ROBUST / "thresholds.py").read_text(encoding="utf-8")
+    tree = ast.parse(src)
+    lines = src.splitlines()
+    missing, n = [], 0
+    for cls in (c for c in tree.body if isinstance(c, ast.ClassDef)):
+        for item in (i for i in cls.body if isinstance(i, ast.AnnAssign)):
+            n += 1
+            comment, i = [], item.lineno - 2
+            while i >= 0 and lines[i].strip().startswith("#:"):
+                comment.insert(0, lines[i].strip()[2:].strip())
+                i -= 1
+            text = " ".join(comment)
+            meaning, _, origin = text.partition("origin: ")
+            if not meaning.strip() or not origin.strip():
+                missing.append(f"{cls.name}.{item.target.id}")
+    groups = [g for g in thresholds.__all__ if g.isupper()]
+    assert n == sum(len(getattr(thresholds, g)._fields) for g in groups)
+    assert not missing, f"fields without a meaning and an origin: {missing}"
+    doc = (ROBUST.parents[3] / "docs" / "method.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| `\w+` \| [^|]+ \| .+ \| (.*) \|$", doc, re.M)
+    assert len(rows) >= n and all(r.strip() for r in rows[-n:])
