@@ -14,7 +14,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from . import kernels as _k
-from .graph import Graph, components
+from .graph import Graph, components, edge_lengths
 from .thresholds import CHAINS, ENDS, LAYOUT, NUMERIC
 
 __all__ = ["Chain", "trace_chains", "order_chains", "fit_line", "step_lengths", "polylen", "chain_lengths",
@@ -67,7 +67,8 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
         The points of each region, ascending.
     """
     chn, n_chn = components(len(P), graph.src, graph.dst, ~flagged)
-    chains = order_chains(P, h, graph.src, graph.dst, graph.dd, chn, n_chn, reg, lin)
+    dd = edge_lengths(P, graph.src, graph.dst)
+    chains = order_chains(P, h, graph.src, graph.dst, dd, chn, n_chn, reg, lin)
     # the points of each region, ascending (one stable sort, not one pass over N per region)
     o = np.argsort(reg, kind="stable")
     cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
