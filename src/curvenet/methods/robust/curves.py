@@ -273,19 +273,28 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     sel = [i for i, c in enumerate(curves) if len(c.points) >= FIT.min_points]
     if (band is not None and band <= 0) or not sel:
         return list(curves)
-    X = np.concatenate([curves[i].points for i in sel])
-    m = np.array([len(curves[i].points) for i in sel], dtype=np.int64)
-    closed = np.array([bool(curves[i].closed) for i in sel])
-    ch = _Chains(X, m, closed)
-    if band is not None:
-        Y = ch.solve(np.full(len(X), float(band)))
-    else:
-        Y = ch.solve(_widths(ch, float(sigma)))
     out = list(curves)
-    off = np.r_[0, np.cumsum(m)].tolist()
-    for k, i in enumerate(sel):
-        c = curves[i]
-        out[i] = Curve(Y[off[k]:off[k + 1]], c.start, c.end, c.closed, c.indices.copy())
+    # the curves are independent of each other: solved in blocks of about LAYOUT.curve_block
+    # samples (whole curves), so the system and its temporaries (about 30 arrays of one value
+    # a sample) stay small at any size
+    sizes = np.array([len(curves[i].points) for i in sel], dtype=np.int64)
+    start = 0
+    while start < len(sel):
+        stop = start + max(1, int(np.searchsorted(np.cumsum(sizes[start:]), LAYOUT.curve_block, side="right")))
+        block = sel[start:stop]
+        X = np.concatenate([curves[i].points for i in block])
+        m = sizes[start:stop]
+        closed = np.array([bool(curves[i].closed) for i in block])
+        ch = _Chains(X, m, closed)
+        if band is not None:
+            Y = ch.solve(np.full(len(X), float(band)))
+        else:
+            Y = ch.solve(_widths(ch, float(sigma)))
+        off = np.r_[0, np.cumsum(m)].tolist()
+        for k, i in enumerate(block):
+            c = curves[i]
+            out[i] = Curve(Y[off[k]:off[k + 1]], c.start, c.end, c.closed, c.indices.copy())
+        start = stop
     return out
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...network import CurveNetwork
-from ...neighbors import locality_order
+from ...neighbors import build_tree, locality_order
 from ...validate import as_points
 from ..stages import ROBUST_SHARES, OnStage, report_stage
 from . import kernels as _k
@@ -148,6 +148,10 @@ def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_s
     # the peak is in the last stages); from here on the tangents are not read
     sigma, hmed, clean, lin = fr.sigma, fr.hmed, fr.clean, fr.lin
     fr = fr._replace(t=None)  # (stage 4 reads sigma and clean only)
+    # the k-d tree is read again by the repairs alone: it is built again there, over the same
+    # points (the same tree, the same answers), instead of being held through the two stages
+    # that hold the most memory (about 20 bytes a point: its ids and nodes)
+    nb = nb._replace(tree=None)
 
     report_stage(on_stage, ROBUST_SHARES, "nodes")
     t1 = time.perf_counter()
@@ -160,7 +164,7 @@ def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_s
     del reg
     report_stage(on_stage, ROBUST_SHARES, "tracing")
     t1 = time.perf_counter()
-    tree, h = nb.tree, nb.h
+    h = nb.h
     del nb  # the kNN lists are not needed below
     chains, regions = trace_chains(P, h, graph, flagged, reg_of, n_reg, lin)  # 5. chains
     indptr, indices = graph.indptr, graph.indices
@@ -170,8 +174,8 @@ def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_s
     report_stage(on_stage, ROBUST_SHARES, "assemble")
     t1 = time.perf_counter()
     sc = Scales(h=h, hmed=hmed, sigma=sigma, noise=NOISE.scale * sigma, clean=clean,
-                width=max(prm.link_width, 0.0), indptr=indptr, indices=indices, tree=tree)
-    del indptr, indices, tree  # (held by sc alone, dropped with it)
+                width=max(prm.link_width, 0.0), indptr=indptr, indices=indices, tree=build_tree(P))
+    del indptr, indices  # (held by sc alone, dropped with it)
     topo = run_repairs(Topology(P, chains, regions), sc, prm)  # 6. repairs
     del chains, regions
     sc = dataclasses.replace(sc, tree=None)  # the k-d tree: read by the repairs alone
