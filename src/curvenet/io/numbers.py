@@ -9,9 +9,13 @@ network. With ``orjson`` installed (extra ``fast``) whole arrays are written at 
 code (the Ryu algorithm: the same shortest digits, correctly rounded), about ten times faster:
 in the range that ``repr`` writes without exponent, ``1e-4 <= |x| < 1e16``, and for zeros of
 either sign, orjson's text is ``repr``'s to the byte (``tests/test_numbers.py`` checks millions
-of random doubles); the rows holding any other value (``1e-07``, ``1e+16``, subnormals, ``inf``,
-``nan``: rare in coordinates) are rewritten by ``repr``. Without orjson every value goes through
-``repr``: the same text, only slower.
+of random doubles); any other value (``1e-07``, ``1e+16``, subnormals, ``inf``, ``nan``: rare in
+coordinates) goes to orjson as NaN, which it writes ``null``, and that word is replaced by the
+value's ``repr``. Without orjson every value goes through ``repr``: the same text, only slower.
+
+:func:`table_bytes` is the bulk path of every text writer: the numbers of a whole table in one
+orjson call, then the text around them (separators, line ends, the fixed tags of a DXF entity)
+put in by a few passes over the bytes instead of a Python string per value.
 """
 
 from __future__ import annotations
@@ -22,7 +26,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
-    "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "REPR_RANGE",
+    "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
+    "table_text", "REPR_RANGE",
 ]
 
 #: The magnitudes that ``repr`` writes without exponent (and orjson writes the same way):
@@ -31,9 +36,6 @@ REPR_RANGE = (1e-4, 1e16)
 
 #: Below this many values ``repr`` is as fast as a call into orjson.
 _SMALL = 64
-
-#: Row marker inside orjson's text (orjson never writes a zero byte).
-_MARK = b"\x00"
 
 
 def _orjson() -> Any:
@@ -69,18 +71,140 @@ def _repr_row(row: np.ndarray, sep: str) -> str:
     return sep.join(map(repr, row.tolist()))
 
 
-def _patch_rows(body: bytes, bad: np.ndarray, a: np.ndarray, sep: str) -> bytes:
-    """``body`` (rows apart by :data:`_MARK`) with the rows ``bad`` rewritten by ``repr``."""
-    marks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == _MARK[0])
-    starts = np.concatenate([[0], marks + 1])
-    ends = np.concatenate([marks, [len(body)]])
-    pieces = []
-    prev = 0
-    for i in bad.tolist():
-        pieces += [body[prev:starts[i]], _repr_row(a[i], sep).encode()]
-        prev = int(ends[i])
-    pieces.append(body[prev:])
-    return b"".join(pieces)
+#: Bytes that stand for the glue of a column in the bulk text until they are replaced by it:
+#: control characters that no number's text holds (tab, line feed and carriage return left out,
+#: which glue may hold).
+_MARKS = bytes(b for b in range(1, 32) if b not in (9, 10, 13))
+
+
+def _bulk(a: np.ndarray) -> bytes:
+    """``repr`` (``str`` for integers) of every value of a flat array, joined by ``,``
+    (orjson, the values unlike ``repr``'s rewritten by ``repr``)."""
+    if a.dtype.kind != "f":
+        return _dumps(a)[1:-1]
+    bad = _unlike_repr(a)
+    if not bad.any():
+        return _dumps(a)[1:-1]
+    pieces = _dumps(np.where(bad, np.nan, a))[1:-1].split(b"null")  # orjson writes nan as null
+    fixes = [repr(x).encode() for x in a[bad].tolist()]
+    out = [b""] * (2 * len(fixes) + 1)
+    out[0::2], out[1::2] = pieces, fixes
+    return b"".join(out)
+
+
+def _value_texts(a: np.ndarray, int_cols: Sequence[int]) -> list[list[str]]:
+    """The text of every value of an (n, m) array, row by row, without orjson."""
+    m = a.shape[1]
+    fmt = [str if (a.dtype.kind != "f" or j in int_cols) else repr for j in range(m)]
+    conv = [(lambda v: str(int(v))) if (a.dtype.kind == "f" and j in int_cols) else f for j, f in enumerate(fmt)]
+    return [[conv[j](v) for j, v in enumerate(r)] for r in a.tolist()]
+
+
+def table_bytes(
+    rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = (), groups: ArrayLike | None = None
+) -> bytes | list[bytes]:
+    """Every row of an (n, m) array as text: each value followed by the glue of its column.
+
+    The bulk path of every text writer: the numbers of all rows are written in one orjson call
+    and the glue goes in by a few passes over the bytes, without a Python object per value.
+
+    Parameters
+    ----------
+    rows : (n, m) array_like of float or int
+        Float values are written as ``repr`` writes them, integers as ``str`` does.
+    glue : sequence of m str or bytes
+        ``glue[j]`` follows each value of column ``j`` (``glue[m - 1]`` ends a row).
+    int_cols : sequence of int
+        Columns of a float array that hold integers (of magnitude below 2**53), written as
+        integers (``7``, not ``7.0``).
+    groups : (g + 1,) array_like of int, optional
+        Row offsets: return the text of rows ``groups[k]:groups[k + 1]`` for each ``k``, each
+        without the glue after its last value.
+
+    Returns
+    -------
+    bytes, or list of g bytes with ``groups``
+
+    Examples
+    --------
+    >>> table_bytes([[1.0, 0.5], [2.0, 1e-7]], [" ", "\\n"], int_cols=[0])
+    b'1 0.5\\n2 1e-07\\n'
+    >>> table_bytes([[1.0], [2.0], [3.0]], [";"], groups=[0, 2, 2, 3])
+    [b'1.0;2.0', b'', b'3.0']
+    """
+    a = np.asarray(rows)
+    if a.dtype.kind not in "fiu":
+        a = a.astype(np.float64)
+    a = np.ascontiguousarray(a, dtype=np.float64 if a.dtype.kind == "f" else np.int64)
+    if a.ndim != 2 or a.shape[1] != len(glue) or not len(glue):
+        raise ValueError(f"rows must be (n, {len(glue)}) for {len(glue)} glue strings, got shape {a.shape}")
+    glue = [g.encode() if isinstance(g, str) else bytes(g) for g in glue]
+    n, m = a.shape
+    off = None if groups is None else np.asarray(groups, dtype=np.int64)
+    if n == 0:
+        return b"" if off is None else [b""] * (len(off) - 1)
+    if a.size < _SMALL or _orjson() is None:
+        texts = _value_texts(a, int_cols)
+        if off is None:
+            return b"".join(t.encode() + g for r in texts for t, g in zip(r, glue))
+        out = []
+        for k0, k1 in zip(off[:-1].tolist(), off[1:].tolist()):
+            b = b"".join(t.encode() + g for r in texts[k0:k1] for t, g in zip(r, glue))
+            out.append(b[: len(b) - len(glue[-1])] if k1 > k0 else b"")
+        return out
+    return _table_bulk(a, glue, tuple(int_cols) if a.dtype.kind == "f" else (), off)
+
+
+def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None) -> bytes | list[bytes]:
+    """:func:`table_bytes` by orjson: mark the comma after each value by its column's mark
+    (or glue, one byte long), cut the ``.0`` of the integer columns, replace the marks."""
+    n, m = a.shape
+    body = bytearray(_bulk(a.ravel()))
+    body.append(44)  # every value followed by a comma
+    buf = np.frombuffer(body, dtype=np.uint8)
+    if m == 1 and not int_cols and off is None:
+        return bytes(body).replace(b",", glue[0])
+    commas = np.flatnonzero(buf == 44)
+    used = set(b"".join(glue))
+    free = [c for c in _MARKS if c not in used]
+    todo = []  # (mark, glue) replaced after the marking
+    for j, g in enumerate(glue):
+        if len(g) == 1 and g != b",":
+            buf[commas[j::m]] = g[0]
+        elif g != b",":
+            mark = free.pop()
+            buf[commas[j::m]] = mark
+            todo.append((bytes([mark]), g))
+    group_mark = None
+    if off is not None:
+        group_mark = bytes([free.pop()])
+        ends = off[1:][np.diff(off) > 0]
+        buf[commas[ends * m - 1]] = group_mark[0]
+    if int_cols:
+        keep = np.ones(len(buf), dtype=bool)
+        for j in int_cols:
+            keep[commas[j::m] - 1] = False
+            keep[commas[j::m] - 2] = False
+        body = bytearray(buf[keep].tobytes())
+    for mark, g in sorted(todo, key=lambda mg: len(mg[1])):
+        body = body.replace(mark, g)
+    if off is None:
+        return bytes(body)
+    pieces = bytes(body).split(group_mark)
+    out = [b""] * (len(off) - 1)
+    for k, piece in zip(np.flatnonzero(np.diff(off) > 0).tolist(), pieces):
+        out[k] = piece
+    return out
+
+
+def table_text(
+    rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] = (), groups: ArrayLike | None = None
+) -> str | list[str]:
+    """:func:`table_bytes` as text (``str``, or a list of ``str`` with ``groups``)."""
+    out = table_bytes(rows, glue, int_cols=int_cols, groups=groups)
+    if isinstance(out, list):
+        return [b.decode("utf-8") for b in out]
+    return out.decode("utf-8")
 
 
 def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n") -> str:
@@ -103,17 +227,14 @@ def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n"
     >>> rows_text([[0.499559, 1.0], [1e-7, -0.0]], "v ")
     'v 0.499559 1.0\\nv 1e-07 -0.0\\n'
     """
-    a = np.ascontiguousarray(_as_rows(np.asarray(rows, dtype=np.float64)))
+    a = _as_rows(np.asarray(rows, dtype=np.float64))
     n, m = a.shape
     if n == 0:
         return ""
-    if m == 0 or a.size < _SMALL or _orjson() is None:
-        return "".join(prefix + _repr_row(r, sep) + end for r in a)
-    body = _dumps(a)[2:-2].replace(b"],[", _MARK).replace(b",", sep.encode())
-    bad = np.flatnonzero(_unlike_repr(a).any(axis=1))
-    if len(bad):
-        body = _patch_rows(body, bad, a, sep)
-    return prefix + body.replace(_MARK, (end + prefix).encode()).decode("ascii") + end
+    if m == 0:
+        return (prefix + end) * n
+    text = prefix + table_text(a, [sep] * (m - 1) + [end + prefix])
+    return text[: len(text) - len(prefix)]
 
 
 def shortest(values: ArrayLike, sep: str = " ") -> str:
@@ -137,9 +258,9 @@ def shortest(values: ArrayLike, sep: str = " ") -> str:
     '0.499559 1.0 1e-07'
     """
     a = np.asarray(values, dtype=np.float64).ravel()
-    if len(a) < _SMALL or _orjson() is None:
-        return sep.join(map(repr, a.tolist()))
-    text = rows_text(a.reshape(-1, 1), "", "", sep)
+    if not len(a):
+        return ""
+    text = table_text(a.reshape(-1, 1), [sep])
     return text[: len(text) - len(sep)]
 
 
@@ -159,9 +280,12 @@ def shortest_rows(rows: ArrayLike, prefix: str = "", sep: str = " ") -> list[str
     list of str
     """
     a = _as_rows(np.asarray(rows, dtype=np.float64))
-    if a.size < _SMALL or _orjson() is None:
-        return [prefix + _repr_row(r, sep) for r in a]
-    return rows_text(a, prefix, sep, "\x00").split("\x00")[:-1]
+    n, m = a.shape
+    if n == 0:
+        return []
+    if m == 0:
+        return [prefix] * n
+    return [prefix + t for t in table_text(a, [sep] * (m - 1) + [""], groups=np.arange(n + 1))]
 
 
 def ints_text(values: ArrayLike, sep: str = " ") -> str:
@@ -177,10 +301,11 @@ def ints_text(values: ArrayLike, sep: str = " ") -> str:
     -------
     str
     """
-    a = np.ascontiguousarray(np.asarray(values).ravel(), dtype=np.int64)
-    if len(a) < _SMALL or _orjson() is None:
-        return sep.join(map(str, a.tolist()))
-    return _dumps(a)[1:-1].decode("ascii").replace(",", sep)
+    a = np.asarray(values).ravel().astype(np.int64)
+    if not len(a):
+        return ""
+    text = table_text(a.reshape(-1, 1), [sep])
+    return text[: len(text) - len(sep)]
 
 
 def int_lists(arrays: Sequence[np.ndarray], sep: str = " ") -> list[str]:
@@ -195,12 +320,12 @@ def int_lists(arrays: Sequence[np.ndarray], sep: str = " ") -> list[str]:
     -------
     list of str
     """
-    arrays = [np.ascontiguousarray(np.asarray(x).ravel(), dtype=np.int64) for x in arrays]
+    arrays = [np.asarray(x).ravel().astype(np.int64) for x in arrays]
     if not arrays:
         return []
-    if sum(len(x) for x in arrays) < _SMALL or _orjson() is None:
-        return [sep.join(map(str, x.tolist())) for x in arrays]
-    return _dumps(arrays)[2:-2].decode("ascii").replace(",", sep).split("]" + sep + "[")
+    sizes = np.array([len(x) for x in arrays], dtype=np.int64)
+    flat = np.concatenate(arrays).reshape(-1, 1)
+    return table_text(flat, [sep], groups=np.concatenate([[0], np.cumsum(sizes)]))
 
 
 def int_rows_text(rows: ArrayLike, sep: str = " ", end: str = "\n") -> str:
@@ -215,13 +340,13 @@ def int_rows_text(rows: ArrayLike, sep: str = " ", end: str = "\n") -> str:
     -------
     str
     """
-    a = np.ascontiguousarray(_as_rows(np.asarray(rows)), dtype=np.int64)
-    if not len(a):
+    a = _as_rows(np.asarray(rows)).astype(np.int64)
+    n, m = a.shape
+    if not n:
         return ""
-    if a.shape[1] == 0 or a.size < _SMALL or _orjson() is None:
-        return "".join(sep.join(map(str, r)) + end for r in a.tolist())
-    body = _dumps(a)[2:-2].replace(b"],[", _MARK).replace(b",", sep.encode())
-    return body.replace(_MARK, end.encode()).decode("ascii") + end
+    if m == 0:
+        return end * n
+    return table_text(a, [sep] * (m - 1) + [end])
 
 
 def join_columns(blocks: Sequence[str], sep: str = " ", end: str = "\n") -> str:
