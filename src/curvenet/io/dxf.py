@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import InputError, require
 from ..network import CurveNetwork
 from ..style import curve_colors
+from .numbers import table_bytes
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
 
@@ -65,30 +66,149 @@ def network_to_dxf(net: CurveNetwork, *, splines: bool | None = None, units: str
         doc.header["$MEASUREMENT"] = int(unit in _METRIC)
     doc.layers.add(CURVE_LAYER, color=5)
     doc.layers.add(NODE_LAYER, color=1)
-    msp = doc.modelspace()
-    colors = curve_colors(net)
-    for i, c in enumerate(net.curves):
-        pts = np.array([_xyz(p) for p in c.points]).reshape(-1, 3)
+    owner = doc.modelspace().block_record_handle
+    entities, seed = _entities(net, bool(splines), owner, int(str(doc.entitydb.handles), 16))
+    doc.entitydb.handles.reset(f"{seed:X}")  # ezdxf writes it as $HANDSEED, the next free handle
+    buf = io.StringIO()
+    doc.write(buf)
+    head, empty, tail = buf.getvalue().partition(_EMPTY_ENTITIES)
+    if not empty:
+        raise RuntimeError("ezdxf wrote no ENTITIES section")  # (every version does)
+    return head + _ENTITIES_START + entities.decode("ascii") + "  0\nENDSEC\n" + tail
+
+
+#: The empty ENTITIES section of the document ezdxf writes, which :func:`network_to_dxf` fills.
+_EMPTY_ENTITIES = "  0\nSECTION\n  2\nENTITIES\n  0\nENDSEC\n"
+_ENTITIES_START = "  0\nSECTION\n  2\nENTITIES\n"
+
+
+def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple[bytes, int]:
+    """The ENTITIES of the drawing as DXF text, and the next free handle.
+
+    The tags of every entity are those ezdxf writes (R2010): a ``POLYLINE`` (3D) with one
+    ``VERTEX`` per point and its ``SEQEND``, or a ``SPLINE``, for each curve; a ``POINT`` for
+    each node. The numbers of all vertices and points are written in bulk
+    (:func:`curvenet.io.numbers.table_bytes`), which is what ezdxf's object per entity made cost
+    a minute at a million points.
+
+    Handles: curves get ``first``, ``first + 1``... (a polyline two, for it and its ``SEQEND``);
+    vertices and points get handles whose hexadecimal digits are all decimal digits, from
+    ``10**k`` on (``k`` the length of the last curve handle, so they are larger), written with
+    the coordinates in the same bulk call. DXF asks only that handles be distinct and below
+    ``$HANDSEED``.
+
+    Parameters
+    ----------
+    net : CurveNetwork
+    splines : bool
+        Splines through the points of curves (see :func:`network_to_dxf`).
+    owner : str
+        Handle of the model space's block record.
+    first : int
+        The first free handle.
+
+    Returns
+    -------
+    text : bytes
+        The entities, each starting with its ``  0`` tag.
+    seed : int
+        A handle above every handle used.
+    """
+    curves = net.curves
+    pts3 = [_xyz_rows(c.points) for c in curves]
+    names = curve_colors(net)
+    true_color = {h: _true_color(h) for h in set(names)}
+    colors = [true_color[h] for h in names]
+    kinds: list[tuple] = []  # per written curve: ("poly", i) or ("spline", i, degree, control, knots, fit)
+    for i, (c, pts) in enumerate(zip(curves, pts3)):
         if len(pts) < 2:
             continue
-        attribs = {"layer": CURVE_LAYER}
         fit = _fit_points(pts, c.closed) if splines else pts[:0]
         if len(fit) >= (_MIN_LOOP if c.closed else 3):
             degree, control, knots = _interpolating_bspline(fit, c.closed)
-            e = msp.add_spline(dxfattribs={**attribs, "degree": degree})
-            e.control_points = control.tolist()
-            e.knots = knots.tolist()
-            e.fit_points = fit.tolist()
-            if c.closed:
-                e.closed = True
+            kinds.append(("spline", i, degree, np.asarray(control, dtype=float), np.asarray(knots, dtype=float), fit))
         else:
-            e = msp.add_polyline3d(pts.tolist(), close=bool(c.closed), dxfattribs=attribs)
-        e.rgb = _rgb(colors[i])
-    for p in net.nodes:
-        msp.add_point(_xyz(p), dxfattribs={"layer": NODE_LAYER})
-    buf = io.StringIO()
-    doc.write(buf)
-    return buf.getvalue()
+            kinds.append(("poly", i))
+    handle = first
+    handles = []
+    for k in kinds:
+        handles.append(handle)
+        handle += 2 if k[0] == "poly" else 1
+    base = 10 ** len(f"{max(handle - 1, first):X}")  # decimal-looking handles above the curves'
+    poly = [k[1] for k in kinds if k[0] == "poly"]
+    n_vert = sum(len(pts3[i]) for i in poly)
+    vertex_text = _vertex_texts(pts3, poly, base, owner)
+    point_text = _point_text(net.nodes, base + n_vert, owner)
+    spline_texts = _spline_texts([k for k in kinds if k[0] == "spline"])
+    out = []
+    vt, st = iter(vertex_text), iter(spline_texts)
+    for k, h in zip(kinds, handles):
+        i = k[1]
+        common = f"  5\n{h:X}\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n{colors[i]}\n"
+        if k[0] == "poly":
+            out.append(
+                f"  0\nPOLYLINE\n{common}100\nAcDb3dPolyline\n 66\n1\n 10\n0.0\n 20\n0.0\n 30\n0.0\n 70\n"
+                f"{8 + int(bool(curves[i].closed))}\n  0\nVERTEX\n  5\n".encode()
+            )
+            out.append(next(vt))
+            out.append(
+                f"\n 70\n32\n  0\nSEQEND\n  5\n{h + 1:X}\n330\n{h:X}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n".encode()
+            )
+        else:
+            _, _, degree, control, knots, fit = k
+            out.append(
+                f"  0\nSPLINE\n{common}100\nAcDbSpline\n 70\n{int(bool(curves[i].closed))}\n 71\n{degree}\n"
+                f" 72\n{len(knots)}\n 73\n{len(control)}\n 74\n{len(fit)}\n".encode()
+            )
+            out.append(next(st))
+    out.append(point_text)
+    seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
+    return b"".join(out), seed
+
+
+def _xyz_rows(points) -> np.ndarray:
+    """(m, 3) float coordinates of (m, 2|3) points (z = 0 in 2D)."""
+    p = np.asarray(points, dtype=float)
+    p = p.reshape(len(p), -1) if len(p) else p.reshape(0, p.shape[-1] if p.ndim > 1 else 3)
+    if p.shape[1] >= 3:
+        return p[:, :3]
+    return np.column_stack([p, np.zeros((len(p), 3 - p.shape[1]))])
+
+
+def _vertex_texts(pts3: list, poly: list[int], base: int, owner: str) -> list[bytes]:
+    """The VERTEX entities of each polyline ``poly[k]``: from the handle of the first vertex
+    to the last vertex's z (the tags before and after are the caller's)."""
+    if not poly:
+        return []
+    P = np.concatenate([pts3[i] for i in poly])
+    sizes = np.array([len(pts3[i]) for i in poly], dtype=np.int64)
+    table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
+    mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n100\nAcDbVertex\n100\nAcDb3dPolylineVertex\n 10\n"
+    glue = [mid, "\n 20\n", "\n 30\n", "\n 70\n32\n  0\nVERTEX\n  5\n"]
+    return table_bytes(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]))
+
+
+def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
+    """The POINT entities of the nodes (handles from ``base`` on)."""
+    P = _xyz_rows(nodes)
+    if not len(P):
+        return b""
+    table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
+    mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{NODE_LAYER}\n100\nAcDbPoint\n 10\n"
+    glue = [mid, "\n 20\n", "\n 30\n", "\n  0\nPOINT\n  5\n"]
+    return b"  0\nPOINT\n  5\n" + table_bytes(table, glue, int_cols=(0,), groups=[0, len(P)])[0] + b"\n"
+
+
+def _spline_texts(splines: list[tuple]) -> list[bytes]:
+    """The tags of each spline from its knots on (knots, control points, fit points)."""
+    if not splines:
+        return []
+    parts = []
+    for col, glue in ((4, ["\n 40\n"]), (3, ["\n 20\n", "\n 30\n", "\n 10\n"]), (5, ["\n 21\n", "\n 31\n", "\n 11\n"])):
+        arrays = [np.asarray(k[col], dtype=float).reshape(len(k[col]), -1) for k in splines]
+        sizes = np.array([len(a) for a in arrays], dtype=np.int64)
+        parts.append(table_bytes(np.concatenate(arrays), glue, groups=np.concatenate([[0], np.cumsum(sizes)])))
+    return [b" 40\n" + k + b"\n 10\n" + c + b"\n 11\n" + f + b"\n" for k, c, f in zip(*parts)]
 
 
 #: A loop needs this many fit points (its first repeated last) for a periodic cubic spline.
@@ -129,10 +249,7 @@ def _interpolating_bspline(fit: np.ndarray, closed: bool) -> tuple[int, np.ndarr
     return k, b.c[i0:i1 - k], b.t[i0:i1 + 1]
 
 
-def _xyz(p) -> tuple[float, float, float]:
-    return (float(p[0]), float(p[1]), float(p[2]) if len(p) > 2 else 0.0)
-
-
-def _rgb(hexcolor: str) -> tuple[int, int, int]:
+def _true_color(hexcolor: str) -> int:
+    """DXF true colour (group 420) of ``"#rrggbb"``: ``0xrrggbb``."""
     h = hexcolor.lstrip("#")
-    return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16))
+    return (int(h[0:2], 16) << 16) | (int(h[2:4], 16) << 8) | int(h[4:6], 16)

@@ -157,7 +157,9 @@ def table_bytes(
 
 def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None) -> bytes | list[bytes]:
     """:func:`table_bytes` by orjson: mark the comma after each value by its column's mark
-    (or glue, one byte long), cut the ``.0`` of the integer columns, replace the marks."""
+    (or glue, one byte long), mark the ``.0`` of the integer columns for deletion, delete, and
+    replace the marks by their glue. Only one-byte patterns are searched (``bytes.replace``
+    of a longer one costs a function call per match)."""
     n, m = a.shape
     body = bytearray(_bulk(a.ravel()))
     body.append(44)  # every value followed by a comma
@@ -165,13 +167,12 @@ def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarr
     if m == 1 and not int_cols and off is None:
         return bytes(body).replace(b",", glue[0])
     commas = np.flatnonzero(buf == 44)
-    used = set(b"".join(glue))
-    free = [c for c in _MARKS if c not in used]
+    free = [c for c in _MARKS if c not in set(b"".join(glue))]
     todo = []  # (mark, glue) replaced after the marking
     for j, g in enumerate(glue):
-        if len(g) == 1 and g != b",":
+        if len(g) == 1:
             buf[commas[j::m]] = g[0]
-        elif g != b",":
+        else:
             mark = free.pop()
             buf[commas[j::m]] = mark
             todo.append((bytes([mark]), g))
@@ -181,19 +182,20 @@ def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarr
         ends = off[1:][np.diff(off) > 0]
         buf[commas[ends * m - 1]] = group_mark[0]
     if int_cols:
-        keep = np.ones(len(buf), dtype=bool)
+        cut = free.pop()
         for j in int_cols:
-            keep[commas[j::m] - 1] = False
-            keep[commas[j::m] - 2] = False
-        body = bytearray(buf[keep].tobytes())
+            buf[commas[j::m] - 1] = cut
+            buf[commas[j::m] - 2] = cut
+        del buf
+        body = body.translate(None, bytes([cut]))
     for mark, g in sorted(todo, key=lambda mg: len(mg[1])):
         body = body.replace(mark, g)
     if off is None:
         return bytes(body)
-    pieces = bytes(body).split(group_mark)
+    pieces = body.split(group_mark)
     out = [b""] * (len(off) - 1)
     for k, piece in zip(np.flatnonzero(np.diff(off) > 0).tolist(), pieces):
-        out[k] = piece
+        out[k] = bytes(piece)
     return out
 
 

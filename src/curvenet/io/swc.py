@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
-from .numbers import int_rows_text, join_columns, rows_text, shortest
+from .numbers import int_rows_text, join_columns, rows_text, shortest, table_text
 
 __all__ = ["network_to_swc", "SWC_UNDEFINED", "SWC_FORK", "SWC_END", "SWC_RADIUS_FRACTION"]
 
@@ -148,11 +148,18 @@ def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
         parents[pos] = parent
         pos += k
     ids = np.arange(1, count + 1)
+    if types.max() < _EXACT_INT:  # one table: integers as floats, written as integers
+        table = np.column_stack([ids, types, xyz, parents]).astype(np.float64)
+        return table_text(table, [" ", " ", " ", " ", f" {radius} ", "\n"], int_cols=(0, 1, 5))
     return join_columns([
         int_rows_text(np.column_stack([ids, types])),
         rows_text(xyz, "", " ", f" {radius}\n"),
         int_rows_text(parents.reshape(-1, 1)),
     ])
+
+
+#: Integers below this are exact as float64 (a sample type above it is written apart).
+_EXACT_INT = 2**53
 
 
 def _median_step(curves: list) -> float:
