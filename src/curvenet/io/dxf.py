@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import io
+from typing import Callable
 
 import numpy as np
 
 from ..errors import InputError, require
 from ..network import CurveNetwork
 from ..style import curve_colors
-from .numbers import table_bytes
+from .numbers import table_bytes, table_pieces
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
 
@@ -26,7 +27,7 @@ DXF_UNITS = {
 _METRIC = {"mm", "cm", "m", "km", "um", "dm", "nm"}
 
 
-def network_to_dxf(net: CurveNetwork, *, splines: bool | None = None, units: str | None = None) -> str:
+def network_to_dxf(net: CurveNetwork, *, splines: bool | None = None, units: str | None = None) -> bytes:
     """The network as an ASCII DXF drawing (AutoCAD R2010).
 
     Each curve is one entity on layer ``CURVES``: a 3D ``POLYLINE`` through its points (closed
@@ -49,8 +50,8 @@ def network_to_dxf(net: CurveNetwork, *, splines: bool | None = None, units: str
 
     Returns
     -------
-    str
-        The DXF text. Curves with fewer than 2 points are left out; a curve with fewer than 3
+    bytes
+        The DXF text (ASCII; bytes, as a file holds it: a million points make 160 MB). Curves with fewer than 2 points are left out; a curve with fewer than 3
         distinct points (4 on a loop) stays a polyline when ``splines`` is on.
     """
     ezdxf = require("ezdxf", "writing DXF files", "io")
@@ -74,28 +75,28 @@ def network_to_dxf(net: CurveNetwork, *, splines: bool | None = None, units: str
     head, empty, tail = buf.getvalue().partition(_EMPTY_ENTITIES)
     if not empty:
         raise RuntimeError("ezdxf wrote no ENTITIES section")  # (every version does)
-    return head + _ENTITIES_START + entities.decode("ascii") + "  0\nENDSEC\n" + tail
+    return b"".join([head.encode(), _ENTITIES_START, *entities, b"  0\nENDSEC\n", tail.encode()])
 
 
 #: The empty ENTITIES section of the document ezdxf writes, which :func:`network_to_dxf` fills.
 _EMPTY_ENTITIES = "  0\nSECTION\n  2\nENTITIES\n  0\nENDSEC\n"
-_ENTITIES_START = "  0\nSECTION\n  2\nENTITIES\n"
+_ENTITIES_START = b"  0\nSECTION\n  2\nENTITIES\n"
 
 
-def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple[bytes, int]:
+def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple[list[bytes], int]:
     """The ENTITIES of the drawing as DXF text, and the next free handle.
 
     The tags of every entity are those ezdxf writes (R2010): a ``POLYLINE`` (3D) with one
     ``VERTEX`` per point and its ``SEQEND``, or a ``SPLINE``, for each curve; a ``POINT`` for
     each node. The numbers of all vertices and points are written in bulk
-    (:func:`curvenet.io.numbers.table_bytes`), which is what ezdxf's object per entity made cost
-    a minute at a million points.
+    (:mod:`curvenet.io.numbers`), where ezdxf's object per entity cost a minute at a million
+    points.
 
     Handles: curves get ``first``, ``first + 1``... (a polyline two, for it and its ``SEQEND``);
     vertices and points get handles whose hexadecimal digits are all decimal digits, from
-    ``10**k`` on (``k`` the length of the last curve handle, so they are larger), written with
-    the coordinates in the same bulk call. DXF asks only that handles be distinct and below
-    ``$HANDSEED``.
+    ``10**k`` on (``k`` the number of digits of the last curve handle, so they are larger),
+    written with the coordinates in the same bulk call. DXF asks only that handles be distinct
+    and below ``$HANDSEED``.
 
     Parameters
     ----------
@@ -109,61 +110,59 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
 
     Returns
     -------
-    text : bytes
-        The entities, each starting with its ``  0`` tag.
+    text : list of bytes
+        The entities, each starting with its ``  0`` tag, in pieces to be joined.
     seed : int
         A handle above every handle used.
     """
     curves = net.curves
-    pts3 = [_xyz_rows(c.points) for c in curves]
+    sizes = np.fromiter((len(c.points) for c in curves), dtype=np.int64, count=len(curves))
+    off = np.concatenate([[0], np.cumsum(sizes)])
+    P = _xyz_rows(np.concatenate([c.points for c in curves if len(c.points)])) if off[-1] else np.zeros((0, 3))
+    closed = [bool(c.closed) for c in curves]
     names = curve_colors(net)
     true_color = {h: _true_color(h) for h in set(names)}
-    colors = [true_color[h] for h in names]
-    kinds: list[tuple] = []  # per written curve: ("poly", i) or ("spline", i, degree, control, knots, fit)
-    for i, (c, pts) in enumerate(zip(curves, pts3)):
-        if len(pts) < 2:
-            continue
-        fit = _fit_points(pts, c.closed) if splines else pts[:0]
-        if len(fit) >= (_MIN_LOOP if c.closed else 3):
-            degree, control, knots = _interpolating_bspline(fit, c.closed)
-            kinds.append(("spline", i, degree, np.asarray(control, dtype=float), np.asarray(knots, dtype=float), fit))
-        else:
-            kinds.append(("poly", i))
-    handle = first
-    handles = []
-    for k in kinds:
-        handles.append(handle)
-        handle += 2 if k[0] == "poly" else 1
-    base = 10 ** len(f"{max(handle - 1, first):X}")  # decimal-looking handles above the curves'
-    poly = [k[1] for k in kinds if k[0] == "poly"]
-    n_vert = sum(len(pts3[i]) for i in poly)
-    vertex_text = _vertex_texts(pts3, poly, base, owner)
-    point_text = _point_text(net.nodes, base + n_vert, owner)
-    spline_texts = _spline_texts([k for k in kinds if k[0] == "spline"])
+    is_spline = np.zeros(len(curves), dtype=bool)
+    spline_data = {}  # curve -> (degree, control (n, 3), knots (n + degree + 1,), fit points (k, 3))
+    if splines:
+        for i in np.flatnonzero(sizes >= 2).tolist():
+            fit = _fit_points(P[off[i]:off[i + 1]], closed[i])
+            if len(fit) >= (_MIN_LOOP if closed[i] else 3):
+                degree, control, knots = _interpolating_bspline(fit, closed[i])
+                spline_data[i] = (degree, np.asarray(control, dtype=float), np.asarray(knots, dtype=float), fit)
+                is_spline[i] = True
+    written = np.flatnonzero(sizes >= 2)
+    poly = written[~is_spline[written]]
+    step = np.where(is_spline[written], 1, 2)  # handles of each written curve
+    handles = (first + np.concatenate([[0], np.cumsum(step)])[:-1]).tolist()
+    last = first + int(step.sum()) - 1
+    base = 10 ** len(f"{max(last, first):X}")  # decimal-looking handles above the curves'
+    keep = np.repeat(~is_spline & (sizes >= 2), sizes)  # the points of the polylines
+    vertex_text, fill = _vertex_texts(P[keep], sizes[poly], base, owner)
+    vt = iter(vertex_text)
+    spline_texts = dict(zip(spline_data, _spline_texts(list(spline_data.values()))))
     out = []
-    vt, st = iter(vertex_text), iter(spline_texts)
-    for k, h in zip(kinds, handles):
-        i = k[1]
-        common = f"  5\n{h:X}\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n{colors[i]}\n"
-        if k[0] == "poly":
+    for i, h in zip(written.tolist(), handles):
+        common = f"  5\n{h:X}\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n{true_color[names[i]]}\n"
+        if not is_spline[i]:
             out.append(
                 f"  0\nPOLYLINE\n{common}100\nAcDb3dPolyline\n 66\n1\n 10\n0.0\n 20\n0.0\n 30\n0.0\n 70\n"
-                f"{8 + int(bool(curves[i].closed))}\n  0\nVERTEX\n  5\n".encode()
+                f"{8 + closed[i]}\n  0\nVERTEX\n  5\n".encode()
             )
             out.append(next(vt))
             out.append(
                 f"\n 70\n32\n  0\nSEQEND\n  5\n{h + 1:X}\n330\n{h:X}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n".encode()
             )
         else:
-            _, _, degree, control, knots, fit = k
+            degree, control, knots, fit = spline_data[i]
             out.append(
-                f"  0\nSPLINE\n{common}100\nAcDbSpline\n 70\n{int(bool(curves[i].closed))}\n 71\n{degree}\n"
+                f"  0\nSPLINE\n{common}100\nAcDbSpline\n 70\n{int(closed[i])}\n 71\n{degree}\n"
                 f" 72\n{len(knots)}\n 73\n{len(control)}\n 74\n{len(fit)}\n".encode()
             )
-            out.append(next(st))
-    out.append(point_text)
+            out.append(spline_texts[i])
+    n_vert = int(keep.sum())
     seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
-    return b"".join(out), seed
+    return [fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
 
 
 def _xyz_rows(points) -> np.ndarray:
@@ -175,17 +174,17 @@ def _xyz_rows(points) -> np.ndarray:
     return np.column_stack([p, np.zeros((len(p), 3 - p.shape[1]))])
 
 
-def _vertex_texts(pts3: list, poly: list[int], base: int, owner: str) -> list[bytes]:
-    """The VERTEX entities of each polyline ``poly[k]``: from the handle of the first vertex
-    to the last vertex's z (the tags before and after are the caller's)."""
-    if not poly:
-        return []
-    P = np.concatenate([pts3[i] for i in poly])
-    sizes = np.array([len(pts3[i]) for i in poly], dtype=np.int64)
+def _vertex_texts(P: np.ndarray, sizes: np.ndarray, base: int, owner: str) -> tuple[list[bytes], Callable]:
+    """The VERTEX entities at the points ``P`` (V, 3) of polylines of ``sizes`` points, each
+    from the handle of its first vertex to its last vertex's z (the tags before and after are
+    the caller's), and the function that puts in their tags once the caller has joined them with
+    its text (:func:`curvenet.io.numbers.table_pieces`)."""
+    if not len(sizes):
+        return [], bytes
     table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
     mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n100\nAcDbVertex\n100\nAcDb3dPolylineVertex\n 10\n"
     glue = [mid, "\n 20\n", "\n 30\n", "\n 70\n32\n  0\nVERTEX\n  5\n"]
-    return table_bytes(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]))
+    return table_pieces(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]))
 
 
 def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
@@ -200,11 +199,12 @@ def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
 
 
 def _spline_texts(splines: list[tuple]) -> list[bytes]:
-    """The tags of each spline from its knots on (knots, control points, fit points)."""
+    """The tags of each spline (degree, control points, knots, fit points) from its knots on:
+    knots, control points, fit points."""
     if not splines:
         return []
     parts = []
-    for col, glue in ((4, ["\n 40\n"]), (3, ["\n 20\n", "\n 30\n", "\n 10\n"]), (5, ["\n 21\n", "\n 31\n", "\n 11\n"])):
+    for col, glue in ((2, ["\n 40\n"]), (1, ["\n 20\n", "\n 30\n", "\n 10\n"]), (3, ["\n 21\n", "\n 31\n", "\n 11\n"])):
         arrays = [np.asarray(k[col], dtype=float).reshape(len(k[col]), -1) for k in splines]
         sizes = np.array([len(a) for a in arrays], dtype=np.int64)
         parts.append(table_bytes(np.concatenate(arrays), glue, groups=np.concatenate([[0], np.cumsum(sizes)])))

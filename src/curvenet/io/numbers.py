@@ -20,14 +20,14 @@ put in by a few passes over the bytes instead of a Python string per value.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
-    "table_text", "REPR_RANGE",
+    "table_text", "table_pieces", "REPR_RANGE",
 ]
 
 #: The magnitudes that ``repr`` writes without exponent (and orjson writes the same way):
@@ -100,6 +100,19 @@ def _value_texts(a: np.ndarray, int_cols: Sequence[int]) -> list[list[str]]:
     return [[conv[j](v) for j, v in enumerate(r)] for r in a.tolist()]
 
 
+def _table_input(rows: ArrayLike, glue: Sequence[str | bytes], groups: ArrayLike | None) -> tuple:
+    """The checked arguments of :func:`table_bytes`: a C-ordered (n, m) float64 or int64
+    array, the glue as bytes, the group offsets (or None)."""
+    a = np.asarray(rows)
+    if a.dtype.kind not in "fiu":
+        a = a.astype(np.float64)
+    a = np.ascontiguousarray(a, dtype=np.float64 if a.dtype.kind == "f" else np.int64)
+    if a.ndim != 2 or a.shape[1] != len(glue) or not len(glue):
+        raise ValueError(f"rows must be (n, {len(glue)}) for {len(glue)} glue strings, got shape {a.shape}")
+    glue = [g.encode() if isinstance(g, str) else bytes(g) for g in glue]
+    return a, glue, None if groups is None else np.asarray(groups, dtype=np.int64)
+
+
 def table_bytes(
     rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = (), groups: ArrayLike | None = None
 ) -> bytes | list[bytes]:
@@ -132,15 +145,8 @@ def table_bytes(
     >>> table_bytes([[1.0], [2.0], [3.0]], [";"], groups=[0, 2, 2, 3])
     [b'1.0;2.0', b'', b'3.0']
     """
-    a = np.asarray(rows)
-    if a.dtype.kind not in "fiu":
-        a = a.astype(np.float64)
-    a = np.ascontiguousarray(a, dtype=np.float64 if a.dtype.kind == "f" else np.int64)
-    if a.ndim != 2 or a.shape[1] != len(glue) or not len(glue):
-        raise ValueError(f"rows must be (n, {len(glue)}) for {len(glue)} glue strings, got shape {a.shape}")
-    glue = [g.encode() if isinstance(g, str) else bytes(g) for g in glue]
+    a, glue, off = _table_input(rows, glue, groups)
     n, m = a.shape
-    off = None if groups is None else np.asarray(groups, dtype=np.int64)
     if n == 0:
         return b"" if off is None else [b""] * (len(off) - 1)
     if a.size < _SMALL or _orjson() is None:
@@ -156,16 +162,36 @@ def table_bytes(
 
 
 def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None) -> bytes | list[bytes]:
-    """:func:`table_bytes` by orjson: mark the comma after each value by its column's mark
-    (or glue, one byte long), mark the ``.0`` of the integer columns for deletion, delete, and
-    replace the marks by their glue. Only one-byte patterns are searched (``bytes.replace``
-    of a longer one costs a function call per match)."""
+    """:func:`table_bytes` by orjson (see :func:`_marked`)."""
+    if a.shape[1] == 1 and not int_cols and off is None:
+        return _bulk(a.ravel()).replace(b",", glue[0]) + glue[0]
+    body, fill, group_mark = _marked(a, glue, int_cols, off)
+    if off is None:
+        return fill(body)
+    return _grouped(fill(body).split(group_mark), off)
+
+
+def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
+    """The text of each group from the pieces of the nonempty groups (empty groups get ``b""``)."""
+    out = [b""] * (len(off) - 1)
+    for k, piece in zip(np.flatnonzero(np.diff(off) > 0).tolist(), pieces):
+        out[k] = bytes(piece)
+    return out
+
+
+def _marked(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None) -> tuple:
+    """The numbers of ``a`` with the comma after each value replaced by its column's glue when
+    that is one byte long, by a mark (a control character) otherwise, and by a group mark at the
+    end of each group; the ``.0`` of the integer columns deleted.
+
+    Returns the text (a bytearray), the function that replaces the marks by their glue, and the
+    group mark. Only one-byte patterns are searched (``bytes.replace`` of a longer one costs a
+    function call per match).
+    """
     n, m = a.shape
     body = bytearray(_bulk(a.ravel()))
     body.append(44)  # every value followed by a comma
     buf = np.frombuffer(body, dtype=np.uint8)
-    if m == 1 and not int_cols and off is None:
-        return bytes(body).replace(b",", glue[0])
     commas = np.flatnonzero(buf == 44)
     free = [c for c in _MARKS if c not in set(b"".join(glue))]
     todo = []  # (mark, glue) replaced after the marking
@@ -188,15 +214,45 @@ def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarr
             buf[commas[j::m] - 2] = cut
         del buf
         body = body.translate(None, bytes([cut]))
-    for mark, g in sorted(todo, key=lambda mg: len(mg[1])):
-        body = body.replace(mark, g)
-    if off is None:
-        return bytes(body)
-    pieces = body.split(group_mark)
-    out = [b""] * (len(off) - 1)
-    for k, piece in zip(np.flatnonzero(np.diff(off) > 0).tolist(), pieces):
-        out[k] = bytes(piece)
-    return out
+    todo.sort(key=lambda mg: len(mg[1]))
+
+    def fill(text):
+        for mark, g in todo:
+            text = text.replace(mark, g)
+        return text
+
+    return body, fill, group_mark
+
+
+def table_pieces(
+    rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
+) -> tuple[list[bytes], Callable[[bytes], bytes]]:
+    """:func:`table_bytes` by groups with the glue put in later, for text around the groups.
+
+    A text made of the groups and text of the caller's (free of control characters other than
+    tab and line ends) joined in one piece is passed once to ``fill``, which puts in the glue:
+    the long glue (a DXF entity's tags between two numbers) goes into the whole text at once
+    instead of into each group.
+
+    Parameters
+    ----------
+    rows, glue, int_cols
+        As for :func:`table_bytes`.
+    groups : (g + 1,) array_like of int
+        Row offsets of the groups.
+
+    Returns
+    -------
+    pieces : list of g bytes
+        The groups, with marks where the glue goes.
+    fill : callable
+        ``fill(text)``: ``text`` (bytes) with the marks replaced by the glue.
+    """
+    a, glue, off = _table_input(rows, glue, groups)
+    if not len(a) or a.size < _SMALL or _orjson() is None:
+        return table_bytes(a, glue, int_cols=int_cols, groups=off), bytes
+    body, fill, group_mark = _marked(a, glue, tuple(int_cols) if a.dtype.kind == "f" else (), off)
+    return _grouped(body.split(group_mark), off), fill
 
 
 def table_text(
