@@ -88,7 +88,7 @@ def _table_by_hand(a, glue, int_cols=(), groups=None) -> list[str] | str:
 
 @pytest.mark.parametrize("kind", ["normal", "bits", "edges"])
 def test_table_text(kind, bulk):
-    from curvenet.io.numbers import table_text
+    from curvenet.io.numbers import group_texts, table_pieces, table_text
 
     rng = np.random.default_rng(3)
     a = _values(rng, 3000)[kind][:3000 // 4 * 4].reshape(-1, 4)
@@ -97,11 +97,14 @@ def test_table_text(kind, bulk):
     groups = np.sort(np.r_[0, rng.integers(0, len(a), 40), len(a), len(a), 0, 3, 3])
     for glue in (["\n 10\n", ",", ", ", "\nVERTEX\n"], [" ", " ", " ", "\n"], ["", "x", ";", ""]):
         assert table_text(a, glue, int_cols=[0]) == _table_by_hand(a, glue, [0])
-        assert table_text(a, glue, int_cols=[0], groups=groups) == _table_by_hand(a, glue, [0], groups.tolist())
+        want = _table_by_hand(a, glue, [0], groups.tolist())
+        assert group_texts(a, glue, int_cols=[0], groups=groups) == want
+        pieces, fill = table_pieces(a, glue, int_cols=[0], groups=groups)
+        assert fill(b"|".join(pieces)).decode().split("|") == want
         assert table_text(a[:, 1:], glue[1:]) == _table_by_hand(a[:, 1:], glue[1:])
     i = rng.integers(-2**63, 2**63, size=(500, 2), dtype=np.int64)
     assert table_text(i, [",", "\n"]) == _table_by_hand(i, [",", "\n"])
     assert table_text(np.zeros((0, 2)), [" ", "\n"]) == ""
-    assert table_text(np.zeros((0, 2)), [" ", "\n"], groups=[0, 0, 0]) == ["", ""]
+    assert group_texts(np.zeros((0, 2)), [" ", "\n"], groups=[0, 0, 0]) == ["", ""]
     with pytest.raises(ValueError):
         table_text(np.zeros((3, 2)), ["\n"])

@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import InputError, require
 from ..network import CurveNetwork
 from ..style import curve_colors
-from .numbers import table_bytes, table_pieces
+from .numbers import table_groups, table_pieces
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
 
@@ -195,7 +195,7 @@ def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
     table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
     mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{NODE_LAYER}\n100\nAcDbPoint\n 10\n"
     glue = [mid, "\n 20\n", "\n 30\n", "\n  0\nPOINT\n  5\n"]
-    return b"  0\nPOINT\n  5\n" + table_bytes(table, glue, int_cols=(0,), groups=[0, len(P)])[0] + b"\n"
+    return b"  0\nPOINT\n  5\n" + table_groups(table, glue, int_cols=(0,), groups=[0, len(P)])[0] + b"\n"
 
 
 def _spline_texts(splines: list[tuple]) -> list[bytes]:
@@ -207,7 +207,7 @@ def _spline_texts(splines: list[tuple]) -> list[bytes]:
     for col, glue in ((2, ["\n 40\n"]), (1, ["\n 20\n", "\n 30\n", "\n 10\n"]), (3, ["\n 21\n", "\n 31\n", "\n 11\n"])):
         arrays = [np.asarray(k[col], dtype=float).reshape(len(k[col]), -1) for k in splines]
         sizes = np.array([len(a) for a in arrays], dtype=np.int64)
-        parts.append(table_bytes(np.concatenate(arrays), glue, groups=np.concatenate([[0], np.cumsum(sizes)])))
+        parts.append(table_groups(np.concatenate(arrays), glue, groups=np.concatenate([[0], np.cumsum(sizes)])))
     return [b" 40\n" + k + b"\n 10\n" + c + b"\n 11\n" + f + b"\n" for k, c, f in zip(*parts)]
 
 

@@ -13,7 +13,7 @@ import json
 import numpy as np
 
 from ..network import CurveNetwork
-from .numbers import table_text
+from .numbers import group_texts
 from .polylines import curve_lengths
 
 __all__ = ["network_to_geojson"]
@@ -85,9 +85,9 @@ def _positions(arrays: list, single: bool = False) -> list[str]:
     P = np.concatenate(full)
     glue = [", "] * (P.shape[1] - 1)
     if single:
-        return ["[" + t + "]" for t in table_text(P, glue + [""], groups=np.arange(len(P) + 1))]
+        return ["[" + t + "]" for t in group_texts(P, glue + [""], groups=np.arange(len(P) + 1))]
     sizes = np.array([len(b) for b in blocks], dtype=np.int64)
-    texts = table_text(P, glue + ["], ["], groups=np.concatenate([[0], np.cumsum(sizes)]))
+    texts = group_texts(P, glue + ["], ["], groups=np.concatenate([[0], np.cumsum(sizes)]))
     return ["[[" + t + "]]" if k else "[]" for t, k in zip(texts, sizes.tolist())]
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..network import CurveNetwork
-from .numbers import shortest_rows, table_text
+from .numbers import group_texts, shortest_rows
 from .polylines import curve_lengths
 
 __all__ = ["network_to_graphml", "format_polyline", "parse_polyline"]
@@ -114,4 +114,4 @@ def _polylines(arrays) -> list[str]:
         return ["" for _ in arrays]
     d = full[0].shape[1]
     sizes = np.array([len(a) for a in arrays], dtype=np.int64)
-    return table_text(np.concatenate(full), [" "] * (d - 1) + [";"], groups=np.concatenate([[0], np.cumsum(sizes)]))
+    return group_texts(np.concatenate(full), [" "] * (d - 1) + [";"], groups=np.concatenate([[0], np.cumsum(sizes)]))

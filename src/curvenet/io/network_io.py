@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import CurveNetwork, _jsonable
-from .numbers import rows_text, table_text
+from .numbers import group_texts, rows_text
 from .points import check_readable
 
 __all__ = ["network_to_json", "network_to_obj", "network_to_ply", "read_network", "polyline_vertices"]
@@ -93,7 +93,7 @@ def network_to_obj(net: CurveNetwork) -> str:
     v, ids, off = polyline_arrays(net)
     out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves\n# nodes are vertices 1..{net.n_nodes}\n"]
     out.append(rows_text(v, "v "))
-    lines = table_text((ids + 1).reshape(-1, 1), [" "], groups=off) if net.n_curves else []
+    lines = group_texts((ids + 1).reshape(-1, 1), [" "], groups=off) if net.n_curves else []
     out += [f"g curve_{i}\nl {text}\n" for i, text in enumerate(lines)]
     return "".join(out)
 

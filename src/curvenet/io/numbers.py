@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
-    "table_text", "table_pieces", "REPR_RANGE",
+    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE",
 ]
 
 #: The magnitudes that ``repr`` writes without exponent (and orjson writes the same way):
@@ -100,7 +100,9 @@ def _value_texts(a: np.ndarray, int_cols: Sequence[int]) -> list[list[str]]:
     return [[conv[j](v) for j, v in enumerate(r)] for r in a.tolist()]
 
 
-def _table_input(rows: ArrayLike, glue: Sequence[str | bytes], groups: ArrayLike | None) -> tuple:
+def _table_input(
+    rows: ArrayLike, glue: Sequence[str | bytes], groups: ArrayLike | None
+) -> tuple[np.ndarray, list[bytes], np.ndarray | None]:
     """The checked arguments of :func:`table_bytes`: a C-ordered (n, m) float64 or int64
     array, the glue as bytes, the group offsets (or None)."""
     a = np.asarray(rows)
@@ -109,13 +111,11 @@ def _table_input(rows: ArrayLike, glue: Sequence[str | bytes], groups: ArrayLike
     a = np.ascontiguousarray(a, dtype=np.float64 if a.dtype.kind == "f" else np.int64)
     if a.ndim != 2 or a.shape[1] != len(glue) or not len(glue):
         raise ValueError(f"rows must be (n, {len(glue)}) for {len(glue)} glue strings, got shape {a.shape}")
-    glue = [g.encode() if isinstance(g, str) else bytes(g) for g in glue]
-    return a, glue, None if groups is None else np.asarray(groups, dtype=np.int64)
+    g = [x.encode() if isinstance(x, str) else bytes(x) for x in glue]
+    return a, g, None if groups is None else np.asarray(groups, dtype=np.int64)
 
 
-def table_bytes(
-    rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = (), groups: ArrayLike | None = None
-) -> bytes | list[bytes]:
+def table_bytes(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = ()) -> bytes:
     """Every row of an (n, m) array as text: each value followed by the glue of its column.
 
     The bulk path of every text writer: the numbers of all rows are written in one orjson call
@@ -130,45 +130,55 @@ def table_bytes(
     int_cols : sequence of int
         Columns of a float array that hold integers (of magnitude below 2**53), written as
         integers (``7``, not ``7.0``).
-    groups : (g + 1,) array_like of int, optional
-        Row offsets: return the text of rows ``groups[k]:groups[k + 1]`` for each ``k``, each
-        without the glue after its last value.
 
     Returns
     -------
-    bytes, or list of g bytes with ``groups``
+    bytes
 
     Examples
     --------
     >>> table_bytes([[1.0, 0.5], [2.0, 1e-7]], [" ", "\\n"], int_cols=[0])
     b'1 0.5\\n2 1e-07\\n'
-    >>> table_bytes([[1.0], [2.0], [3.0]], [";"], groups=[0, 2, 2, 3])
+    """
+    a, g, _ = _table_input(rows, glue, None)
+    if not len(a):
+        return b""
+    if a.size < _SMALL or _orjson() is None:
+        return b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))
+    cols = tuple(int_cols) if a.dtype.kind == "f" else ()
+    if a.shape[1] == 1 and not cols:
+        return _bulk(a.ravel()).replace(b",", g[0]) + g[0]
+    body, fill, _ = _marked(a, g, cols, None)
+    return fill(bytes(body))
+
+
+def table_groups(
+    rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
+) -> list[bytes]:
+    """:func:`table_bytes` of each group of rows, each without the glue after its last value.
+
+    Parameters
+    ----------
+    rows, glue, int_cols
+        As for :func:`table_bytes`.
+    groups : (g + 1,) array_like of int
+        Row offsets: group ``k`` is rows ``groups[k]:groups[k + 1]``.
+
+    Returns
+    -------
+    list of g bytes
+
+    Examples
+    --------
+    >>> table_groups([[1.0], [2.0], [3.0]], [";"], groups=[0, 2, 2, 3])
     [b'1.0;2.0', b'', b'3.0']
     """
-    a, glue, off = _table_input(rows, glue, groups)
-    n, m = a.shape
-    if n == 0:
-        return b"" if off is None else [b""] * (len(off) - 1)
-    if a.size < _SMALL or _orjson() is None:
-        texts = _value_texts(a, int_cols)
-        if off is None:
-            return b"".join(t.encode() + g for r in texts for t, g in zip(r, glue))
-        out = []
-        for k0, k1 in zip(off[:-1].tolist(), off[1:].tolist()):
-            b = b"".join(t.encode() + g for r in texts[k0:k1] for t, g in zip(r, glue))
-            out.append(b[: len(b) - len(glue[-1])] if k1 > k0 else b"")
-        return out
-    return _table_bulk(a, glue, tuple(int_cols) if a.dtype.kind == "f" else (), off)
-
-
-def _table_bulk(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None) -> bytes | list[bytes]:
-    """:func:`table_bytes` by orjson (see :func:`_marked`)."""
-    if a.shape[1] == 1 and not int_cols and off is None:
-        return _bulk(a.ravel()).replace(b",", glue[0]) + glue[0]
-    body, fill, group_mark = _marked(a, glue, int_cols, off)
-    if off is None:
-        return fill(body)
-    return _grouped(fill(body).split(group_mark), off)
+    a, g, off = _table_input(rows, glue, groups)
+    assert off is not None
+    if not len(a) or a.size < _SMALL or _orjson() is None:
+        return table_pieces(a, g, groups=off, int_cols=int_cols)[0]  # (the glue in already)
+    body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
+    return _grouped(fill(bytes(body)).split(group_mark), off)
 
 
 def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
@@ -179,14 +189,16 @@ def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
     return out
 
 
-def _marked(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None) -> tuple:
+def _marked(
+    a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None
+) -> tuple[bytearray, Callable[[bytes], bytes], bytes]:
     """The numbers of ``a`` with the comma after each value replaced by its column's glue when
     that is one byte long, by a mark (a control character) otherwise, and by a group mark at the
     end of each group; the ``.0`` of the integer columns deleted.
 
-    Returns the text (a bytearray), the function that replaces the marks by their glue, and the
-    group mark. Only one-byte patterns are searched (``bytes.replace`` of a longer one costs a
-    function call per match).
+    Returns the text, the function that replaces the marks by their glue, and the group mark.
+    Only one-byte patterns are searched (``bytes.replace`` of a longer one costs a function
+    call per match).
     """
     n, m = a.shape
     body = bytearray(_bulk(a.ravel()))
@@ -202,9 +214,8 @@ def _marked(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray |
             mark = free.pop()
             buf[commas[j::m]] = mark
             todo.append((bytes([mark]), g))
-    group_mark = None
+    group_mark = bytes([free.pop()])
     if off is not None:
-        group_mark = bytes([free.pop()])
         ends = off[1:][np.diff(off) > 0]
         buf[commas[ends * m - 1]] = group_mark[0]
     if int_cols:
@@ -216,7 +227,7 @@ def _marked(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray |
         body = body.translate(None, bytes([cut]))
     todo.sort(key=lambda mg: len(mg[1]))
 
-    def fill(text):
+    def fill(text: bytes) -> bytes:
         for mark, g in todo:
             text = text.replace(mark, g)
         return text
@@ -227,7 +238,7 @@ def _marked(a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray |
 def table_pieces(
     rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
 ) -> tuple[list[bytes], Callable[[bytes], bytes]]:
-    """:func:`table_bytes` by groups with the glue put in later, for text around the groups.
+    """:func:`table_groups` with the glue put in later, for text around the groups.
 
     A text made of the groups and text of the caller's (free of control characters other than
     tab and line ends) joined in one piece is passed once to ``fill``, which puts in the glue:
@@ -246,23 +257,32 @@ def table_pieces(
     pieces : list of g bytes
         The groups, with marks where the glue goes.
     fill : callable
-        ``fill(text)``: ``text`` (bytes) with the marks replaced by the glue.
+        ``fill(text)``: ``text`` (bytes) with the marks replaced by the glue (``bytes`` itself
+        when the pieces hold their glue already).
     """
-    a, glue, off = _table_input(rows, glue, groups)
-    if not len(a) or a.size < _SMALL or _orjson() is None:
-        return table_bytes(a, glue, int_cols=int_cols, groups=off), bytes
-    body, fill, group_mark = _marked(a, glue, tuple(int_cols) if a.dtype.kind == "f" else (), off)
+    a, g, off = _table_input(rows, glue, groups)
+    assert off is not None
+    if not len(a):
+        return [b""] * (len(off) - 1), bytes
+    if a.size < _SMALL or _orjson() is None:
+        texts = _value_texts(a, int_cols)
+        out = []
+        for k0, k1 in zip(off[:-1].tolist(), off[1:].tolist()):
+            b = b"".join(t.encode() + x for r in texts[k0:k1] for t, x in zip(r, g))
+            out.append(b[: len(b) - len(g[-1])] if k1 > k0 else b"")
+        return out, bytes
+    body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
     return _grouped(body.split(group_mark), off), fill
 
 
-def table_text(
-    rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] = (), groups: ArrayLike | None = None
-) -> str | list[str]:
-    """:func:`table_bytes` as text (``str``, or a list of ``str`` with ``groups``)."""
-    out = table_bytes(rows, glue, int_cols=int_cols, groups=groups)
-    if isinstance(out, list):
-        return [b.decode("utf-8") for b in out]
-    return out.decode("utf-8")
+def table_text(rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] = ()) -> str:
+    """:func:`table_bytes` as ``str``."""
+    return table_bytes(rows, glue, int_cols=int_cols).decode("utf-8")
+
+
+def group_texts(rows: ArrayLike, glue: Sequence[str], *, groups: ArrayLike, int_cols: Sequence[int] = ()) -> list[str]:
+    """:func:`table_groups` as ``str``."""
+    return [b.decode("utf-8") for b in table_groups(rows, glue, groups=groups, int_cols=int_cols)]
 
 
 def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n") -> str:
@@ -343,7 +363,7 @@ def shortest_rows(rows: ArrayLike, prefix: str = "", sep: str = " ") -> list[str
         return []
     if m == 0:
         return [prefix] * n
-    return [prefix + t for t in table_text(a, [sep] * (m - 1) + [""], groups=np.arange(n + 1))]
+    return [prefix + t for t in group_texts(a, [sep] * (m - 1) + [""], groups=np.arange(n + 1))]
 
 
 def ints_text(values: ArrayLike, sep: str = " ") -> str:
@@ -383,7 +403,7 @@ def int_lists(arrays: Sequence[np.ndarray], sep: str = " ") -> list[str]:
         return []
     sizes = np.array([len(x) for x in arrays], dtype=np.int64)
     flat = np.concatenate(arrays).reshape(-1, 1)
-    return table_text(flat, [sep], groups=np.concatenate([[0], np.cumsum(sizes)]))
+    return group_texts(flat, [sep], groups=np.concatenate([[0], np.cumsum(sizes)]))
 
 
 def int_rows_text(rows: ArrayLike, sep: str = " ", end: str = "\n") -> str:
