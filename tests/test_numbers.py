@@ -86,9 +86,13 @@ def _table_by_hand(a, glue, int_cols=(), groups=None) -> list[str] | str:
     return out
 
 
+@pytest.mark.parametrize("piece", [None, 7], ids=["whole", "in-pieces"])
 @pytest.mark.parametrize("kind", ["normal", "bits", "edges"])
-def test_table_text(kind, bulk):
+def test_table_text(kind, piece, bulk, monkeypatch):
     from curvenet.io.numbers import group_texts, table_pieces, table_text
+
+    if piece:  # the glue put in by pieces of a few bytes
+        monkeypatch.setattr(numbers, "_FILL_PIECE", piece)
 
     rng = np.random.default_rng(3)
     a = _values(rng, 3000)[kind][:3000 // 4 * 4].reshape(-1, 4)
@@ -100,7 +104,7 @@ def test_table_text(kind, bulk):
         want = _table_by_hand(a, glue, [0], groups.tolist())
         assert group_texts(a, glue, int_cols=[0], groups=groups) == want
         pieces, fill = table_pieces(a, glue, int_cols=[0], groups=groups)
-        assert fill(b"|".join(pieces)).decode().split("|") == want
+        assert b"".join(fill(b"|".join(pieces))).decode().split("|") == want
         assert table_text(a[:, 1:], glue[1:]) == _table_by_hand(a[:, 1:], glue[1:])
     i = rng.integers(-2**63, 2**63, size=(500, 2), dtype=np.int64)
     assert table_text(i, [",", "\n"]) == _table_by_hand(i, [",", "\n"])

@@ -1,4 +1,11 @@
-"""DXF writer (extra ``io``, ezdxf): curves as 3D polylines or splines (fitted curves), nodes as points."""
+"""DXF writer (extra ``io``, ezdxf): curves as 3D polylines or splines (fitted curves), nodes as points.
+
+ezdxf writes the document (header, units, tables, layers, objects) without entities; the
+entities are written here as the text ezdxf writes for them, the numbers of all vertices and
+points in bulk (:mod:`curvenet.io.numbers`): ezdxf's Python object per vertex cost 81 s for a
+network of a million points. ``tests/test_writers_extra.py`` reads the file back with ezdxf,
+audits it and compares its entities with those ezdxf builds from the same network.
+"""
 
 from __future__ import annotations
 
@@ -139,30 +146,31 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
     base = 10 ** len(f"{max(last, first):X}")  # decimal-looking handles above the curves'
     keep = np.repeat(~is_spline & (sizes >= 2), sizes)  # the points of the polylines
     vertex_text, fill = _vertex_texts(P[keep], sizes[poly], base, owner)
-    vt = iter(vertex_text)
     spline_texts = dict(zip(spline_data, _spline_texts(list(spline_data.values()))))
-    out = []
-    for i, h in zip(written.tolist(), handles):
-        common = f"  5\n{h:X}\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n{true_color[names[i]]}\n"
-        if not is_spline[i]:
-            out.append(
-                f"  0\nPOLYLINE\n{common}100\nAcDb3dPolyline\n 66\n1\n 10\n0.0\n 20\n0.0\n 30\n0.0\n 70\n"
-                f"{8 + closed[i]}\n  0\nVERTEX\n  5\n".encode()
-            )
-            out.append(next(vt))
-            out.append(
-                f"\n 70\n32\n  0\nSEQEND\n  5\n{h + 1:X}\n330\n{h:X}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n".encode()
-            )
-        else:
+    rgb = [true_color[names[i]] for i in written.tolist()]
+    # the tags of each curve before and after its vertices, all in one % call
+    head = (f"  0\nPOLYLINE\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n%d\n"
+            "100\nAcDb3dPolyline\n 66\n1\n 10\n0.0\n 20\n0.0\n 30\n0.0\n 70\n%d\n  0\nVERTEX\n  5\n\x00"
+            f"\n 70\n32\n  0\nSEQEND\n  5\n%X\n330\n%X\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n\x00")
+    p_idx = np.flatnonzero(~is_spline[written])
+    h = np.asarray(handles, dtype=np.int64)[p_idx]
+    values = np.column_stack([h, np.asarray(rgb, dtype=np.int64)[p_idx], 8 + np.asarray(closed)[poly], h + 1, h])
+    tags = ((head * len(p_idx)) % tuple(values.ravel().tolist())).encode().split(b"\x00")
+    out: list = [b""] * (3 * len(written))
+    for k, (a, b) in enumerate(zip(p_idx.tolist(), vertex_text)):
+        out[3 * a:3 * a + 3] = tags[2 * k], b, tags[2 * k + 1]
+    for k, (i, hh) in enumerate(zip(written.tolist(), handles)):
+        if is_spline[i]:
             degree, control, knots, fit = spline_data[i]
-            out.append(
-                f"  0\nSPLINE\n{common}100\nAcDbSpline\n 70\n{int(closed[i])}\n 71\n{degree}\n"
+            out[3 * k] = (
+                f"  0\nSPLINE\n  5\n{hh:X}\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n{rgb[k]}\n"
+                f"100\nAcDbSpline\n 70\n{int(closed[i])}\n 71\n{degree}\n"
                 f" 72\n{len(knots)}\n 73\n{len(control)}\n 74\n{len(fit)}\n".encode()
             )
-            out.append(spline_texts[i])
+            out[3 * k + 1] = spline_texts[i]
     n_vert = int(keep.sum())
     seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
-    return [fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
+    return [*fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
 
 
 def _xyz_rows(points) -> np.ndarray:
@@ -180,7 +188,7 @@ def _vertex_texts(P: np.ndarray, sizes: np.ndarray, base: int, owner: str) -> tu
     the caller's), and the function that puts in their tags once the caller has joined them with
     its text (:func:`curvenet.io.numbers.table_pieces`)."""
     if not len(sizes):
-        return [], bytes
+        return [], lambda text: [text]
     table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
     mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n100\nAcDbVertex\n100\nAcDb3dPolylineVertex\n 10\n"
     glue = [mid, "\n 20\n", "\n 30\n", "\n 70\n32\n  0\nVERTEX\n  5\n"]
