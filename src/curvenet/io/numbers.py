@@ -200,7 +200,7 @@ def _marked(
 ) -> tuple[bytearray, Callable[[bytes], list[bytes]], bytes]:
     """The numbers of ``a`` with the comma after each value replaced by its column's glue when
     that is one byte long, by a mark (a control character) otherwise, and by a group mark at the
-    end of each group; the ``.0`` of the integer columns deleted.
+    end of each group; the ``.0`` of the integer columns marked for deletion.
 
     Returns the text, the function that replaces the marks by their glue (returning the text in
     pieces, to be joined), and the group mark.
@@ -225,14 +225,13 @@ def _marked(
     if off is not None:
         ends = off[1:][np.diff(off) > 0]
         buf[commas[ends * m - 1]] = group_mark[0]
-    if int_cols:
+    todo.sort(key=lambda mg: len(mg[1]))
+    if int_cols:  # the ".0" of integers goes with the first pass of the glue
         cut = free.pop()
         for j in int_cols:
             buf[commas[j::m] - 1] = cut
             buf[commas[j::m] - 2] = cut
-        del buf
-        body = body.translate(None, bytes([cut]))
-    todo.sort(key=lambda mg: len(mg[1]))
+        todo.insert(0, (bytes([cut]), b""))
 
     def fill_piece(text: bytes) -> bytes:
         for mark, g in todo:
