@@ -197,7 +197,7 @@ def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
 
 def _marked(
     a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None
-) -> tuple[bytearray, Callable[[bytes], list[bytes]], bytes]:
+) -> tuple[bytearray, Callable[[bytes | bytearray], list[bytes | bytearray]], bytes]:
     """The numbers of ``a`` with the comma after each value replaced by its column's glue when
     that is one byte long, by a mark (a control character) otherwise, and by a group mark at the
     end of each group; the ``.0`` of the integer columns marked for deletion.
@@ -233,12 +233,12 @@ def _marked(
             buf[commas[j::m] - 2] = cut
         todo.insert(0, (bytes([cut]), b""))
 
-    def fill_piece(text: bytes) -> bytes:
+    def fill_piece(text: bytes | bytearray) -> bytes | bytearray:
         for mark, g in todo:
             text = text.replace(mark, g)
         return text
 
-    def fill(text: bytes) -> list[bytes]:
+    def fill(text: bytes | bytearray) -> list[bytes | bytearray]:
         if not todo:
             return [text]
         return [fill_piece(text[i:i + _FILL_PIECE]) for i in range(0, len(text), _FILL_PIECE)]
@@ -248,7 +248,7 @@ def _marked(
 
 def table_pieces(
     rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
-) -> tuple[list[bytes], Callable[[bytes], list[bytes]]]:
+) -> tuple[list[bytes], Callable[[bytes | bytearray], list[bytes | bytearray]]]:
     """:func:`table_groups` with the glue put in later, for text around the groups.
 
     A text made of the groups and text of the caller's (free of control characters other than
@@ -286,7 +286,7 @@ def table_pieces(
     return _grouped(body.split(group_mark), off), fill
 
 
-def _as_is(text: bytes) -> list[bytes]:
+def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
     """The ``fill`` of a text that holds its glue already."""
     return [text]
 

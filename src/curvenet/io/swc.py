@@ -137,20 +137,18 @@ def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
     :func:`network_to_swc`), ``count`` samples in all."""
     if not count:
         return ""
-    xyz = np.zeros((count, 3))
-    types = np.empty(count, dtype=np.int64)
+    sizes = np.array([len(pts) for pts, _, _ in blocks], dtype=np.int64)
+    types = np.repeat(np.array([t for _, t, _ in blocks], dtype=np.int64), sizes)
     parents = np.arange(count, dtype=np.int64)  # within a run, the sample before
-    pos = 0
-    for pts, t, parent in blocks:
-        k = len(pts)
-        xyz[pos:pos + k, :d] = pts
-        types[pos:pos + k] = t
-        parents[pos] = parent
-        pos += k
+    parents[np.concatenate([[0], np.cumsum(sizes)[:-1]])] = [parent for _, _, parent in blocks]
     ids = np.arange(1, count + 1)
     if types.max() < _EXACT_INT:  # one table: integers as floats, written as integers
-        table = np.column_stack([ids, types, xyz, parents]).astype(np.float64)
+        table = np.zeros((count, 6))
+        table[:, 0], table[:, 1], table[:, 5] = ids, types, parents
+        table[:, 2:2 + d] = np.concatenate([pts for pts, _, _ in blocks])
         return table_text(table, [" ", " ", " ", " ", f" {radius} ", "\n"], int_cols=(0, 1, 5))
+    xyz = np.zeros((count, 3))
+    xyz[:, :d] = np.concatenate([pts for pts, _, _ in blocks])
     return join_columns([
         int_rows_text(np.column_stack([ids, types])),
         rows_text(xyz, "", " ", f" {radius}\n"),
