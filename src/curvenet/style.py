@@ -112,11 +112,12 @@ def curve_order(curves: Sequence[Curve]) -> list[int]:
     list of int
     """
     n = len(curves)
-    sizes = np.fromiter((len(c.points) for c in curves), dtype=np.int64, count=n)
-    full = [np.asarray(c.points, dtype=float) for c in curves if len(c.points)]
-    if not full or any(p.ndim != 2 or p.shape[1] != full[0].shape[1] for p in full):
+    pts = [c.points for c in curves]
+    sizes = np.fromiter(map(len, pts), dtype=np.int64, count=n)
+    full = [p for p in pts if len(p)]
+    if not full or len({np.shape(p)[1:] for p in full}) != 1 or np.ndim(full[0]) != 2:
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
-    P = np.round(np.concatenate(full), KEY_DECIMALS) + 0.0
+    P = np.round(np.concatenate(full).astype(float, copy=False), KEY_DECIMALS) + 0.0
     if not np.isfinite(P).all():  # (tuples holding nan compare as Python does, not as numpy)
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
     has = sizes > 0
