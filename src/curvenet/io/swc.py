@@ -75,7 +75,7 @@ def network_to_swc(
     if radius is None:
         step = _median_step(net.curves)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
-    node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type))
+    node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type)).tolist()
     at_node: list[list[int]] = [[] for _ in range(n)]
     for i, c in enumerate(net.curves):
         if c.start is not None and c.end is not None:
@@ -84,8 +84,8 @@ def network_to_swc(
                 at_node[int(c.end)].append(i)
     blocks: list[tuple[np.ndarray, int, int]] = []  # runs of samples: (positions, type, parent of the first)
     count = 0  # samples so far
-    sample_of_node = np.zeros(n, dtype=np.int64)  # 0: not written yet
-    used = np.zeros(len(net.curves), dtype=bool)
+    sample_of_node = [0] * n  # 0: not written yet (Python lists: the walk reads them one by one)
+    used = [False] * len(net.curves)
     cut = 0
 
     def add(pts: np.ndarray, t: int, parent: int) -> int:
@@ -97,7 +97,7 @@ def network_to_swc(
         count += len(pts)
         return count
 
-    roots = sorted(range(n), key=lambda j: (val[j] != 1, j))
+    roots = sorted(range(n), key=(val != 1).tolist().__getitem__)  # free ends first (stable)
     for root in roots:
         if sample_of_node[root]:
             continue
@@ -113,7 +113,7 @@ def network_to_swc(
                 a, b = int(c.start or 0), int(c.end or 0)  # curves listed at a node have both
                 pts = c.points if a == j else c.points[::-1]
                 other = b if a == j else a
-                parent = add(pts[1:-1], sample_type, int(sample_of_node[j]))
+                parent = add(pts[1:-1], sample_type, sample_of_node[j])
                 if sample_of_node[other]:
                     cut += 1
                 else:
