@@ -827,3 +827,25 @@ def test_sampled_eye_under_noise_and_density(offset):
     m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
     assert m["exact_topology"]
     assert m["curve_f1"] == 1.0
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.1])
+def test_points_alone_in_space_are_dropped_by_their_neighbourhood_alone(noise):
+    # outliers far from everything (their 4th neighbour beyond SPACING.isolated median
+    # spacings: alone, or a clump of 4) are dropped; the network is the one without them, input
+    # indices included (they come last). A clump of 5 and a point off the curve are not alone.
+    from curvenet.methods.robust import estimate
+    from curvenet.methods.robust.thresholds import SPACING
+
+    P = np.vstack([_seg([-30, 0, 0], [30, 0, 0]), _seg([0, 1, 0], [0, 30, 0])])
+    P = _noisy(P, noise) if noise else P
+    far = SPACING.isolated * H
+    lone = np.array([[0, -3 * far, 0], [4 * far, 4 * far, 0], [-2 * far, 0, far]])
+    clump4 = np.array([0, 0, -2 * far]) + np.eye(4, 3) * 2 * H
+    Q = np.vstack([P, lone, clump4])
+    est = estimate(Q)  # (the whole cloud's: the outliers move the median noise a little)
+    net = reconstruct_robust(Q, estimates=est)
+    assert net == reconstruct_robust(P, estimates=est) and net.parameters["isolated_dropped"] == 7
+    clump5 = np.array([-2 * far, -2 * far, 0]) + np.r_[np.eye(4, 3), -np.eye(1, 3)] * 2 * H
+    near = np.array([[10, 0.5 * far, 0]])
+    assert reconstruct_robust(np.vstack([P, clump5, near])).parameters["isolated_dropped"] == 0

@@ -4,7 +4,8 @@ Every radius is in units of the *local* sampling spacing ``h`` of a point, and g
 estimated noise. The stages, each a module of this package (docs/method.md shows each on a
 small example):
 
-1. :mod:`.frames` -- neighbours, local spacing, duplicate samples, tangents, noise level;
+1. :mod:`.frames` -- neighbours, local spacing, duplicate samples, points alone in space
+   (outliers), tangents, noise level;
 2. :mod:`.graph` -- links along the tangents (strand links cut under noise);
 3. :mod:`.junctions` -- the shell test: which points are junction points, and their regions;
 4. :mod:`.chains` -- the chains between regions, ordered;
@@ -35,7 +36,7 @@ from ..stages import ROBUST_SHARES, OnStage, report_stage
 from . import kernels as _k
 from .chains import trace_chains
 from .curves import build_curves, drop_spikes, fit_curves
-from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, lex_order, local_spacing,
+from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, isolated, lex_order, local_spacing,
                      median_noise, median_spacing, neighbours, tangents)
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
@@ -139,9 +140,15 @@ def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_s
     fr = frames(P, nb, estimates)  # 2. tangents and noise
     P, order, nb, fr = _without_duplicates(P, order, nb, fr, prm, estimates)
     params_out["duplicates_dropped"] = int(N - len(P))
-    params_out.update(_spacing_report(prm, nb.h, fr))
+    n_kept, h_all = len(P), nb.h
+    P, order, nb, fr = _without_isolated(P, order, nb, fr, prm)
+    params_out["isolated_dropped"] = int(n_kept - len(P))
+    params_out.update(_spacing_report(prm, h_all if nb is None else nb.h, fr))
+    del h_all
     if estimates is not None:
         params_out["estimates_given"] = True
+    if nb is None:  # too few points left that are not alone in space: no curve
+        return CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
     graph = linked_graph(P, nb, fr, prm)  # 3. links
     tm["graph"] = time.perf_counter() - t1
     # memory: every intermediate is dropped as soon as no later stage reads it (at 1e7 points
@@ -220,6 +227,22 @@ def _without_duplicates(P, order, nb, fr, prm: RobustParams, est: Estimates | No
     P, order = P[keep], order[keep]
     nb = neighbours(P, prm)
     return P, order, nb, frames(P, nb, est)
+
+
+def _without_isolated(P, order, nb, fr, prm: RobustParams):
+    """Points, internal order, neighbours and frames without the points alone in space (see
+    :func:`.frames.isolated`): those are dropped and stages 1-2 redone on the rest, with the
+    median spacing and noise level found on all of them (those of :func:`estimate`); the inputs
+    themselves when nothing is dropped. When fewer than ``DEFAULTS.min_points`` are left, the
+    neighbours and frames are None (no network)."""
+    keep = isolated(nb, fr.hmed)
+    if keep is None:
+        return P, order, nb, fr
+    P, order = P[keep], order[keep]
+    if len(P) < DEFAULTS.min_points:
+        return P, order, None, fr
+    nb = neighbours(P, prm)
+    return P, order, nb, frames(P, nb, Estimates(fr.hmed, fr.sigma))
 
 
 def _spacing_report(prm: RobustParams, h: np.ndarray, fr) -> dict:
