@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from curvenet import synth
-from curvenet.bench import _seed
+from curvenet.bench import run_seed
 from curvenet.metrics import deviation
 from curvenet.reconstruct import reconstruct
 
@@ -58,7 +58,7 @@ def measure(models, conditions) -> list[dict]:
         h = synth.h_of(truth)
         for cond in conditions:
             kw = CONDITIONS[cond]
-            pts, _ = synth.sample(truth, rng=_seed(name, cond), **kw)
+            pts, _ = synth.sample(truth, rng=run_seed(name, cond), **kw)
             before = reconstruct(pts, fit=False)
             t0 = time.perf_counter()
             after = reconstruct(pts)

@@ -64,6 +64,7 @@ ROW_TITLE = 0.6
 
 #: The figures, in stage order: file name -> drawing function name.
 FIGURES = {
+    "0-order.png": "draw_order",
     "1-spacing.png": "draw_spacing",
     "2-tangents.png": "draw_tangents",
     "3-graph.png": "draw_graph",
@@ -392,6 +393,24 @@ def _region_colors(n: int) -> list[str]:
     return [PALETTE[i % len(PALETTE)] for i in range(n)]
 
 
+def draw_order(runs: list[StageRun], path: Path) -> Path:
+    """Stage 0: the points as they arrive and as they are handed on (sorted by coordinates),
+    each coloured by its number; in the internal order consecutive numbers are joined."""
+    fig, grid = _grid(runs, 2)
+    for row, run in zip(grid, runs):
+        for ax, X, what in ((row[0], run.example.points, "input order"),
+                            (row[1], run.P_in, "internal order (sorted by coordinates)")):
+            n = len(X)
+            if X is run.P_in:
+                ax.plot(*X.T[:2], color=POINT_COLOR, lw=0.5, alpha=0.5, zorder=1)
+            sc = ax.scatter(*X.T[:2], s=_marker_size(run, False), c=np.arange(n), cmap="viridis",
+                            linewidths=0, zorder=2)
+            _frame(ax, run)
+            ax.set_title(f"{run.example.title}\n{what}", fontsize="medium")
+        fig.colorbar(sc, ax=row[1], shrink=0.7, label="point number")
+    return _save(fig, path)
+
+
 def draw_spacing(runs: list[StageRun], path: Path) -> Path:
     """Stage 1: the input points coloured by their local spacing h (duplicates dropped marked)."""
     fig, axes = _figure(len(runs), ROW_MAX)
@@ -708,6 +727,10 @@ def field_comments(source: str) -> dict[str, dict[str, str]]:
     return out
 
 
+#: What starts the part of a field's comment that says where its value came from (the origin
+#: column of the tables).
+ORIGIN = " origin: "
+
 _ROLE = re.compile(r":\w+:`~?\.*([\w.]+)`")
 
 
@@ -732,9 +755,10 @@ def group_table(name: str) -> str:
     group = getattr(thresholds, name)
     comments = field_comments(Path(thresholds.__file__).read_text())[type(group).__name__]
     doc = " ".join((type(group).__doc__ or "").split())
-    rows = [f"*`thresholds.{name}`: {_md(doc)}*", "", "| name | value | meaning |", "|---|---|---|"]
+    rows = [f"*`thresholds.{name}`: {_md(doc)}*", "", "| name | value | meaning | origin |", "|---|---|---|---|"]
     for field, value in zip(group._fields, group):
-        rows.append(f"| `{field}` | {_value(value)} | {_md(comments[field])} |")
+        meaning, _, origin = comments[field].partition(ORIGIN)
+        rows.append(f"| `{field}` | {_value(value)} | {_md(meaning)} | {_md(origin)} |")
     return "\n".join(rows)
 
 

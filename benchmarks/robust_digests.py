@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from curvenet import synth
-from curvenet.bench import CONDITIONS, _seed
+from curvenet.bench import CONDITIONS, run_seed
 from curvenet.reconstruct import reconstruct
 
 STORE = Path(__file__).resolve().parents[1] / "tests" / "data" / "robust_digests.json"
@@ -87,12 +87,12 @@ def points_of(run_id: str) -> np.ndarray | None:
         _, m, c, k = parts
         truth = synth.model(m)
         cond = CONDITION_NAMES[c]
-        return synth.sample(truth, rng=_seed(m, cond) + int(k), **CONDITIONS[cond])[0]
+        return synth.sample(truth, rng=run_seed(m, cond) + int(k), **CONDITIONS[cond])[0]
     from curvenet.synth import cassie
 
     if not cassie.available():
         return None
-    pts = synth.sample(cassie.load(parts[1]), h=CASSIE_H, rng=_seed("cassie", parts[1]))[0]
+    pts = synth.sample(cassie.load(parts[1]), h=CASSIE_H, rng=run_seed("cassie", parts[1]))[0]
     return pts if len(pts) <= CASSIE_MAX_POINTS else None
 
 

@@ -172,8 +172,10 @@ def writers(n: int, repeat: int, cache: Path, out: Path, exts=()) -> list[tuple]
         path.unlink()
         flag = "ok" if best <= WRITE_TARGET_S else "OVER"
         rows.append((ext, best, best / floor, size, flag))
-        print(f"  {ext:18s} {best:7.3f} s (cpu {cpu:6.3f} s)  {best / floor:6.2f} x query  {size:8.1f} MB  "
-              f"target {WRITE_TARGET_S} s: {flag}", flush=True)
+        json_best = next((r[1] for r in rows if r[0] == ".json"), None)
+        vs_json = f"  {best / json_best:5.2f} x json" if json_best else ""
+        print(f"  {ext:18s} {best:7.3f} s (cpu {cpu:6.3f} s)  {best / floor:6.2f} x query{vs_json}  {size:8.1f} MB  "
+              f"load {os.getloadavg()[0]:4.1f}  target {WRITE_TARGET_S} s: {flag}", flush=True)
     return rows
 
 

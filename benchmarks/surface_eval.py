@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from curvenet import synth
-from curvenet.bench import _seed
+from curvenet.bench import run_seed
 from curvenet.reconstruct import reconstruct
 from curvenet.surfacing import SurfaceCheckWarning, surface
 from curvenet.synth import cassie, surfaces
@@ -70,10 +70,10 @@ def networks(kind: str, names, source: str, cache: Path | None):
             continue
         if kind in ("synth", "surfaces"):
             truth = synth.model(name) if kind == "synth" else surfaces.surface_model(name).network
-            h, rng = synth.h_of(truth), _seed(name, "clean")
+            h, rng = synth.h_of(truth), run_seed(name, "clean")
         else:
             truth = cassie.load(name)
-            h, rng = CASSIE_H, _seed("cassie", name)
+            h, rng = CASSIE_H, run_seed("cassie", name)
         if source == "truth":
             yield name, truth
             continue

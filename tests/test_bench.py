@@ -35,7 +35,7 @@ def test_rows_cover_models_and_conditions(rows):
 def test_rows_are_the_metrics_of_the_method(rows):
     r = next(x for x in rows if x["model"] == "cube" and x["condition"] == "noise 0.2h")
     truth = synth.model("cube")
-    pts, _ = synth.sample(truth, rng=bench._seed("cube", "noise 0.2h"), noise=0.2)
+    pts, _ = synth.sample(truth, rng=bench.run_seed("cube", "noise 0.2h"), noise=0.2)
     assert r["N_d"] == len(pts)
     net = rec.reconstruct(pts, method="emst")
     m = compare(net, truth, h=synth.h_of(truth))
@@ -163,7 +163,7 @@ def test_figures(tmp_path):
 def test_method_vs_emst_data():
     data = bench.method_vs_emst("fig8", "emst", condition="noise 0.2h")
     truth = synth.model("fig8")
-    pts, _ = synth.sample(truth, rng=bench._seed("fig8", "noise 0.2h"), noise=0.2)
+    pts, _ = synth.sample(truth, rng=bench.run_seed("fig8", "noise 0.2h"), noise=0.2)
     np.testing.assert_array_equal(data["points"], pts)
     assert (data["true_N_n"], data["true_N_c"]) == (truth.n_nodes, truth.n_curves)
     assert [d["method"] for d in data["panels"]] == ["emst", "emst"]

@@ -135,6 +135,30 @@ def test_noisy_scene_equals_one_process(client, tmp_path):
     assert net.parameters["clean"] is False and net.parameters["noise"] == one.parameters["noise"]
 
 
+def test_corridor_with_outliers_equals_one_process(client, tmp_path):
+    """Noise and 1.5% outliers (the corridor of the scale benchmark, 5 spans): an outlier's
+    spacing, and every radius of it, reached tens of median spacings, beyond the halo, so tiles
+    found junctions and ends the whole cloud did not (64 nodes against 60 before the method
+    dropped the points alone in space)."""
+    from curvenet.synth.corridor import corridor_layout, corridor_span
+
+    lay = corridor_layout(5, wires=4, rng=1)
+    P = np.vstack([corridor_span(lay, i, noise=0.03, outliers=0.015, rng=1) for i in range(lay.n_spans + 1)])
+    one = reconstruct(P)
+    net = reconstruct_tiled(_save(tmp_path, P), tiles=60.0, client=client)
+    assert net.parameters["tiles"] > 30
+    _assert_same(one, net, one.parameters["spacing"])
+    assert one.parameters["isolated_dropped"] > 0.5 * 0.015 * len(P)
+
+
+def test_the_halo_holds_the_isolation_test_of_every_point_within_the_reach():
+    from curvenet.distributed.halo import HALO_MARGIN, interaction_reach
+    from curvenet.methods.robust.thresholds import SPACING
+
+    in_h, _ = interaction_reach()
+    assert HALO_MARGIN * in_h >= in_h + SPACING.isolated
+
+
 @pytest.fixture(scope="module")
 def tree3d():
     from curvenet import synth

@@ -70,3 +70,45 @@ def test_empty_and_small(bulk):
     assert rows_text([[1.0, 2.0]], "v ") == "v 1.0 2.0\n"
     assert join_columns(["a\nbb\n", "1\n2\n"]) == "a 1\nbb 2\n"
     assert join_columns(["", ""]) == ""
+
+
+def _table_by_hand(a, glue, int_cols=(), groups=None) -> list[str] | str:
+    def text(v, j):
+        return str(int(v)) if (isinstance(v, int) or j in int_cols) else repr(v)
+
+    rows = ["".join(text(v, j) + g for j, (v, g) in enumerate(zip(r, glue))) for r in a.tolist()]
+    if groups is None:
+        return "".join(rows)
+    out = []
+    for k0, k1 in zip(groups[:-1], groups[1:]):
+        t = "".join(rows[k0:k1])
+        out.append(t[: len(t) - len(glue[-1])] if k1 > k0 else "")
+    return out
+
+
+@pytest.mark.parametrize("piece", [None, 7], ids=["whole", "in-pieces"])
+@pytest.mark.parametrize("kind", ["normal", "bits", "edges"])
+def test_table_text(kind, piece, bulk, monkeypatch):
+    from curvenet.io.numbers import group_texts, table_pieces, table_text
+
+    if piece:  # the glue put in by pieces of a few bytes
+        monkeypatch.setattr(numbers, "_FILL_PIECE", piece)
+
+    rng = np.random.default_rng(3)
+    a = _values(rng, 3000)[kind][:3000 // 4 * 4].reshape(-1, 4)
+    a[:, 0] = rng.integers(-10**15, 10**15, size=len(a))  # an integer column among floats
+    a[::7, 0] = 0
+    groups = np.sort(np.r_[0, rng.integers(0, len(a), 40), len(a), len(a), 0, 3, 3])
+    for glue in (["\n 10\n", ",", ", ", "\nVERTEX\n"], [" ", " ", " ", "\n"], ["", "x", ";", ""]):
+        assert table_text(a, glue, int_cols=[0]) == _table_by_hand(a, glue, [0])
+        want = _table_by_hand(a, glue, [0], groups.tolist())
+        assert group_texts(a, glue, int_cols=[0], groups=groups) == want
+        pieces, fill = table_pieces(a, glue, int_cols=[0], groups=groups)
+        assert b"".join(fill(b"|".join(pieces))).decode().split("|") == want
+        assert table_text(a[:, 1:], glue[1:]) == _table_by_hand(a[:, 1:], glue[1:])
+    i = rng.integers(-2**63, 2**63, size=(500, 2), dtype=np.int64)
+    assert table_text(i, [",", "\n"]) == _table_by_hand(i, [",", "\n"])
+    assert table_text(np.zeros((0, 2)), [" ", "\n"]) == ""
+    assert group_texts(np.zeros((0, 2)), [" ", "\n"], groups=[0, 0, 0]) == ["", ""]
+    with pytest.raises(ValueError):
+        table_text(np.zeros((3, 2)), ["\n"])

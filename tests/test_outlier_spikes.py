@@ -29,7 +29,7 @@ def test_outliers_with_noise_leave_every_curve(name, monkeypatch):
     # benchmark sampling: an outlier 2.6-2.7h off a curve was a sample of that curve (F1 0.86-0.88)
     cond = "outliers 2% + noise 0.1h"
     truth = synth.model(name)
-    pts, _ = synth.sample(truth, rng=bench._seed(name, cond), **bench.EXTRA_CONDITIONS[cond])
+    pts, _ = synth.sample(truth, rng=bench.run_seed(name, cond), **bench.EXTRA_CONDITIONS[cond])
     h = synth.h_of(truth)
     assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] == 1.0
     # the spikes' effect, without the fit (which would pull a spike towards its curve too)

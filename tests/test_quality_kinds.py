@@ -10,7 +10,7 @@ from curvenet.reconstruct import reconstruct
 
 def _score(name, condition="clean"):
     truth = synth.model(name)
-    pts, _ = synth.sample(truth, rng=bench._seed(name, condition), **bench.CONDITIONS[condition])
+    pts, _ = synth.sample(truth, rng=bench.run_seed(name, condition), **bench.CONDITIONS[condition])
     return compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
 
 
@@ -36,7 +36,7 @@ def test_tangent_junctions_from_5_degrees_are_placed_within_2h():
 
     truth = synth.model("tangent")
     h = synth.h_of(truth)
-    pts, _ = synth.sample(truth, rng=bench._seed("tangent", "clean"))
+    pts, _ = synth.sample(truth, rng=bench.run_seed("tangent", "clean"))
     net = reconstruct(pts, method="robust")
     found = net.nodes[net.valence == 3]
     for k, ang in enumerate(TANGENT_ANGLES):
@@ -50,7 +50,7 @@ def test_finer_split_scale_stays_clear_of_the_noise(monkeypatch):
     # junction (the benchmark's crossing, sampling offset 6: curve F1 0.57 without the guard)
     truth = synth.model("crossing")
     cond = "noise 0.3h + density x3"
-    pts, _ = synth.sample(truth, rng=bench._seed("crossing", cond) + 6, **bench.CONDITIONS[cond])
+    pts, _ = synth.sample(truth, rng=bench.run_seed("crossing", cond) + 6, **bench.CONDITIONS[cond])
     h = synth.h_of(truth)
     guarded = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(fine_noise=0.0))

@@ -607,6 +607,14 @@ TESTED = (R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.t
 
 def test_every_repair_in_the_order_has_its_tests_here():
     assert set(R.ORDER) <= set(TESTED)
+    # each one: a test of the failure it fixes and of a near miss it leaves, named after it
+    names = [n for n, f in globals().items() if n.startswith("test_") and callable(f)]
+    near = {r.__name__ for r, _, _ in _NEAR_MISSES}
+    for repair in set(R.ORDER):
+        own = [n for n in names if n.startswith(f"test_{repair.__name__}_")]
+        assert len(own) >= 2, f"{repair.__name__}: {own}"
+        assert repair.__doc__ and repair.__doc__.strip(), f"{repair.__name__} has no docstring"
+        assert repair.__name__ in near or any("leave" in n or "keep" in n for n in own), repair.__name__
 
 
 def test_run_repairs_mends_a_split_crossing():

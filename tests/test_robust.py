@@ -566,11 +566,11 @@ def test_sampled_mug_close_junctions_under_noise_and_density():
     # the handle meets the line 12.5h above the ring: with noise 0.3h and spacing up to 1.3h
     # the widened shell (about 10h) flags both junctions as one region
     from curvenet import synth
-    from curvenet.bench import _seed
+    from curvenet.bench import run_seed
     from curvenet.metrics import compare
 
     truth = synth.model("mug")
-    pts, _ = synth.sample(truth, rng=_seed("mug", "noise 0.3h + density x3"), noise=0.3, density_ratio=3.0)
+    pts, _ = synth.sample(truth, rng=run_seed("mug", "noise 0.3h + density x3"), noise=0.3, density_ratio=3.0)
     m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
     assert m["exact_topology"]
     assert m["curve_f1"] == 1.0
@@ -583,11 +583,11 @@ def test_sampled_tree_short_leaves_under_noise_and_density(offset):
     # at a free end, and the leaf joined its junction's region; the split of large regions
     # now also keeps a junction and a free-end tip apart (joined by the leaf)
     from curvenet import synth
-    from curvenet.bench import _seed
+    from curvenet.bench import run_seed
     from curvenet.metrics import compare
 
     truth = synth.model("tree")
-    pts, _ = synth.sample(truth, rng=_seed("tree", "noise 0.3h + density x3") + offset, noise=0.3,
+    pts, _ = synth.sample(truth, rng=run_seed("tree", "noise 0.3h + density x3") + offset, noise=0.3,
                           density_ratio=3.0)
     m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
     assert m["exact_topology"]
@@ -599,11 +599,11 @@ def test_sampled_loop_with_a_sharp_corner_is_not_a_zigzag():
     # (sampling 7): links across the corner's legs made the loop, ordered by its distance
     # from the cut point, run back and forth between them all along; reordered, it is exact
     from curvenet import synth
-    from curvenet.bench import _seed
+    from curvenet.bench import run_seed
     from curvenet.metrics import compare
 
     truth = synth.model("corners")
-    pts, _ = synth.sample(truth, rng=_seed("corners", "noise 0.3h + density x3") + 7, noise=0.3,
+    pts, _ = synth.sample(truth, rng=run_seed("corners", "noise 0.3h + density x3") + 7, noise=0.3,
                           density_ratio=3.0)
     m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
     assert m["exact_topology"]
@@ -649,11 +649,11 @@ def test_sampled_sharp_spike_is_not_a_zigzag():
     # along a chord across the spike, so the curve ran back and forth between the legs (its
     # Hausdorff distance 2.05h); the curve's points are now reordered into a shorter path
     from curvenet import synth
-    from curvenet.bench import _seed
+    from curvenet.bench import run_seed
     from curvenet.metrics import compare
 
     truth = synth.model("corners")
-    pts, _ = synth.sample(truth, rng=_seed("corners", "noise 0.3h + density x3") + 4, noise=0.3,
+    pts, _ = synth.sample(truth, rng=run_seed("corners", "noise 0.3h + density x3") + 4, noise=0.3,
                           density_ratio=3.0)
     net = reconstruct_robust(pts)
     m = compare(net, truth, h=synth.h_of(truth))
@@ -819,11 +819,33 @@ def test_sampled_eye_under_noise_and_density(offset):
     # three curves 2.5h apart under noise 0.3h and spacing up to 2h: links across the strands
     # (rungs of a ladder) flagged the plateau as junctions; the strand test cuts them
     from curvenet import synth
-    from curvenet.bench import _seed
+    from curvenet.bench import run_seed
     from curvenet.metrics import compare
 
     truth = synth.model("eye")
-    pts, _ = synth.sample(truth, rng=_seed("eye", "noise 0.3h + density x3") + offset, noise=0.3, density_ratio=3.0)
+    pts, _ = synth.sample(truth, rng=run_seed("eye", "noise 0.3h + density x3") + offset, noise=0.3, density_ratio=3.0)
     m = compare(reconstruct_robust(pts), truth, h=synth.h_of(truth))
     assert m["exact_topology"]
     assert m["curve_f1"] == 1.0
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.1])
+def test_points_alone_in_space_are_dropped_by_their_neighbourhood_alone(noise):
+    # outliers far from everything (their 4th neighbour beyond SPACING.isolated median
+    # spacings: alone, or a clump of 4) are dropped; the network is the one without them, input
+    # indices included (they come last). A clump of 5 and a point off the curve are not alone.
+    from curvenet.methods.robust import estimate
+    from curvenet.methods.robust.thresholds import SPACING
+
+    P = np.vstack([_seg([-30, 0, 0], [30, 0, 0]), _seg([0, 1, 0], [0, 30, 0])])
+    P = _noisy(P, noise) if noise else P
+    far = SPACING.isolated * H
+    lone = np.array([[0, -3 * far, 0], [4 * far, 4 * far, 0], [-2 * far, 0, far]])
+    clump4 = np.array([0, 0, -2 * far]) + np.eye(4, 3) * 2 * H
+    Q = np.vstack([P, lone, clump4])
+    est = estimate(Q)  # (the whole cloud's: the outliers move the median noise a little)
+    net = reconstruct_robust(Q, estimates=est)
+    assert net == reconstruct_robust(P, estimates=est) and net.parameters["isolated_dropped"] == 7
+    clump5 = np.array([-2 * far, -2 * far, 0]) + np.r_[np.eye(4, 3), -np.eye(1, 3)] * 2 * H
+    near = np.array([[10, 0.5 * far, 0]])
+    assert reconstruct_robust(np.vstack([P, clump5, near])).parameters["isolated_dropped"] == 0

@@ -183,12 +183,12 @@ def test_dxf_unitless_by_default_units_on_request(tmp_path):
     from curvenet.io.dxf import network_to_dxf
 
     net = sample_network(3)
-    (tmp_path / "a.dxf").write_text(network_to_dxf(net))
+    (tmp_path / "a.dxf").write_bytes(network_to_dxf(net))
     assert ezdxf.readfile(tmp_path / "a.dxf").header["$INSUNITS"] == 0
-    (tmp_path / "b.dxf").write_text(network_to_dxf(net, units="mm"))
+    (tmp_path / "b.dxf").write_bytes(network_to_dxf(net, units="mm"))
     doc = ezdxf.readfile(tmp_path / "b.dxf")
     assert doc.header["$INSUNITS"] == ezdxf.units.MM and doc.header["$MEASUREMENT"] == 1
-    (tmp_path / "c.dxf").write_text(network_to_dxf(net, units="in"))
+    (tmp_path / "c.dxf").write_bytes(network_to_dxf(net, units="in"))
     assert ezdxf.readfile(tmp_path / "c.dxf").header["$INSUNITS"] == ezdxf.units.IN
     with pytest.raises(InputError, match="DXF units"):
         network_to_dxf(net, units="parsec")

@@ -7,9 +7,14 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+import sys
+from pathlib import Path
+
 from curvenet import Curve, CurveNetwork
 from curvenet.errors import InputError
 from curvenet.io import WRITERS, write_network
+
+sys.path.insert(0, str(Path(__file__).parent))
 
 
 def sample_network(d: int = 3) -> CurveNetwork:
@@ -103,6 +108,83 @@ def test_dxf_splines_are_b_splines_through_the_points(net, tmp_path):
             d0 = np.array(ctrl_only.derivative(knots[0], 1)[1])
             d1 = np.array(ctrl_only.derivative(knots[-1], 1)[1])
             np.testing.assert_allclose(d0, d1, rtol=1e-6, atol=1e-9)
+
+
+def _ezdxf_built(net, splines):
+    """The drawing the DXF writer made through ezdxf's objects before it wrote the text itself
+    (issue 22): the reference its entities must equal."""
+    import ezdxf
+
+    from curvenet.io.dxf import _fit_points, _interpolating_bspline, _MIN_LOOP
+    from curvenet.style import curve_colors
+
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    colors = curve_colors(net)
+    for i, c in enumerate(net.curves):
+        pts = xyz(c.points) if len(c.points) else np.zeros((0, 3))
+        if len(pts) < 2:
+            continue
+        fit = _fit_points(pts, c.closed) if splines else pts[:0]
+        if len(fit) >= (_MIN_LOOP if c.closed else 3):
+            degree, control, knots = _interpolating_bspline(fit, c.closed)
+            e = msp.add_spline(dxfattribs={"layer": "CURVES"})
+            e.dxf.degree = degree
+            e.control_points, e.knots, e.fit_points = control.tolist(), knots.tolist(), fit.tolist()
+            e.closed = bool(c.closed)
+        else:
+            e = msp.add_polyline3d(pts.tolist(), close=bool(c.closed), dxfattribs={"layer": "CURVES"})
+        e.rgb = tuple(int(colors[i][k:k + 2], 16) for k in (1, 3, 5))
+    for p in xyz(net.nodes) if len(net.nodes) else []:
+        msp.add_point(p.tolist(), dxfattribs={"layer": "NODES"})
+    return doc
+
+
+def _dxf_networks():
+    from sample_networks import writer_networks
+
+    nets = {f"sample{d}": sample_network(d) for d in (2, 3)}
+    nets.update({k: v for k, v in writer_networks().items() if k != "theta2"})
+    short = [Curve(np.array([[0.0, 0, 0], [1, 2, 0.5], [2, 0, 1]]), 0, 1),  # a degree-2 spline
+             Curve(np.array([[0.0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 1]]), 0, 1),  # a repeated point
+             Curve(np.array([[5.0, 5, 5]]), None, None), Curve(np.zeros((0, 3)), None, None),
+             Curve(np.array([[0.0, 0, 0], [1, 1, 0], [0, 0, 0]]), 0, 0, closed=True)]
+    nets["short"] = CurveNetwork(np.array([[0.0, 0, 0], [2, 0, 1]]), short)
+    return nets
+
+
+@pytest.mark.parametrize("splines", [False, True], ids=["polylines", "splines"])
+@pytest.mark.parametrize("units", [None, "mm"])
+def test_dxf_text_equals_ezdxf_objects_and_audits(splines, units, tmp_path):
+    """The DXF written as text (issue 22) loads in ezdxf, passes its audit untouched, and holds
+    the entities ezdxf builds from the same network: types, layers, colours, flags, and every
+    coordinate, knot and control point bit for bit; handles distinct and below $HANDSEED."""
+    ezdxf = pytest.importorskip("ezdxf")
+    from curvenet.io.dxf import network_to_dxf
+
+    for name, net in _dxf_networks().items():
+        path = tmp_path / f"{name}.dxf"
+        path.write_bytes(network_to_dxf(net, splines=splines, units=units))
+        doc = ezdxf.readfile(path)
+        audit = doc.audit()
+        assert not audit.errors and not audit.fixes, (name, [str(f.message) for f in audit.fixes])
+        assert doc.header["$INSUNITS"] == (4 if units else 0)
+        got, want = list(doc.modelspace()), list(_ezdxf_built(net, splines).modelspace())
+        assert [e.dxftype() for e in got] == [e.dxftype() for e in want], name
+        for a, b in zip(got, want):
+            assert a.dxf.layer == b.dxf.layer and a.rgb == b.rgb, name
+            if a.dxftype() == "POINT":
+                assert tuple(a.dxf.location) == tuple(b.dxf.location)
+            elif a.dxftype() == "POLYLINE":
+                assert a.is_3d_polyline and a.is_closed == b.is_closed
+                assert [tuple(v.dxf.location) for v in a.vertices] == [tuple(v.dxf.location) for v in b.vertices]
+            else:
+                assert (a.dxf.degree, a.closed) == (b.dxf.degree, b.closed)
+                for attr in ("control_points", "knots", "fit_points"):
+                    assert np.array_equal(np.array(getattr(a, attr)), np.array(getattr(b, attr))), (name, attr)
+        handles = [e.dxf.handle for e in doc.entitydb.values()]
+        assert len(set(handles)) == len(handles)
+        assert max(int(h, 16) for h in handles) < int(doc.header["$HANDSEED"], 16)
 
 
 def test_dxf_splines_default_follows_the_fit(tmp_path):

@@ -33,6 +33,7 @@ from .reconstruct import METHODS, reconstruct
 
 __all__ = [
     "CONDITIONS",
+    "run_seed",
     "EXTRA_CONDITIONS",
     "REALDEV_CONDITIONS",
     "QUICK_MODELS",
@@ -88,7 +89,10 @@ _ORDER = ("robust", "paper-tuned", "paper", "emst")
 _QUALITY = ("node_f1", "curve_f1", "exact_topology", "node_offset_h", "coverage", "chamfer_h")
 
 
-def _seed(*parts: str) -> int:
+def run_seed(*parts: str) -> int:
+    """The sampling seed of a benchmark run named by ``parts`` (e.g. model and condition): the
+    CRC-32 of the parts joined by ``/``, so every script that repeats a run samples the same
+    points (``benchmarks/robust_digests.py`` does)."""
     return zlib.crc32("/".join(parts).encode())
 
 
@@ -257,7 +261,7 @@ def run_bench(
         h = synth.h_of(truth)
         tuned = None
         for cond in conditions:
-            pts, _ = synth.sample(truth, rng=_seed(name, cond) + seed, **allc[cond])
+            pts, _ = synth.sample(truth, rng=run_seed(name, cond) + seed, **allc[cond])
             if tune_on == "each":
                 tuned = None
             for method in methods:
@@ -267,7 +271,7 @@ def run_bench(
                         if tune_on == "each":
                             tuned, _ = tune_paper(pts, truth, h=h, grid=grid)
                         else:
-                            clean, _ = synth.sample(truth, rng=_seed(name, "clean") + seed)
+                            clean, _ = synth.sample(truth, rng=run_seed(name, "clean") + seed)
                             tuned, _ = tune_paper(clean, truth, h=h, grid=grid)
                     params = dict(tuned)
                 row = _run_one(method, pts, truth, h, params)
@@ -327,7 +331,7 @@ def run_cassie(
     for name in names:
         truth = cassie.load(name)
         gap = cassie.min_separation(truth, within=10 * h) / h
-        pts, _ = synth.sample(truth, h=h, rng=_seed("cassie", name))
+        pts, _ = synth.sample(truth, h=h, rng=run_seed("cassie", name))
         tuned = None
         for method in methods:
             if max_points is not None and len(pts) > max_points:
@@ -403,7 +407,7 @@ def run_realdev(methods: Iterable[str] | None = None, names: Iterable[str] | Non
         truth = realdev.load(name)
         h = synth.h_of(truth)
         for cond in conditions:
-            pts, _ = synth.sample(truth, rng=_seed("realdev", name, cond) + seed, **allc[cond])
+            pts, _ = synth.sample(truth, rng=run_seed("realdev", name, cond) + seed, **allc[cond])
             for method in methods:
                 row = _run_one(method, pts, truth, h, {})
                 row.update(dataset="realdev", model=name, kind=truth.parameters["kind"], condition=cond, h=h)
@@ -437,7 +441,7 @@ def eps_sweep(model: str = "tree", epsilons: Iterable[float] | None = None, *, c
     """
     truth = synth.model(model)
     h = synth.h_of(truth)
-    pts, _ = synth.sample(truth, rng=_seed(model, condition), **{**CONDITIONS, **EXTRA_CONDITIONS}[condition])
+    pts, _ = synth.sample(truth, rng=run_seed(model, condition), **{**CONDITIONS, **EXTRA_CONDITIONS}[condition])
     eps = list(epsilons) if epsilons is not None else list(np.logspace(-6, -1, 12))
     out: dict[str, Any] = {"model": model, "h": h, "condition": condition, "params": dict(params),
                            "true_N_n": truth.n_nodes, "true_N_c": truth.n_curves}
@@ -475,7 +479,7 @@ def method_vs_emst(model: str = "fig8", method: str = "robust", *, condition: st
     """
     truth = synth.model(model)
     h = synth.h_of(truth)
-    pts, _ = synth.sample(truth, rng=_seed(model, condition), **CONDITIONS[condition])
+    pts, _ = synth.sample(truth, rng=run_seed(model, condition), **CONDITIONS[condition])
     panels = []
     for m in (method, "emst"):
         net = reconstruct(pts, method=m)

@@ -26,6 +26,7 @@ __all__ = [
     "NODE_COLORS",
     "curve_colors",
     "curve_sort_key",
+    "curve_order",
 ]
 
 #: Curve colours (colour-blind-friendly tab10 without its grey, then darker companions).
@@ -71,20 +72,85 @@ def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list
     list of str, one per curve
     """
     k = len(palette)
-    node_key = [tuple(np.round(p, KEY_DECIMALS).tolist()) for p in net.nodes]
-    at_node: dict[int, list[int]] = {}
-    counts = np.zeros(k, dtype=np.int64)
+    starts = [-1 if c.start is None else int(c.start) for c in net.curves]
+    ends = [-1 if c.end is None else int(c.end) for c in net.curves]
+    at_node: list[list[int]] = [[] for _ in range(max(starts + ends + [-1]) + 1)]  # colours at each node
+    counts = [0] * k
     out = [0] * net.n_curves
-    for i in sorted(range(net.n_curves), key=lambda i: curve_sort_key(net.curves[i])):
-        c = net.curves[i]
-        ends = [] if c.start is None else sorted({int(c.start), int(c.end)}, key=lambda n: node_key[n])
-        taken = {j for n in ends for j in at_node.get(n, ())}
-        j = min(range(k), key=lambda i: (i in taken, counts[i], i))
+    every = range(k)
+    for i in curve_order(net.curves):
+        s, e = starts[i], (ends[i] if ends[i] >= 0 else starts[i])
+        taken = set(at_node[s] + at_node[e]) if s >= 0 else ()
+        if taken:
+            free = [j for j in every if j not in taken] or every
+            j = min(free, key=counts.__getitem__)  # the least used, the first in the palette on a tie
+        else:
+            j = counts.index(min(counts))
         out[i] = j
         counts[j] += 1
-        for n in ends:
-            at_node.setdefault(n, []).append(j)
+        if s >= 0:
+            at_node[s].append(j)
+            if e != s:
+                at_node[e].append(j)
     return [palette[j] for j in out]
+
+
+def curve_order(curves: Sequence[Curve]) -> list[int]:
+    """The indices of ``curves`` sorted by :func:`curve_sort_key` (stable: ties keep their order).
+
+    The keys' leading parts (whether a curve has points, its smallest and largest points in
+    lexicographic order, its number of points) are found and compared for all curves at once
+    (``ufunc.reduceat``, ``np.lexsort``); only runs of curves equal in all of them are sorted by
+    the whole key.
+
+    Parameters
+    ----------
+    curves : sequence of Curve
+
+    Returns
+    -------
+    list of int
+    """
+    n = len(curves)
+    pts = [c.points for c in curves]
+    sizes = np.fromiter(map(len, pts), dtype=np.int64, count=n)
+    full = [p for p in pts if len(p)]
+    if not full or len({np.shape(p)[1:] for p in full}) != 1 or np.ndim(full[0]) != 2:
+        return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
+    P = np.round(np.concatenate(full).astype(float, copy=False), KEY_DECIMALS) + 0.0
+    if not np.isfinite(P).all():  # (tuples holding nan compare as Python does, not as numpy)
+        return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
+    has = sizes > 0
+    starts = np.concatenate([[0], np.cumsum(sizes[has])])[:-1]
+    lo = np.zeros((n, P.shape[1]))
+    hi = np.zeros((n, P.shape[1]))
+    lo[has] = _lexicographic_extreme(P, np.repeat(np.arange(len(starts)), sizes[has]), starts, np.minimum)
+    hi[has] = _lexicographic_extreme(P, np.repeat(np.arange(len(starts)), sizes[has]), starts, np.maximum)
+    keys = [has] + list(lo.T) + list(hi.T) + [sizes]
+    order = np.lexsort(tuple(keys[::-1]))
+    K = np.column_stack(keys)[order]
+    same = (K[1:] == K[:-1]).all(axis=1)  # equal leading parts: the whole key decides
+    out = order.tolist()
+    starts = np.flatnonzero(np.diff(np.concatenate([[0], same.astype(np.int8), [0]])) == 1)
+    stops = np.flatnonzero(np.diff(np.concatenate([[0], same.astype(np.int8), [0]])) == -1) + 1
+    for a, b in zip(starts.tolist(), stops.tolist()):
+        run = sorted(out[a:b])  # their order in ``curves``, then the stable sort by the whole key
+        out[a:b] = sorted(run, key=lambda i: curve_sort_key(curves[i]))
+    return out
+
+
+def _lexicographic_extreme(P: np.ndarray, cid: np.ndarray, starts: np.ndarray, ufunc) -> np.ndarray:
+    """The lexicographically smallest (``np.minimum``) or largest (``np.maximum``) row of each
+    run of rows ``P[starts[i]:starts[i + 1]]`` (``cid``: the run of each row), (runs, d):
+    column by column among the rows that tie on the columns before."""
+    out = np.empty((len(starts), P.shape[1]))
+    alive = np.ones(len(P), dtype=bool)
+    blank = np.inf if ufunc is np.minimum else -np.inf
+    for j in range(P.shape[1]):
+        col = np.where(alive, P[:, j], blank)
+        out[:, j] = ufunc.reduceat(col, starts)
+        alive &= col == out[cid, j]
+    return out
 
 
 def curve_sort_key(c: Curve) -> tuple:

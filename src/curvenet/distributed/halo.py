@@ -11,7 +11,7 @@ halo's edge: a false free end, which the tile does not keep).
 from __future__ import annotations
 
 from ..methods.robust import Estimates
-from ..methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, REPAIRS, SHELL
+from ..methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, REPAIRS, SHELL, SPACING
 
 __all__ = ["HALO_MARGIN", "interaction_reach", "halo_width"]
 
@@ -27,8 +27,18 @@ def interaction_reach() -> tuple[float, float]:
     The candidates, from :mod:`curvenet.methods.robust.thresholds`: the walk into a junction
     (``NODES.walk_far`` spacings, the largest), the chain trim at a node (twice
     ``NODES.span``), the outer shell, the directional links, the junction merge
-    (``REPAIRS.merge_len``); the walk's shell radii widen by ``SHELL.widen`` noise scales per
-    shell radius, so its noise term is ``walk_far / shell_outer * shell_outer * widen``.
+    (``REPAIRS.merge_len``), the test that drops the points alone in space
+    (``SPACING.isolated`` median spacings, :func:`curvenet.methods.robust.frames.isolated`);
+    the walk's shell radii widen by ``SHELL.widen`` noise scales per shell radius, so its noise
+    term is ``walk_far / shell_outer * shell_outer * widen``.
+
+    The radii in local spacings are covered at up to ``HALO_MARGIN`` median spacings. Points
+    alone in space, whose spacing would be tens of median spacings (outliers), are dropped
+    first by a test that looks ``SPACING.isolated`` median spacings far; the halo holds that
+    test for every point within the largest radius of the box
+    (``HALO_MARGIN * in_h >= in_h + SPACING.isolated``, tested). A kept point of a larger
+    spacing still reaches farther (a clump of outliers, a stretch sampled more than
+    ``HALO_MARGIN`` times sparser than the median): there a tile can decide otherwise.
 
     Returns
     -------
@@ -38,7 +48,7 @@ def interaction_reach() -> tuple[float, float]:
         In noise scales (``NOISE.scale`` times the noise std).
     """
     in_h = max(NODES.walk_far, 2 * NODES.span, DEFAULTS.shell_outer, DEFAULTS.link * LINKS.directional,
-               REPAIRS.merge_len)
+               REPAIRS.merge_len, SPACING.isolated)
     in_noise = max(NODES.walk_far * SHELL.widen, NODES.fit_noise, LINKS.strip_noise, LINKS.gap_noise)
     return float(in_h), float(in_noise)
 

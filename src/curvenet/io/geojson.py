@@ -13,7 +13,7 @@ import json
 import numpy as np
 
 from ..network import CurveNetwork
-from .numbers import shortest_rows
+from .numbers import group_texts
 from .polylines import curve_lengths
 
 __all__ = ["network_to_geojson"]
@@ -49,34 +49,30 @@ def network_to_geojson(net: CurveNetwork) -> str:
     flat = [p.ravel() for p in lines if len(p)] + [np.asarray(net.nodes, dtype=float).ravel()]
     if not np.isfinite(np.concatenate(flat)).all():
         return _geojson_slow(net, lines)  # json refuses them (as before)
-    lengths = curve_lengths(net.curves).tolist()
-    features = []
-    for i, c in enumerate(net.curves):
-        features.append({
-            "type": "Feature",
-            "id": f"curve-{i}",
-            "geometry": {"type": "LineString", "coordinates": _HOLE},
-            "properties": {
-                "kind": "curve",
-                "curve": i,
-                "start": None if c.start is None else int(c.start),
-                "end": None if c.end is None else int(c.end),
-                "closed": bool(c.closed),
-                "length": lengths[i],
-            },
-        })
-    features += _node_features(net, [_HOLE] * net.n_nodes)
-    doc = {"type": "FeatureCollection", "features": features}
-    parts = json.dumps(doc, allow_nan=False).split(json.dumps(_HOLE))
-    coords = _positions(lines) + _positions([net.nodes], single=True)
-    out = [parts[0]]
-    for text, part in zip(coords, parts[1:]):
-        out += [text, part]
-    return "".join(out) + "\n"
-
-
-#: Stands in for the coordinates in the document given to ``json`` (they are written apart).
-_HOLE = "@coordinates@"
+    lengths = curve_lengths(net.curves)
+    if not np.isfinite(lengths).all():
+        return _geojson_slow(net, lines)  # json refuses them (as before)
+    # the text json.dumps writes for the document, with the coordinates written apart in bulk
+    out = ['{"type": "FeatureCollection", "features": [']
+    sep = ""
+    for i, (c, coords, length) in enumerate(zip(net.curves, _positions(lines), lengths.tolist())):
+        start = "null" if c.start is None else int(c.start)
+        end = "null" if c.end is None else int(c.end)
+        out.append(
+            f'{sep}{{"type": "Feature", "id": "curve-{i}", "geometry": {{"type": "LineString", "coordinates": '
+            f'{coords}}}, "properties": {{"kind": "curve", "curve": {i}, "start": {start}, "end": {end}, '
+            f'"closed": {"true" if c.closed else "false"}, "length": {length!r}}}}}'
+        )
+        sep = ", "
+    for j, (coords, v) in enumerate(zip(_positions([net.nodes], single=True), net.valence.tolist())):
+        kind = "junction" if v >= 3 else ("end" if v == 1 else "other")
+        out.append(
+            f'{sep}{{"type": "Feature", "id": "node-{j}", "geometry": {{"type": "Point", "coordinates": {coords}}}, '
+            f'"properties": {{"kind": "node", "node": {j}, "valence": {int(v)}, "node_kind": "{kind}"}}}}'
+        )
+        sep = ", "
+    out.append("]}\n")
+    return "".join(out)
 
 
 def _positions(arrays: list, single: bool = False) -> list[str]:
@@ -84,16 +80,15 @@ def _positions(arrays: list, single: bool = False) -> list[str]:
     (``[[x, y], [x, y]]``), or with ``single`` of each row of the one array (``[x, y]``)."""
     blocks = [np.asarray(a, dtype=float) for a in arrays]
     full = [b for b in blocks if len(b)]
-    rows = shortest_rows(np.concatenate(full), "[", ", ") if full else []
+    if not full:
+        return [] if single else ["[]" for _ in blocks]
+    P = np.concatenate(full)
+    glue = [", "] * (P.shape[1] - 1)
     if single:
-        return [r + "]" for r in rows]
-    out = []
-    pos = 0
-    for b in blocks:
-        k = len(b)
-        out.append("[" + "], ".join(rows[pos:pos + k]) + "]]" if k else "[]")
-        pos += k
-    return out
+        return ["[" + t + "]" for t in group_texts(P, glue + [""], groups=np.arange(len(P) + 1))]
+    sizes = np.array([len(b) for b in blocks], dtype=np.int64)
+    texts = group_texts(P, glue + ["], ["], groups=np.concatenate([[0], np.cumsum(sizes)]))
+    return ["[[" + t + "]]" if k else "[]" for t, k in zip(texts, sizes.tolist())]
 
 
 def _node_features(net: CurveNetwork, coordinates: list) -> list[dict]:

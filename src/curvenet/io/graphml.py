@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..network import CurveNetwork
-from .numbers import shortest_rows
+from .numbers import group_texts, shortest_rows
 from .polylines import curve_lengths
 
 __all__ = ["network_to_graphml", "format_polyline", "parse_polyline"]
@@ -108,11 +108,10 @@ def network_to_graphml(net: CurveNetwork) -> str:
 
 def _polylines(arrays) -> list[str]:
     """:func:`format_polyline` of each (m, d) array (all formatted at once)."""
-    full = [np.asarray(a, dtype=float) for a in arrays if len(a)]
-    rows = shortest_rows(np.concatenate(full)) if full else []
-    out = []
-    pos = 0
-    for a in arrays:
-        out.append(";".join(rows[pos:pos + len(a)]))
-        pos += len(a)
-    return out
+    arrays = [np.asarray(a, dtype=float) for a in arrays]
+    full = [a for a in arrays if len(a)]
+    if not full:
+        return ["" for _ in arrays]
+    d = full[0].shape[1]
+    sizes = np.array([len(a) for a in arrays], dtype=np.int64)
+    return group_texts(np.concatenate(full), [" "] * (d - 1) + [";"], groups=np.concatenate([[0], np.cumsum(sizes)]))

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import CurveNetwork, _jsonable
-from .numbers import int_lists, rows_text
+from .numbers import group_texts, rows_text
 from .points import check_readable
 
 __all__ = ["network_to_json", "network_to_obj", "network_to_ply", "read_network", "polyline_vertices"]
@@ -93,8 +93,8 @@ def network_to_obj(net: CurveNetwork) -> str:
     v, ids, off = polyline_arrays(net)
     out = [f"# curvenet network: {net.n_nodes} nodes, {net.n_curves} curves\n# nodes are vertices 1..{net.n_nodes}\n"]
     out.append(rows_text(v, "v "))
-    for i, text in enumerate(int_lists(np.split(ids + 1, off[1:-1]) if net.n_curves else [])):
-        out.append(f"g curve_{i}\nl {text}\n")
+    lines = group_texts((ids + 1).reshape(-1, 1), [" "], groups=off) if net.n_curves else []
+    out += [f"g curve_{i}\nl {text}\n" for i, text in enumerate(lines)]
     return "".join(out)
 
 

@@ -9,20 +9,25 @@ network. With ``orjson`` installed (extra ``fast``) whole arrays are written at 
 code (the Ryu algorithm: the same shortest digits, correctly rounded), about ten times faster:
 in the range that ``repr`` writes without exponent, ``1e-4 <= |x| < 1e16``, and for zeros of
 either sign, orjson's text is ``repr``'s to the byte (``tests/test_numbers.py`` checks millions
-of random doubles); the rows holding any other value (``1e-07``, ``1e+16``, subnormals, ``inf``,
-``nan``: rare in coordinates) are rewritten by ``repr``. Without orjson every value goes through
-``repr``: the same text, only slower.
+of random doubles); any other value (``1e-07``, ``1e+16``, subnormals, ``inf``, ``nan``: rare in
+coordinates) goes to orjson as NaN, which it writes ``null``, and that word is replaced by the
+value's ``repr``. Without orjson every value goes through ``repr``: the same text, only slower.
+
+:func:`table_bytes` is the bulk path of every text writer: the numbers of a whole table in one
+orjson call, then the text around them (separators, line ends, the fixed tags of a DXF entity)
+put in by a few passes over the bytes instead of a Python string per value.
 """
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
-    "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "REPR_RANGE",
+    "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
+    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE",
 ]
 
 #: The magnitudes that ``repr`` writes without exponent (and orjson writes the same way):
@@ -31,9 +36,6 @@ REPR_RANGE = (1e-4, 1e16)
 
 #: Below this many values ``repr`` is as fast as a call into orjson.
 _SMALL = 64
-
-#: Row marker inside orjson's text (orjson never writes a zero byte).
-_MARK = b"\x00"
 
 
 def _orjson() -> Any:
@@ -69,18 +71,234 @@ def _repr_row(row: np.ndarray, sep: str) -> str:
     return sep.join(map(repr, row.tolist()))
 
 
-def _patch_rows(body: bytes, bad: np.ndarray, a: np.ndarray, sep: str) -> bytes:
-    """``body`` (rows apart by :data:`_MARK`) with the rows ``bad`` rewritten by ``repr``."""
-    marks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == _MARK[0])
-    starts = np.concatenate([[0], marks + 1])
-    ends = np.concatenate([marks, [len(body)]])
-    pieces = []
-    prev = 0
-    for i in bad.tolist():
-        pieces += [body[prev:starts[i]], _repr_row(a[i], sep).encode()]
-        prev = int(ends[i])
-    pieces.append(body[prev:])
-    return b"".join(pieces)
+#: Bytes that stand for the glue of a column in the bulk text until they are replaced by it:
+#: control characters that no number's text holds (tab, line feed and carriage return left out,
+#: which glue may hold).
+_MARKS = bytes(b for b in range(1, 32) if b not in (9, 10, 13))
+
+
+#: The glue goes into a long text in pieces of this many bytes: each piece stays in the
+#: processor's cache through the passes of ``bytes.replace`` (one a glue), which made the
+#: glue of a DXF's vertices 0.25 -> 0.15 s of processor time at a million points.
+_FILL_PIECE = 1 << 20
+
+
+def _bulk(a: np.ndarray) -> bytes:
+    """``repr`` (``str`` for integers) of every value of a flat array, joined by ``,``
+    (orjson, the values unlike ``repr``'s rewritten by ``repr``)."""
+    if a.dtype.kind != "f":
+        return _dumps(a)[1:-1]
+    bad = _unlike_repr(a)
+    if not bad.any():
+        return _dumps(a)[1:-1]
+    pieces = _dumps(np.where(bad, np.nan, a))[1:-1].split(b"null")  # orjson writes nan as null
+    fixes = [repr(x).encode() for x in a[bad].tolist()]
+    out = [b""] * (2 * len(fixes) + 1)
+    out[0::2], out[1::2] = pieces, fixes
+    return b"".join(out)
+
+
+def _value_texts(a: np.ndarray, int_cols: Sequence[int]) -> list[list[str]]:
+    """The text of every value of an (n, m) array, row by row, without orjson."""
+    m = a.shape[1]
+    fmt = [str if (a.dtype.kind != "f" or j in int_cols) else repr for j in range(m)]
+    conv = [(lambda v: str(int(v))) if (a.dtype.kind == "f" and j in int_cols) else f for j, f in enumerate(fmt)]
+    return [[conv[j](v) for j, v in enumerate(r)] for r in a.tolist()]
+
+
+def _table_input(
+    rows: ArrayLike, glue: Sequence[str | bytes], groups: ArrayLike | None
+) -> tuple[np.ndarray, list[bytes], np.ndarray | None]:
+    """The checked arguments of :func:`table_bytes`: a C-ordered (n, m) float64 or int64
+    array, the glue as bytes, the group offsets (or None)."""
+    a = np.asarray(rows)
+    if a.dtype.kind not in "fiu":
+        a = a.astype(np.float64)
+    a = np.ascontiguousarray(a, dtype=np.float64 if a.dtype.kind == "f" else np.int64)
+    if a.ndim != 2 or a.shape[1] != len(glue) or not len(glue):
+        raise ValueError(f"rows must be (n, {len(glue)}) for {len(glue)} glue strings, got shape {a.shape}")
+    g = [x.encode() if isinstance(x, str) else bytes(x) for x in glue]
+    return a, g, None if groups is None else np.asarray(groups, dtype=np.int64)
+
+
+def table_bytes(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = ()) -> bytes:
+    """Every row of an (n, m) array as text: each value followed by the glue of its column.
+
+    The bulk path of every text writer: the numbers of all rows are written in one orjson call
+    and the glue goes in by a few passes over the bytes, without a Python object per value.
+
+    Parameters
+    ----------
+    rows : (n, m) array_like of float or int
+        Float values are written as ``repr`` writes them, integers as ``str`` does.
+    glue : sequence of m str or bytes
+        ``glue[j]`` follows each value of column ``j`` (``glue[m - 1]`` ends a row).
+    int_cols : sequence of int
+        Columns of a float array that hold integers (of magnitude below 2**53), written as
+        integers (``7``, not ``7.0``).
+
+    Returns
+    -------
+    bytes
+
+    Examples
+    --------
+    >>> table_bytes([[1.0, 0.5], [2.0, 1e-7]], [" ", "\\n"], int_cols=[0])
+    b'1 0.5\\n2 1e-07\\n'
+    """
+    a, g, _ = _table_input(rows, glue, None)
+    if not len(a):
+        return b""
+    if a.size < _SMALL or _orjson() is None:
+        return b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))
+    cols = tuple(int_cols) if a.dtype.kind == "f" else ()
+    if a.shape[1] == 1 and not cols:
+        return _bulk(a.ravel()).replace(b",", g[0]) + g[0]
+    body, fill, _ = _marked(a, g, cols, None)
+    return b"".join(fill(body))
+
+
+def table_groups(
+    rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
+) -> list[bytes]:
+    """:func:`table_bytes` of each group of rows, each without the glue after its last value.
+
+    Parameters
+    ----------
+    rows, glue, int_cols
+        As for :func:`table_bytes`.
+    groups : (g + 1,) array_like of int
+        Row offsets: group ``k`` is rows ``groups[k]:groups[k + 1]``.
+
+    Returns
+    -------
+    list of g bytes
+
+    Examples
+    --------
+    >>> table_groups([[1.0], [2.0], [3.0]], [";"], groups=[0, 2, 2, 3])
+    [b'1.0;2.0', b'', b'3.0']
+    """
+    a, g, off = _table_input(rows, glue, groups)
+    assert off is not None
+    if not len(a) or a.size < _SMALL or _orjson() is None:
+        return table_pieces(a, g, groups=off, int_cols=int_cols)[0]  # (the glue in already)
+    body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
+    return _grouped(b"".join(fill(body)).split(group_mark), off)
+
+
+def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
+    """The text of each group from the pieces of the nonempty groups (empty groups get ``b""``)."""
+    out = [b""] * (len(off) - 1)
+    for k, piece in zip(np.flatnonzero(np.diff(off) > 0).tolist(), pieces):
+        out[k] = bytes(piece)
+    return out
+
+
+def _marked(
+    a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None
+) -> tuple[bytearray, Callable[[bytes | bytearray], list[bytes | bytearray]], bytes]:
+    """The numbers of ``a`` with the comma after each value replaced by its column's glue when
+    that is one byte long, by a mark (a control character) otherwise, and by a group mark at the
+    end of each group; the ``.0`` of the integer columns marked for deletion.
+
+    Returns the text, the function that replaces the marks by their glue (returning the text in
+    pieces, to be joined), and the group mark.
+    Only one-byte patterns are searched (``bytes.replace`` of a longer one costs a function
+    call per match).
+    """
+    n, m = a.shape
+    body = bytearray(_bulk(a.ravel()))
+    body.append(44)  # every value followed by a comma
+    buf = np.frombuffer(body, dtype=np.uint8)
+    commas = np.flatnonzero(buf == 44)
+    free = [c for c in _MARKS if c not in set(b"".join(glue))]
+    todo = []  # (mark, glue) replaced after the marking
+    for j, g in enumerate(glue):
+        if len(g) == 1:
+            buf[commas[j::m]] = g[0]
+        else:
+            mark = free.pop()
+            buf[commas[j::m]] = mark
+            todo.append((bytes([mark]), g))
+    group_mark = bytes([free.pop()])
+    if off is not None:
+        ends = off[1:][np.diff(off) > 0]
+        buf[commas[ends * m - 1]] = group_mark[0]
+    todo.sort(key=lambda mg: len(mg[1]))
+    if int_cols:  # the ".0" of integers goes with the first pass of the glue
+        cut = free.pop()
+        for j in int_cols:
+            buf[commas[j::m] - 1] = cut
+            buf[commas[j::m] - 2] = cut
+        todo.insert(0, (bytes([cut]), b""))
+
+    def fill_piece(text: bytes | bytearray) -> bytes | bytearray:
+        for mark, g in todo:
+            text = text.replace(mark, g)
+        return text
+
+    def fill(text: bytes | bytearray) -> list[bytes | bytearray]:
+        if not todo:
+            return [text]
+        return [fill_piece(text[i:i + _FILL_PIECE]) for i in range(0, len(text), _FILL_PIECE)]
+
+    return body, fill, group_mark
+
+
+def table_pieces(
+    rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
+) -> tuple[list[bytes], Callable[[bytes | bytearray], list[bytes | bytearray]]]:
+    """:func:`table_groups` with the glue put in later, for text around the groups.
+
+    A text made of the groups and text of the caller's (free of control characters other than
+    tab and line ends) joined in one piece is passed once to ``fill``, which puts in the glue:
+    the long glue (a DXF entity's tags between two numbers) goes into the whole text at once
+    instead of into each group.
+
+    Parameters
+    ----------
+    rows, glue, int_cols
+        As for :func:`table_bytes`.
+    groups : (g + 1,) array_like of int
+        Row offsets of the groups.
+
+    Returns
+    -------
+    pieces : list of g bytes
+        The groups, with marks where the glue goes.
+    fill : callable
+        ``fill(text)``: ``text`` (bytes) with the marks replaced by the glue, as a list of
+        pieces to be joined (``[text]`` when the pieces hold their glue already).
+    """
+    a, g, off = _table_input(rows, glue, groups)
+    assert off is not None
+    if not len(a):
+        return [b""] * (len(off) - 1), _as_is
+    if a.size < _SMALL or _orjson() is None:
+        texts = _value_texts(a, int_cols)
+        out = []
+        for k0, k1 in zip(off[:-1].tolist(), off[1:].tolist()):
+            b = b"".join(t.encode() + x for r in texts[k0:k1] for t, x in zip(r, g))
+            out.append(b[: len(b) - len(g[-1])] if k1 > k0 else b"")
+        return out, _as_is
+    body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
+    return _grouped(body.split(group_mark), off), fill
+
+
+def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
+    """The ``fill`` of a text that holds its glue already."""
+    return [text]
+
+
+def table_text(rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] = ()) -> str:
+    """:func:`table_bytes` as ``str``."""
+    return table_bytes(rows, glue, int_cols=int_cols).decode("utf-8")
+
+
+def group_texts(rows: ArrayLike, glue: Sequence[str], *, groups: ArrayLike, int_cols: Sequence[int] = ()) -> list[str]:
+    """:func:`table_groups` as ``str``."""
+    return [b.decode("utf-8") for b in table_groups(rows, glue, groups=groups, int_cols=int_cols)]
 
 
 def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n") -> str:
@@ -103,17 +321,14 @@ def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n"
     >>> rows_text([[0.499559, 1.0], [1e-7, -0.0]], "v ")
     'v 0.499559 1.0\\nv 1e-07 -0.0\\n'
     """
-    a = np.ascontiguousarray(_as_rows(np.asarray(rows, dtype=np.float64)))
+    a = _as_rows(np.asarray(rows, dtype=np.float64))
     n, m = a.shape
     if n == 0:
         return ""
-    if m == 0 or a.size < _SMALL or _orjson() is None:
-        return "".join(prefix + _repr_row(r, sep) + end for r in a)
-    body = _dumps(a)[2:-2].replace(b"],[", _MARK).replace(b",", sep.encode())
-    bad = np.flatnonzero(_unlike_repr(a).any(axis=1))
-    if len(bad):
-        body = _patch_rows(body, bad, a, sep)
-    return prefix + body.replace(_MARK, (end + prefix).encode()).decode("ascii") + end
+    if m == 0:
+        return (prefix + end) * n
+    text = prefix + table_text(a, [sep] * (m - 1) + [end + prefix])
+    return text[: len(text) - len(prefix)]
 
 
 def shortest(values: ArrayLike, sep: str = " ") -> str:
@@ -137,9 +352,9 @@ def shortest(values: ArrayLike, sep: str = " ") -> str:
     '0.499559 1.0 1e-07'
     """
     a = np.asarray(values, dtype=np.float64).ravel()
-    if len(a) < _SMALL or _orjson() is None:
-        return sep.join(map(repr, a.tolist()))
-    text = rows_text(a.reshape(-1, 1), "", "", sep)
+    if not len(a):
+        return ""
+    text = table_text(a.reshape(-1, 1), [sep])
     return text[: len(text) - len(sep)]
 
 
@@ -159,9 +374,12 @@ def shortest_rows(rows: ArrayLike, prefix: str = "", sep: str = " ") -> list[str
     list of str
     """
     a = _as_rows(np.asarray(rows, dtype=np.float64))
-    if a.size < _SMALL or _orjson() is None:
-        return [prefix + _repr_row(r, sep) for r in a]
-    return rows_text(a, prefix, sep, "\x00").split("\x00")[:-1]
+    n, m = a.shape
+    if n == 0:
+        return []
+    if m == 0:
+        return [prefix] * n
+    return [prefix + t for t in group_texts(a, [sep] * (m - 1) + [""], groups=np.arange(n + 1))]
 
 
 def ints_text(values: ArrayLike, sep: str = " ") -> str:
@@ -177,10 +395,11 @@ def ints_text(values: ArrayLike, sep: str = " ") -> str:
     -------
     str
     """
-    a = np.ascontiguousarray(np.asarray(values).ravel(), dtype=np.int64)
-    if len(a) < _SMALL or _orjson() is None:
-        return sep.join(map(str, a.tolist()))
-    return _dumps(a)[1:-1].decode("ascii").replace(",", sep)
+    a = np.asarray(values).ravel().astype(np.int64)
+    if not len(a):
+        return ""
+    text = table_text(a.reshape(-1, 1), [sep])
+    return text[: len(text) - len(sep)]
 
 
 def int_lists(arrays: Sequence[np.ndarray], sep: str = " ") -> list[str]:
@@ -195,12 +414,12 @@ def int_lists(arrays: Sequence[np.ndarray], sep: str = " ") -> list[str]:
     -------
     list of str
     """
-    arrays = [np.ascontiguousarray(np.asarray(x).ravel(), dtype=np.int64) for x in arrays]
+    arrays = [np.asarray(x).ravel().astype(np.int64) for x in arrays]
     if not arrays:
         return []
-    if sum(len(x) for x in arrays) < _SMALL or _orjson() is None:
-        return [sep.join(map(str, x.tolist())) for x in arrays]
-    return _dumps(arrays)[2:-2].decode("ascii").replace(",", sep).split("]" + sep + "[")
+    sizes = np.array([len(x) for x in arrays], dtype=np.int64)
+    flat = np.concatenate(arrays).reshape(-1, 1)
+    return group_texts(flat, [sep], groups=np.concatenate([[0], np.cumsum(sizes)]))
 
 
 def int_rows_text(rows: ArrayLike, sep: str = " ", end: str = "\n") -> str:
@@ -215,13 +434,13 @@ def int_rows_text(rows: ArrayLike, sep: str = " ", end: str = "\n") -> str:
     -------
     str
     """
-    a = np.ascontiguousarray(_as_rows(np.asarray(rows)), dtype=np.int64)
-    if not len(a):
+    a = _as_rows(np.asarray(rows)).astype(np.int64)
+    n, m = a.shape
+    if not n:
         return ""
-    if a.shape[1] == 0 or a.size < _SMALL or _orjson() is None:
-        return "".join(sep.join(map(str, r)) + end for r in a.tolist())
-    body = _dumps(a)[2:-2].replace(b"],[", _MARK).replace(b",", sep.encode())
-    return body.replace(_MARK, end.encode()).decode("ascii") + end
+    if m == 0:
+        return end * n
+    return table_text(a, [sep] * (m - 1) + [end])
 
 
 def join_columns(blocks: Sequence[str], sep: str = " ", end: str = "\n") -> str:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from typing import Literal
-from xml.sax.saxutils import escape, quoteattr
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -90,9 +90,9 @@ def network_to_svg(
         raise InputError(f"SVG width must be a positive integer, got {width!r}")
     d = net.dimension
     projection = VIEWS.get(projection, projection)
-    curves_uv = _project_curves(net, projection)
+    curves_uv, sizes = _project_curves(net, projection)
     nodes_uv = project(net.nodes, projection) if len(net.nodes) else np.zeros((0, 2))
-    allp = np.vstack([nodes_uv, *curves_uv]) if (len(nodes_uv) or curves_uv) else np.zeros((0, 2))
+    allp = np.vstack([nodes_uv, curves_uv])
     if len(allp) == 0:
         allp = np.zeros((1, 2))
     lo, hi = allp.min(axis=0), allp.max(axis=0)
@@ -116,22 +116,24 @@ def network_to_svg(
         f'<g id="curves" fill="none" stroke-width="{num(sw)}" stroke-linecap="round" stroke-linejoin="round">',
     ]
     colors = curve_colors(net)
-    for i, (c, points) in enumerate(zip(net.curves, _point_lists(curves_uv))):
+    for i, (c, points) in enumerate(zip(net.curves, _point_lists(curves_uv, sizes))):
         tag = "polygon" if c.closed else "polyline"
         ends = "free loop" if c.start is None else f"nodes {c.start}-{c.end}"
         data = "" if c.start is None else f' data-start="{int(c.start)}" data-end="{int(c.end)}"'
-        out.append(
+        out.append(  # (the title holds no character to escape: digits and fixed words)
             f'<{tag} id="curve-{i}" class="curve" stroke="{colors[i]}"{data} points="{points}">'
-            f"<title>{escape(f'curve {i}: {ends}')}</title></{tag}>"
+            f"<title>curve {i}: {ends}</title></{tag}>"
         )
     out.append("</g>")
     if nodes and len(nodes_uv):
         kinds = net.node_kinds
-        val = net.valence
+        val = net.valence.tolist()
+        attr = {k: quoteattr(k) for k in set(kinds)}
         out.append(f'<g id="nodes" stroke="black" stroke-width="{num(sw / 2)}">')
-        for j, (u, v) in enumerate(nodes_uv):
+        rad = num(r)
+        for j, (u, v) in enumerate(nodes_uv.tolist()):
             out.append(
-                f'<circle id="node-{j}" class={quoteattr(kinds[j])} cx="{num(u)}" cy="{num(0.0 - v)}" r="{num(r)}" '
+                f'<circle id="node-{j}" class={attr[kinds[j]]} cx="{u:.9g}" cy="{0.0 - v:.9g}" r="{rad}" '
                 f'fill="{NODE_COLORS[kinds[j]]}"><title>node {j}, valence {int(val[j])}</title></circle>'
             )
         out.append("</g>")
@@ -139,34 +141,28 @@ def network_to_svg(
     return "\n".join(out) + "\n"
 
 
-def _point_lists(curves_uv: list[np.ndarray]) -> list[str]:
-    """The ``points`` attribute of each curve: ``u,-v`` pairs with 9 significant digits (as
-    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one call."""
-    full = [uv for uv in curves_uv if len(uv)]
-    if not full:
-        return ["" for _ in curves_uv]
-    flat = np.concatenate(full)
-    vals = np.column_stack([flat[:, 0], 0.0 - flat[:, 1]]).ravel().tolist()
-    pairs = (("%.9g,%.9g\n" * len(flat)) % tuple(vals)).split("\n")
-    out = []
-    pos = 0
-    for uv in curves_uv:
-        out.append(" ".join(pairs[pos:pos + len(uv)]))
-        pos += len(uv)
-    return out
+def _point_lists(uv: np.ndarray, sizes: np.ndarray) -> list[str]:
+    """The ``points`` attribute of each curve (``sizes`` points each, their (u, v) the rows of
+    ``uv`` curve after curve): ``u,-v`` pairs with 9 significant digits (as
+    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one call, with a
+    line end after each curve's last pair."""
+    if not len(uv):
+        return ["" for _ in sizes]
+    vals = np.column_stack([uv[:, 0], 0.0 - uv[:, 1]]).ravel().tolist()
+    sizes = sizes.tolist()
+    fmt = "".join("%.9g,%.9g " * (k - 1) + "%.9g,%.9g\n" for k in sizes if k)
+    texts = iter((fmt % tuple(vals)).split("\n"))
+    return [next(texts) if k else "" for k in sizes]
 
 
-def _project_curves(net: CurveNetwork, projection: str) -> list[np.ndarray]:
-    """:func:`project` of each curve's points; the projections that keep coordinates (all but
-    ``iso``) of all curves at once."""
+def _project_curves(net: CurveNetwork, projection: str) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`project` of the points of all curves, (N, 2) curve after curve, and the number of
+    points of each curve; the projections that keep coordinates (all but ``iso``) of all curves
+    at once."""
+    sizes = np.fromiter((len(c.points) for c in net.curves), dtype=np.int64, count=net.n_curves)
     full = [c.points for c in net.curves if len(c.points)]
-    if projection == "iso" or not full or any(p.shape[1] != full[0].shape[1] for p in full):
-        return [project(c.points, projection) if len(c.points) else np.zeros((0, 2)) for c in net.curves]
-    uv = project(np.concatenate(full), projection)
-    out = []
-    pos = 0
-    for c in net.curves:
-        k = len(c.points)
-        out.append(uv[pos:pos + k] if k else np.zeros((0, 2)))
-        pos += k
-    return out
+    if not full:
+        return np.zeros((0, 2)), sizes
+    if projection == "iso" or any(p.shape[1] != full[0].shape[1] for p in full):
+        return np.concatenate([project(p, projection) for p in full]), sizes
+    return project(np.concatenate(full), projection), sizes

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
-from .numbers import int_rows_text, join_columns, rows_text, shortest
+from .numbers import int_rows_text, join_columns, rows_text, shortest, table_text
 
 __all__ = ["network_to_swc", "SWC_UNDEFINED", "SWC_FORK", "SWC_END", "SWC_RADIUS_FRACTION"]
 
@@ -75,7 +75,7 @@ def network_to_swc(
     if radius is None:
         step = _median_step(net.curves)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
-    node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type))
+    node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type)).tolist()
     at_node: list[list[int]] = [[] for _ in range(n)]
     for i, c in enumerate(net.curves):
         if c.start is not None and c.end is not None:
@@ -84,8 +84,8 @@ def network_to_swc(
                 at_node[int(c.end)].append(i)
     blocks: list[tuple[np.ndarray, int, int]] = []  # runs of samples: (positions, type, parent of the first)
     count = 0  # samples so far
-    sample_of_node = np.zeros(n, dtype=np.int64)  # 0: not written yet
-    used = np.zeros(len(net.curves), dtype=bool)
+    sample_of_node = [0] * n  # 0: not written yet (Python lists: the walk reads them one by one)
+    used = [False] * len(net.curves)
     cut = 0
 
     def add(pts: np.ndarray, t: int, parent: int) -> int:
@@ -97,7 +97,7 @@ def network_to_swc(
         count += len(pts)
         return count
 
-    roots = sorted(range(n), key=lambda j: (val[j] != 1, j))
+    roots = sorted(range(n), key=(val != 1).tolist().__getitem__)  # free ends first (stable)
     for root in roots:
         if sample_of_node[root]:
             continue
@@ -113,7 +113,7 @@ def network_to_swc(
                 a, b = int(c.start or 0), int(c.end or 0)  # curves listed at a node have both
                 pts = c.points if a == j else c.points[::-1]
                 other = b if a == j else a
-                parent = add(pts[1:-1], sample_type, int(sample_of_node[j]))
+                parent = add(pts[1:-1], sample_type, sample_of_node[j])
                 if sample_of_node[other]:
                     cut += 1
                 else:
@@ -137,22 +137,27 @@ def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
     :func:`network_to_swc`), ``count`` samples in all."""
     if not count:
         return ""
-    xyz = np.zeros((count, 3))
-    types = np.empty(count, dtype=np.int64)
+    sizes = np.array([len(pts) for pts, _, _ in blocks], dtype=np.int64)
+    types = np.repeat(np.array([t for _, t, _ in blocks], dtype=np.int64), sizes)
     parents = np.arange(count, dtype=np.int64)  # within a run, the sample before
-    pos = 0
-    for pts, t, parent in blocks:
-        k = len(pts)
-        xyz[pos:pos + k, :d] = pts
-        types[pos:pos + k] = t
-        parents[pos] = parent
-        pos += k
+    parents[np.concatenate([[0], np.cumsum(sizes)[:-1]])] = [parent for _, _, parent in blocks]
     ids = np.arange(1, count + 1)
+    if types.max() < _EXACT_INT:  # one table: integers as floats, written as integers
+        table = np.zeros((count, 6))
+        table[:, 0], table[:, 1], table[:, 5] = ids, types, parents
+        table[:, 2:2 + d] = np.concatenate([pts for pts, _, _ in blocks])
+        return table_text(table, [" ", " ", " ", " ", f" {radius} ", "\n"], int_cols=(0, 1, 5))
+    xyz = np.zeros((count, 3))
+    xyz[:, :d] = np.concatenate([pts for pts, _, _ in blocks])
     return join_columns([
         int_rows_text(np.column_stack([ids, types])),
         rows_text(xyz, "", " ", f" {radius}\n"),
         int_rows_text(parents.reshape(-1, 1)),
     ])
+
+
+#: Integers below this are exact as float64 (a sample type above it is written apart).
+_EXACT_INT = 2**53
 
 
 def _median_step(curves: list) -> float:

@@ -6,8 +6,6 @@
 
 from __future__ import annotations
 
-import io
-
 import numpy as np
 
 __all__ = ["mesh_to_obj", "mesh_to_ply", "MESH_WRITERS"]
@@ -26,19 +24,18 @@ def mesh_to_obj(mesh, *, precision: int = 9) -> bytes:
     -------
     bytes
     """
-    out = io.StringIO()
-    out.write("# curvenet surface mesh\n")
-    out.write(f"# vertices {len(mesh.vertices)} triangles {len(mesh.triangles)} patches {mesh.n_patches}\n")
+    out = [b"# curvenet surface mesh\n",
+           f"# vertices {len(mesh.vertices)} triangles {len(mesh.triangles)} patches {mesh.n_patches}\n".encode()]
+    V = np.asarray(mesh.vertices, dtype=float).reshape(-1, 3)
     fmt = f"v %.{precision}g %.{precision}g %.{precision}g\n"
-    for v in mesh.vertices:
-        out.write(fmt % (v[0], v[1], v[2]))
-    T = np.asarray(mesh.triangles) + 1
+    out.append(((fmt * len(V)) % tuple(V.ravel().tolist())).encode("ascii"))  # one call for all
+    T = np.asarray(mesh.triangles, dtype=np.int64).reshape(-1, 3) + 1
     P = np.asarray(mesh.patch)
     for k in np.unique(P):
-        out.write(f"g patch_{int(k)}\n")
-        for t in T[P == k]:
-            out.write(f"f {t[0]} {t[1]} {t[2]}\n")
-    return out.getvalue().encode("ascii")
+        out.append(f"g patch_{int(k)}\n".encode())
+        faces = T[P == k]
+        out.append((("f %d %d %d\n" * len(faces)) % tuple(faces.ravel().tolist())).encode("ascii"))
+    return b"".join(out)
 
 
 def mesh_to_ply(mesh, *, binary: bool = True, patch: bool = False) -> bytes:

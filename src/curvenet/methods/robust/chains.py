@@ -14,8 +14,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from . import kernels as _k
-from .graph import Graph, components
-from .thresholds import CHAINS, ENDS, NUMERIC
+from .graph import Graph, components, edge_lengths
+from .thresholds import CHAINS, ENDS, LAYOUT, NUMERIC
 
 __all__ = ["Chain", "trace_chains", "order_chains", "fit_line", "step_lengths", "polylen", "chain_lengths",
            "extent", "order_between", "end_portion", "end_counts"]
@@ -71,7 +71,8 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
         The points of each region, ascending.
     """
     chn, n_chn = components(len(P), graph.src, graph.dst, ~flagged)
-    chains = order_chains(P, h, graph.src, graph.dst, graph.dd, chn, n_chn, reg, lin, close)
+    dd = edge_lengths(P, graph.src, graph.dst)
+    chains = order_chains(P, h, graph.src, graph.dst, dd, chn, n_chn, reg, lin, close)
     # the points of each region, ascending (one stable sort, not one pass over N per region)
     o = np.argsort(reg, kind="stable")
     cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
@@ -284,12 +285,16 @@ def step_lengths(P, ids):
     (n,) ndarray of float
         The same values as ``np.linalg.norm(np.diff(P[ids], axis=0), axis=1)`` (one gather).
     """
-    out = np.zeros(len(ids))
-    if len(ids) > 1:
-        X = P[ids]
+    n = len(ids)
+    out = np.zeros(n)
+    # in blocks of LAYOUT.curve_block steps (the same arithmetic per step): the (block, d)
+    # gathers stay small, where one gather of all the points was 2 x 24 bytes a point at the
+    # peak of the method's memory
+    for i in range(0, n - 1, LAYOUT.curve_block):
+        X = P[ids[i:min(i + LAYOUT.curve_block + 1, n)]]
         D = X[1:] - X[:-1]
         D *= D
-        out[:-1] = np.sqrt(D.sum(axis=1))
+        out[i:i + len(D)] = np.sqrt(D.sum(axis=1))
     return out
 
 

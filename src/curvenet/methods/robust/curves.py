@@ -273,19 +273,28 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     sel = [i for i, c in enumerate(curves) if len(c.points) >= FIT.min_points]
     if (band is not None and band <= 0) or not sel:
         return list(curves)
-    X = np.concatenate([curves[i].points for i in sel])
-    m = np.array([len(curves[i].points) for i in sel], dtype=np.int64)
-    closed = np.array([bool(curves[i].closed) for i in sel])
-    ch = _Chains(X, m, closed)
-    if band is not None:
-        Y = ch.solve(np.full(len(X), float(band)))
-    else:
-        Y = ch.solve(_widths(ch, float(sigma)))
     out = list(curves)
-    off = np.r_[0, np.cumsum(m)].tolist()
-    for k, i in enumerate(sel):
-        c = curves[i]
-        out[i] = Curve(Y[off[k]:off[k + 1]], c.start, c.end, c.closed, c.indices.copy())
+    # the curves are independent of each other: solved in blocks of about LAYOUT.curve_block
+    # samples (whole curves), so the system and its temporaries (about 30 arrays of one value
+    # a sample) stay small at any size
+    sizes = np.array([len(curves[i].points) for i in sel], dtype=np.int64)
+    start = 0
+    while start < len(sel):
+        stop = start + max(1, int(np.searchsorted(np.cumsum(sizes[start:]), LAYOUT.curve_block, side="right")))
+        block = sel[start:stop]
+        X = np.concatenate([curves[i].points for i in block])
+        m = sizes[start:stop]
+        closed = np.array([bool(curves[i].closed) for i in block])
+        ch = _Chains(X, m, closed)
+        if band is not None:
+            Y = ch.solve(np.full(len(X), float(band)))
+        else:
+            Y = ch.solve(_widths(ch, float(sigma)))
+        off = np.r_[0, np.cumsum(m)].tolist()
+        for k, i in enumerate(block):
+            c = curves[i]
+            out[i] = Curve(Y[off[k]:off[k + 1]], c.start, c.end, c.closed, c.indices.copy())
+        start = stop
     return out
 
 
@@ -308,8 +317,10 @@ def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
     # what the noise alone puts between the two fits, and the wide fit's bias beyond it
     noise2 = (d - 1) * FIT.kernel_l2 * sigma**2 * (1.0 / narrow - 1.0 / wide)
     bias2 = np.maximum(part2 - noise2, NUMERIC.tiny)
-    # the width of least expected squared error: bias (b / wide)^4 B, variance kernel_l2 sigma^2 / b
-    best = wide * ((d - 1) * FIT.kernel_l2 * sigma**2 / (8.0 * wide * bias2)) ** (1.0 / 9.0)
+    # the width of least expected squared error: squared bias (b / wide)^(2 q) bias2 (the bias of
+    # a kernel of order q = FIT.bias_order grows as b^q), variance kernel_l2 sigma^2 / b
+    q2 = 2.0 * FIT.bias_order
+    best = wide * ((d - 1) * FIT.kernel_l2 * sigma**2 / (q2 * wide * bias2)) ** (1.0 / (q2 + 1.0))
     # near a held end no wider than its distance from it in samples: a node placed off the
     # samples then pulls only the last few of them
     k = np.where(ch.held_curve, np.minimum(ch.idx - ch.first, ch.last - ch.idx), np.inf)
@@ -359,8 +370,8 @@ class _Chains:
         a = b2 * (dp + dn) / (2.0 * dp)
         c = b2 * (dp + dn) / (2.0 * dn)
         r = np.arange(len(rows))
-        R = coo_matrix((np.concatenate([a, -(a + c), c]),
-                        (np.tile(r, 3), np.concatenate([self.prv[rows], rows, self.nxt[rows]]))),
+        stencil, cols = [a, -(a + c), c], [self.prv[rows], rows, self.nxt[rows]]
+        R = coo_matrix((np.concatenate(stencil), (np.tile(r, len(stencil)), np.concatenate(cols))),
                        shape=(len(rows), M)).tocsr()
         A = (identity(M, format="csr") + R.T @ R).tocsr()
         held = np.flatnonzero(self.held)
@@ -382,11 +393,10 @@ def _spd_solve(A, rhs: np.ndarray, *, banded: bool) -> np.ndarray:
     from scipy.sparse.linalg import splu
 
     if banded:
-        n = A.shape[0]
-        ab = np.zeros((3, n))
-        ab[2] = A.diagonal(0)
-        ab[1, 1:] = A.diagonal(1)
-        ab[0, 2:] = A.diagonal(2)
+        n, w = A.shape[0], 2  # w: the diagonals above the main one
+        ab = np.zeros((w + 1, n))  # LAPACK's upper banded form: diagonal j in row w - j
+        for j in range(w + 1):
+            ab[w - j, j:] = A.diagonal(j)
         return solveh_banded(ab, np.ascontiguousarray(rhs), check_finite=False)
     lu = splu(A.tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
     return lu.solve(np.ascontiguousarray(rhs))
@@ -433,7 +443,7 @@ def _spike_free(curves, lens, h, noise):
     """``(curve, keep)`` for each of ``curves`` (``lens`` samples each) with a spike: the mask
     of its samples kept (see :func:`drop_spikes`)."""
     off = np.r_[0, np.cumsum(lens)]
-    if off[-1] < 3:
+    if off[-1] <= 2:  # no sample between a first and a last one
         return []
     X = np.concatenate([c.points for c in curves])
     ids = np.concatenate([c.indices for c in curves])

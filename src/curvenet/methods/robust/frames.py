@@ -20,7 +20,7 @@ from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
 __all__ = ["Neighbours", "Frames", "neighbours", "frames", "duplicates", "local_spacing", "tangents",
-           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "lex_order", "pair_distances"]
+           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "isolated", "lex_order", "pair_distances"]
 
 
 class Neighbours(NamedTuple):
@@ -155,6 +155,30 @@ def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:
     if not dedup_applies(len(dup), int(np.count_nonzero(dup))):
         return None
     return np.flatnonzero(~dup)
+
+
+def isolated(nb: Neighbours, hmed: float) -> np.ndarray | None:
+    """The points to keep when some are alone in space, else None.
+
+    A point whose ``SPACING.n_mean``-th nearest neighbour lies farther than ``SPACING.isolated``
+    median spacings ``hmed`` (the whole cloud's: :class:`Estimates`) is an outlier, not a sample
+    of a curve: every radius of the method is in local spacings, and its own would reach that
+    far. The test of a point looks no farther than that radius and depends on nothing else
+    (no count over the cloud), so a part of the cloud holding the point's surroundings to that
+    radius (a tile with its halo) decides it as the whole cloud.
+
+    Returns
+    -------
+    (M,) ndarray of int64 or None
+        Ids of the points kept, ascending (possibly none); None when every point is kept.
+    """
+    m = min(SPACING.n_mean, nb.idx.shape[1])
+    if m == 0:
+        return None
+    alone = nb.distances(col=m - 1) > SPACING.isolated * hmed
+    if not alone.any():
+        return None
+    return np.flatnonzero(~alone)
 
 
 def median_spacing(h: np.ndarray) -> float:

@@ -13,11 +13,11 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels as _k
-from .frames import Frames, Neighbours, noisy_tangents, vote_tangents
+from .frames import Frames, Neighbours, noisy_tangents, pair_distances, vote_tangents
 from .params import RobustParams
-from .thresholds import LINKS, NOISE, TANGENTS
+from .thresholds import LAYOUT, LINKS, NOISE, TANGENTS
 
-__all__ = ["Graph", "linked_graph", "linked_edges", "cut_strand_links", "components"]
+__all__ = ["Graph", "linked_graph", "linked_edges", "edge_lengths", "cut_strand_links", "components"]
 
 
 class Graph(NamedTuple):
@@ -26,9 +26,9 @@ class Graph(NamedTuple):
     Attributes
     ----------
     src, dst : (E,) ndarray of int32
-        Directed links (kept by the tests; both directions of a pair may be there).
-    dd : (E,) ndarray of float
-        Their lengths.
+        Directed links (kept by the tests; both directions of a pair may be there). Their
+        lengths are not kept (8 bytes a link, up to 55 bytes a point under noise, held through
+        the shell test): :func:`edge_lengths` gives them again, the same bits.
     indptr : (N + 1,) ndarray of int64
     indices : ndarray of int32
         CSR adjacency of the undirected union of the links.
@@ -36,7 +36,6 @@ class Graph(NamedTuple):
 
     src: np.ndarray
     dst: np.ndarray
-    dd: np.ndarray
     indptr: np.ndarray
     indices: np.ndarray
 
@@ -66,7 +65,28 @@ def linked_graph(P: np.ndarray, nb: Neighbours, fr: Frames, prm: RobustParams) -
             tn, _ = vote_tangents(tn, ln, nb.idx, m=min(TANGENTS.vote_m_noisy, nb.idx.shape[1]))
             src, dst, dd = cut_strand_links(P, nb.h, nb.idx, tn, src, dst, dd, fr.sigma)
     indptr, indices = _k.csr_union(N, np.asarray(src, dtype=_k.INDEX), np.asarray(dst, dtype=_k.INDEX))
-    return Graph(src, dst, dd, indptr, indices)
+    return Graph(src, dst, indptr, indices)
+
+
+def edge_lengths(P: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """Lengths of the links ``(src, dst)``: the same bits as :func:`linked_edges` gave them
+    (both sum the squared coordinate differences as scipy's k-d tree query does), computed in
+    blocks of ``LAYOUT.curve_block`` links so that no (E, d) gather is made.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    src, dst : (E,) ndarray of int
+
+    Returns
+    -------
+    (E,) ndarray of float
+    """
+    out = np.empty(len(src))
+    for i in range(0, len(src), LAYOUT.curve_block):
+        j = i + LAYOUT.curve_block
+        out[i:j] = pair_distances(P, src[i:j], dst[i:j])
+    return out
 
 
 def linked_edges(P, h, idx, t, lin, link, width, wmin=0.0, gap=0.0):

@@ -51,7 +51,10 @@ class RobustParams:
     smoothing: float | None = None
 
     @classmethod
-    def from_keywords(cls, **given: Any) -> "RobustParams":
+    def from_keywords(cls, *, spacing: float | None = None, k: int | None = None, shell_inner: float | None = None,
+                      shell_outer: float | None = None, link: float | None = None, link_width: float | None = None,
+                      min_spur: float | None = None, fit: bool | None = None,
+                      smoothing: float | None = None) -> "RobustParams":
         """Validate the keywords of :func:`~.pipeline.reconstruct_robust` (None: the default).
 
         Raises
@@ -61,9 +64,11 @@ class RobustParams:
             shell not larger than the inner one, a bad spacing or smoothing width, a ``fit``
             that is not a bool or None.
         """
+        given = {"k": k, "shell_inner": shell_inner, "shell_outer": shell_outer, "link": link,
+                 "link_width": link_width, "min_spur": min_spur}
         vals: dict[str, Any] = {}
         for name in _POSITIVE:
-            val = given.get(name)
+            val = given[name]
             if val is None:
                 continue
             if not np.isfinite(val) or val <= 0:
@@ -76,12 +81,10 @@ class RobustParams:
         outer = vals.get("shell_outer", DEFAULTS.shell_outer)
         if outer <= inner:
             raise InputError(f"shell_outer ({outer}) must be larger than shell_inner ({inner})")
-        spacing, smoothing = given.get("spacing"), given.get("smoothing")
         if spacing is not None and (not np.isfinite(spacing) or spacing <= 0):
             raise InputError(f"spacing must be a positive number, got {spacing!r}")
         if smoothing is not None and (not np.isfinite(smoothing) or smoothing < 0):
             raise InputError(f"smoothing must be a non-negative number of spacings, got {smoothing!r}")
-        fit = given.get("fit")
         if fit is not None and not isinstance(fit, (bool, np.bool_)):
             raise InputError(f"fit must be true, false or none (none: where noise is detected), got {fit!r}")
         return cls(spacing=spacing, smoothing=smoothing, fit=None if fit is None else bool(fit), **vals)

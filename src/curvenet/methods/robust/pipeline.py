@@ -4,7 +4,8 @@ Every radius is in units of the *local* sampling spacing ``h`` of a point, and g
 estimated noise. The stages, each a module of this package (docs/method.md shows each on a
 small example):
 
-1. :mod:`.frames` -- neighbours, local spacing, duplicate samples, tangents, noise level;
+1. :mod:`.frames` -- neighbours, local spacing, duplicate samples, points alone in space
+   (outliers), tangents, noise level;
 2. :mod:`.graph` -- links along the tangents (strand links cut under noise);
 3. :mod:`.junctions` -- the shell test: which points are junction points, and their regions;
 4. :mod:`.chains` -- the chains between regions, ordered;
@@ -22,7 +23,6 @@ the user's keywords in :class:`.params.RobustParams`.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 from typing import NamedTuple
 
@@ -30,26 +30,26 @@ import numpy as np
 
 from ...errors import InputError
 from ...network import CurveNetwork
-from ...neighbors import locality_order
+from ...neighbors import build_tree, locality_order
 from ...validate import as_points
 from ..stages import ROBUST_SHARES, OnStage, report_stage
 from . import kernels as _k
 from .chains import trace_chains
 from .curves import build_curves, drop_spikes, fit_curves
-from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, lex_order, local_spacing,
+from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, isolated, lex_order, local_spacing,
                      median_noise, median_spacing, neighbours, tangents)
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
 from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
-from .thresholds import DEFAULTS, FIT, LAYOUT, NOISE, SPACING
+from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
 
 __all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts"]
 
 
-def _reconstruct_robust(
+def reconstruct_robust(
     points,
     *,
     spacing: float | None = None,
@@ -109,19 +109,27 @@ def _reconstruct_robust(
         Nodes (junctions and free ends), curves ending exactly at their nodes (closed loops
         without node have ``start = end = None``), parameters used and stage timings.
     """
-    tm: dict[str, float] = {}
     t0 = time.perf_counter()
     P0 = as_points(points)
     prm = RobustParams.from_keywords(spacing=spacing, k=k, shell_inner=shell_inner, shell_outer=shell_outer,
                                      link=link, link_width=link_width, min_spur=min_spur, fit=fit,
                                      smoothing=smoothing)
+    # small inputs run the plain-Python kernels: no numba compile or cache load (same results)
+    with _k.compiled_for(len(P0)):
+        return _stages(P0, prm, estimates, on_stage, t0)
+
+
+def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_stage: OnStage | None,
+            t0: float) -> CurveNetwork:
+    """The stages in order on the points ``P0`` (N, d) (see :func:`reconstruct_robust`)."""
+    tm: dict[str, float] = {}
     N, dim = P0.shape
     order = _internal_order(P0)
     P = P0[order]
     del P0  # (a copy when the input was not float64)
     params_out = prm.report()
     if N < DEFAULTS.min_points:
-        params_out["spacing"] = float(spacing) if spacing is not None else None
+        params_out["spacing"] = float(prm.spacing) if prm.spacing is not None else None
         return CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
 
     report_stage(on_stage, ROBUST_SHARES, "neighbors")
@@ -132,15 +140,25 @@ def _reconstruct_robust(
     fr = frames(P, nb, estimates)  # 2. tangents and noise
     P, order, nb, fr = _without_duplicates(P, order, nb, fr, prm, estimates)
     params_out["duplicates_dropped"] = int(N - len(P))
-    params_out.update(_spacing_report(prm, nb.h, fr))
+    n_kept, h_all = len(P), nb.h
+    P, order, nb, fr = _without_isolated(P, order, nb, fr, prm)
+    params_out["isolated_dropped"] = int(n_kept - len(P))
+    params_out.update(_spacing_report(prm, h_all if nb is None else nb.h, fr))
+    del h_all
     if estimates is not None:
         params_out["estimates_given"] = True
+    if nb is None:  # too few points left that are not alone in space: no curve
+        return CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
     graph = linked_graph(P, nb, fr, prm)  # 3. links
     tm["graph"] = time.perf_counter() - t1
     # memory: every intermediate is dropped as soon as no later stage reads it (at 1e7 points
     # the peak is in the last stages); from here on the tangents are not read
     sigma, hmed, clean, lin = fr.sigma, fr.hmed, fr.clean, fr.lin
     fr = fr._replace(t=None)  # (stage 4 reads sigma and clean only)
+    # the k-d tree is read again by the repairs alone: it is built again there, over the same
+    # points (the same tree, the same answers), instead of being held through the two stages
+    # that hold the most memory (about 20 bytes a point: its ids and nodes)
+    nb = nb._replace(tree=None)
 
     report_stage(on_stage, ROBUST_SHARES, "nodes")
     t1 = time.perf_counter()
@@ -153,7 +171,7 @@ def _reconstruct_robust(
     del reg
     report_stage(on_stage, ROBUST_SHARES, "tracing")
     t1 = time.perf_counter()
-    tree, h = nb.tree, nb.h
+    h = nb.h
     del nb  # the kNN lists are not needed below
     chains, regions = trace_chains(P, h, graph, flagged, reg_of, n_reg, lin, close=close)  # 5. chains
     indptr, indices = graph.indptr, graph.indices
@@ -163,8 +181,8 @@ def _reconstruct_robust(
     report_stage(on_stage, ROBUST_SHARES, "assemble")
     t1 = time.perf_counter()
     sc = Scales(h=h, hmed=hmed, sigma=sigma, noise=NOISE.scale * sigma, clean=clean,
-                width=max(prm.link_width, 0.0), indptr=indptr, indices=indices, tree=tree)
-    del indptr, indices, tree  # (held by sc alone, dropped with it)
+                width=max(prm.link_width, 0.0), indptr=indptr, indices=indices, tree=build_tree(P))
+    del indptr, indices  # (held by sc alone, dropped with it)
     topo = run_repairs(Topology(P, chains, regions), sc, prm)  # 6. repairs
     del chains, regions
     sc = dataclasses.replace(sc, tree=None)  # the k-d tree: read by the repairs alone
@@ -209,6 +227,22 @@ def _without_duplicates(P, order, nb, fr, prm: RobustParams, est: Estimates | No
     P, order = P[keep], order[keep]
     nb = neighbours(P, prm)
     return P, order, nb, frames(P, nb, est)
+
+
+def _without_isolated(P, order, nb, fr, prm: RobustParams):
+    """Points, internal order, neighbours and frames without the points alone in space (see
+    :func:`.frames.isolated`): those are dropped and stages 1-2 redone on the rest, with the
+    median spacing and noise level found on all of them (those of :func:`estimate`); the inputs
+    themselves when nothing is dropped. When fewer than ``DEFAULTS.min_points`` are left, the
+    neighbours and frames are None (no network)."""
+    keep = isolated(nb, fr.hmed)
+    if keep is None:
+        return P, order, nb, fr
+    P, order = P[keep], order[keep]
+    if len(P) < DEFAULTS.min_points:
+        return P, order, None, fr
+    nb = neighbours(P, prm)
+    return P, order, nb, frames(P, nb, Estimates(fr.hmed, fr.sigma))
 
 
 def _spacing_report(prm: RobustParams, h: np.ndarray, fr) -> dict:
@@ -329,10 +363,3 @@ def estimate(points, *, spacing: float | None = None, k: int | None = None) -> E
         return first
     v = point_estimates(points, dedup_radius=r, spacing=spacing, k=k)
     return Estimates(median_spacing(v.h), median_noise(v.rms))
-
-
-@functools.wraps(_reconstruct_robust)
-def reconstruct_robust(points, **params) -> CurveNetwork:
-    # small inputs run the plain-Python kernels: no numba compile or cache load (same results)
-    with _k.compiled_for(len(points)):
-        return _reconstruct_robust(points, **params)

@@ -10,8 +10,13 @@ kernels receive their groups as arguments (numba types a named tuple like any tu
 changed value reaches the compiled and the plain-Python kernels alike, and numba's disk cache
 never serves a kernel built with an older value.
 
-Where a value came from is said per field; "benchmark" means chosen on the project's
-synthetic models and CASSIE sketches (docs/benchmarks.md), never per input.
+Where a value came from is said per field ("origin"); "benchmark" means chosen on the
+project's synthetic models and CASSIE sketches (docs/benchmarks.md), never per input, and the
+figures quoted are those the commit named in parentheses measured (``git show <commit>``).
+"No measurement recorded" says that the history holds no measurement of that value: it is
+the commit's choice, kept since because the benchmark did not ask for another. "Derived" values
+follow from the geometry or the code, "definition" ones from what a junction is; a rounding
+guard or an implementation setting is not a tuning (results never depend on the latter).
 """
 
 from __future__ import annotations
@@ -26,20 +31,32 @@ class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
 
     #: neighbours per point for the linked graph
+    #: origin: first version (3e727c1); no measurement recorded
     k: int = 16
     #: inner radius of the junction-test shell, in h (a junction's branches are apart there)
+    #: origin: an early tuning hook (RB_RI), made a constant in c5f96bf; the tuning runs were not
+    #: recorded
     shell_inner: float = 2.5
     #: outer radius of the shell, in h
+    #: origin: an early tuning hook (RB_RO; 4.5 in the first version), made a constant in c5f96bf;
+    #: the tuning runs were not recorded
     shell_outer: float = 5.5
     #: longest link between two points, in h
+    #: origin: first version (3e727c1); no measurement recorded
     link: float = 2.5
     #: a link's far end lies within this many h of the tangent line through one of its ends
+    #: origin: an early tuning hook (RB_W), made a constant in c5f96bf; the tuning runs were not
+    #: recorded
     link_width: float = 1.0
     #: spurs and isolated pieces shorter than this many h are dropped
+    #: origin: first version (3e727c1); no measurement recorded
     min_spur: float = 3.0
     #: the fewest neighbours that give a spacing and a tangent
+    #: origin: derived: the spacing averages the ``SPACING.n_mean`` = 4 nearest neighbours (first
+    #: version)
     k_min: int = 4
     #: under this many points there is no network to find (empty result)
+    #: origin: derived: a point and its ``k_min`` neighbours (first version)
     min_points: int = 5
 
 
@@ -50,8 +67,11 @@ class Layout(NamedTuple):
     """The internal numbering of the points (cache locality only; results never depend on it)."""
 
     #: clouds of more points are numbered cell by cell (6% faster at 34,000 points, 15% at 1e6)
+    #: origin: measured speed, 6884b44 (the 272-run sweep unchanged)
     local_min: int = 20_000
     #: curve samples per block of the vectorized per-curve tests (their temporaries stay small)
+    #: origin: memory only: a block holds whole curves, the same arithmetic; results never depend on
+    #: it
     curve_block: int = 1 << 18
 
 
@@ -63,34 +83,57 @@ class Spacing(NamedTuple):
     compiled ``kernels/frames.py`` reproduces the numpy formula of :func:`.frames.local_spacing`)."""
 
     #: nearest neighbours whose mean distance is the raw spacing (points)
+    #: origin: first version (3e727c1); no measurement recorded
     n_mean: int = 4
     #: divisor of that mean: the mean distance to the 4 nearest samples of a curve sampled
     #: every ``h`` is ``1.5 h`` (unitless)
+    #: origin: derived (above; first version)
     mean_div: float = 1.5
     #: neighbours whose raw spacings, with the point's own, give the median (points)
+    #: origin: first version (3e727c1); no measurement recorded
     n_median: int = 8
     #: accumulators of numpy's pairwise summation of a row, summed as a binary tree (a power
     #: of two: numpy's unrolling, reproduced so the sums are the same bits; a property of numpy,
     #: not a tuning)
+    #: origin: a property of numpy (above), not a tuning
     numpy_lanes: int = 8
     #: a neighbour closer than ``dup`` times the first estimate is the same place sampled twice
+    #: origin: benchmark: CASSIE mean curve F1 0.857 -> 0.862 (4aabe83)
     dup: float = 0.1
     #: ... or closer than ``dup_k`` times the k-th neighbour's distance over k / 2 (several
     #: curves ending on one sample make the first estimate tiny)
+    #: origin: benchmark: CASSIE mean 0.870 -> 0.874, guitar 0.588 -> 0.637 (bdebc5b)
     dup_k: float = 0.3
     #: the compiled spacing kernel takes rows of at most this many neighbours
+    #: origin: implementation: for more neighbours the numpy formula runs, the same bits (c90f454)
     kernel_k_max: int = 128
     #: rows at a time of the numpy spacing (the (rows, k) temporaries stay small)
+    #: origin: memory only: the rows are independent, results never depend on it (ae0b350)
     block: int = 1 << 16
     #: spacings are raised to this fraction of the smallest positive one (coincident clouds)
+    #: origin: first version's guard against a zero spacing (3e727c1), not a tuning
     floor: float = 1e-3
     #: noise-free samples (estimated noise under ``dedup_noise`` median spacings) closer than
     #: ``dedup`` median spacings to an earlier one are dropped: overlapping strokes (benchmark)
+    #: origin: benchmark: CASSIE free creations 0.891 -> 0.904 (d822590)
     dedup: float = 0.3
     #: the noise level, in median spacings, under which the input counts as noise-free
+    #: origin: benchmark, set with the duplicate rule (d822590: CASSIE free creations 0.891 ->
+    #: 0.904)
     dedup_noise: float = 0.05
+    #: a point whose ``n_mean``-th nearest neighbour lies farther than this many median
+    #: spacings is alone in space (an outlier, not a sample of a curve): dropped
+    #: (:func:`.frames.isolated`). Its own spacing would be that far, and every radius of it
+    #: with it, beyond any bounded neighbourhood (a tile's halo)
+    #: origin: issue 23 (tiled == one process under outliers): corridor outliers have spacings
+    #: of 40-80 median spacings; a sparse free end (density ratio 3) has its 4th neighbour about
+    #: 8. No network of the 576 digest runs nor of the 256 'outliers 2%' bench runs changed
+    isolated: float = 16.0
     #: the spacing range reported: these percentiles of h
+    #: origin: reporting only: no result depends on it
     report_lo: float = 5.0
+    #: ... and the upper one (percentile)
+    #: origin: reporting only: no result depends on it
     report_hi: float = 95.0
 
 
@@ -101,27 +144,39 @@ class Tangents(NamedTuple):
     """Stage 2: tangents, their vote and the noise estimate (:mod:`.frames`)."""
 
     #: neighbours of the strip PCA that refines a tangent
+    #: origin: set with the strip-refined tangents (400599a); no measurement recorded
     strip_m: int = 12
     #: on noise-free input a neighbour's direction replaces the 4-neighbour direction when it
     #: scores this much more (under noise the kernels' larger margin): a sparse curve between
     #: two close parallel curves has its 4 nearest neighbours half across (benchmark)
+    #: origin: benchmark: the eye at density x3 exact in 8 of 8 samplings, were 6 (2cbe27f)
     cand_margin_clean: float = 1.5
     #: a tangent more than 10 degrees (cosine) off a coherent vote of its neighbours is replaced
+    #: origin: set with the tangent vote (2bace58); no measurement recorded
     vote_cos: float = float(np.cos(np.radians(10.0)))
     #: neighbours in the vote on noise-free input
+    #: origin: set with the tangent vote (2bace58); no measurement recorded
     vote_m: int = 8
     #: ... and under noise (a tangent thrown across close curves has more neighbours to outvote it)
+    #: origin: benchmark: sweep under noise 0.2h 0.984 -> 0.996 (70ade3d)
     vote_m_noisy: int = 16
     #: the vote's coherence ``1 - l2 / l1`` needed to replace a tangent
+    #: origin: set with the tangent vote (2bace58); no measurement recorded
     vote_coh: float = 0.6
     #: picking the nearest strip neighbour on each side favours points pulled towards the
     #: point: the chord distance is scaled by this (measured on Gaussian noise)
+    #: origin: measured on Gaussian noise, with the noise estimate (20a7b2f)
     rms_bias: float = 1.28
     #: the chord distance of Gaussian noise of std s per coordinate is s * sqrt(rms_dim (d - 1))
+    #: origin: derived: the point's own noise plus a quarter of each chord end's (s^2 (1 + 1/4 +
+    #: 1/4)) per direction across
     rms_dim: float = 1.5
     #: neighbours of the noisy tangents of the strand test
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     noisy_k: int = 32
     #: points per block of the noisy tangents' own neighbour query
+    #: origin: memory only: results never depend on it (efa6188)
     noisy_block: int = 1 << 16
 
 
@@ -133,21 +188,29 @@ class Strip(NamedTuple):
 
     #: half-width scale of the strip that scores a direction: the Gaussian weight is
     #: ``exp(-(r / (w h))^2)`` (spacings; former ``STRIP_W``)
+    #: origin: benchmark: set with the neighbour-direction test (652e120: density x3 0.969 -> 1.000)
     w: float = 0.5
     #: reach along the line of that strip (spacings; former ``STRIP_A``)
+    #: origin: benchmark: set with the neighbour-direction test (652e120: density x3 0.969 -> 1.000)
     a: float = 3.0
     #: score a neighbour's direction needs above the 4-neighbour direction's to replace it
     #: (points of strip score; former ``CAND_MARGIN``)
+    #: origin: benchmark: set with the neighbour-direction test (652e120: density x3 0.969 -> 1.000)
     cand_margin: float = 2.0
     #: the neighbours' directions are tried only where the first PCA's linearity is below this
     #: (unitless; former ``CAND_LIN``)
+    #: origin: measured: the same networks on 16 models x 2 seeds, tangents at 1e6 3.9 s -> 1.5 s
+    #: (f669b37)
     cand_lin: float = 0.8
     #: nearest neighbours of the first PCA, whose directions are the candidates (points)
+    #: origin: benchmark: set with the neighbour-direction test (652e120: density x3 0.969 -> 1.000)
     n_first: int = 4
     #: weighted PCA refinements of the direction (each reweights the points within ``h`` of
     #: the current line)
+    #: origin: set with the strip-refined tangents (400599a); no measurement recorded
     refine: int = 2
     #: points per parallel block (one set of scratch arrays each; results never depend on it)
+    #: origin: implementation: results never depend on it
     rows: int = 2048
 
 
@@ -158,29 +221,46 @@ class Noisy(NamedTuple):
     """Tangents of noisy input (``kernels/frames.py``, :func:`_noisy_tangents`)."""
 
     #: directions to this many nearest neighbours are scored (points; former ``NOISY_CAND``)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     cand: int = 16
     #: reach of the strip along the line, plus ``reach_sig`` sigma (spacings; former
     #: ``NOISY_A``)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     a: float = 5.0
     #: noise part of that reach (sigmas)
+    #: origin: measured: the sweep moved by one sampling of the eye (efa6188: under noise 0.3h + x3
+    #: 0.496 -> 0.502)
     reach_sig: float = 2.0
     #: strip width: ``max(wh h, wf sigma)`` (sigmas; former ``NOISY_WF``)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     wf: float = 2.0
     #: (spacings; former ``NOISY_WH``)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     wh: float = 0.5
     #: Gaussian weights are cut at this many strip widths (unitless; former ``NOISY_CUT``)
+    #: origin: measured: the sweep unchanged (efa6188); a reach, not a tuning
     cut: float = 3.0
     #: the refining PCA takes the points within ``max(h, rw sigma)`` of the line (sigmas;
     #: former ``NOISY_RW``)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     rw: float = 2.5
     #: a candidate direction within this cosine (10 degrees) of one already scored is not
     #: scored again: the refinement, whose strip is at least a spacing wide over 5 spacings,
     #: starts from the same points (cosine; former ``NOISY_SAME``)
+    #: origin: benchmark: the eye under noise 0.3h + x3 0.502 -> 0.550, twice as fast (3d841b0)
     same: float = float(np.cos(np.radians(10.0)))
     #: weighted PCA refinements of the best direction
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     refine: int = 2
     #: rows per parallel block (one set of scratch arrays each; results never depend on it;
     #: former ``NOISY_ROWS``)
+    #: origin: implementation: results never depend on it
     rows: int = 256
 
 
@@ -191,6 +271,7 @@ class Vote(NamedTuple):
     """Tangent vote (``kernels/frames.py``, :func:`_vote_eig`)."""
 
     #: candidate points per parallel block (results never depend on it)
+    #: origin: implementation: results never depend on it
     rows: int = 1024
 
 
@@ -201,6 +282,7 @@ class Noise(NamedTuple):
     """The noise scale of every radius below."""
 
     #: the noise scale is this many times the estimated noise std
+    #: origin: set with the noise estimate (20a7b2f); no measurement recorded
     scale: float = 1.2
 
 
@@ -211,12 +293,18 @@ class Links(NamedTuple):
     """Stage 3: the linked graph (:mod:`.graph`)."""
 
     #: links may stray from a tangent line by this many times the noise
+    #: origin: an early tuning hook (RB_NW), made a constant in c5f96bf; the tuning runs were not
+    #: recorded
     strip_noise: float = 4.5
     #: links may be longer than ``link * h`` by this many times the noise
+    #: origin: set with the noise-aware long links (a811460); no measurement recorded
     gap_noise: float = 3.0
     #: directional links (nearest along the tangent) reach this many times the link length
+    #: origin: set in 20a7b2f; no measurement recorded
     directional: float = 2.0
     #: below this linearity a point has no reliable tangent and its links are kept
+    #: origin: an early tuning hook (RB_LIN; 0.6 in the first version), made a constant in c5f96bf;
+    #: the tuning runs were not recorded
     lin_min: float = 0.3
 
 
@@ -228,46 +316,75 @@ class Strand(NamedTuple):
     (``kernels/graph.py``, :func:`_strand_cuts`; former ``STRAND_*``)."""
 
     #: only links between tangents within 20 degrees are tested (cosine)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     cos: float = float(np.cos(np.radians(20.0)))
     #: the far end must lie more than ``max(t0 sigma, dmin h / 2)`` from the tangent line
     #: (sigmas)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     t0: float = 2.0
     #: window: neighbours within ``a h`` along the tangent (spacings)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     a: float = 4.0
     #: mean-shift kernel width ``max(b sigma, bh h)`` (sigmas)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     b: float = 1.5
     #: (spacings)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     bh: float = 0.35
     #: the two modes must lie more than ``max(thr sigma, dmin h)`` apart (sigmas)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     thr: float = 3.0
     #: (spacings)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     dmin: float = 1.5
     #: points each mode needs (points)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     nmin: int = 3
     #: on both sides of the link, beyond ``side h`` along it (spacings)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     side: float = 0.5
     #: the points of a mode must run within 15 degrees of the tangent (cosine)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     lcos: float = float(np.cos(np.radians(15.0)))
     #: most mean-shift steps
+    #: origin: a cap on the iterations, set with the strand test, its values measured together
+    #: (0b70e44: sweep under noise 0.3h + x3 0.929 -> 0.961)
     steps: int = 30
     #: mean shift stops when a step moves less than this fraction of the kernel width, squared
     #: (unitless)
+    #: origin: a convergence test, set with the strand test, its values measured together (0b70e44:
+    #: sweep under noise 0.3h + x3 0.929 -> 0.961)
     shift_tol: float = 1e-12
     #: a point belongs to a mode within this many kernel widths (unitless)
+    #: origin: set with the strand test, its values measured together (0b70e44: sweep under noise
+    #: 0.3h + x3 0.929 -> 0.961)
     member: float = 1.5
     #: links per parallel block (one set of scratch arrays each; results never depend on it;
     #: former ``STRAND_ROWS``)
+    #: origin: implementation: results never depend on it
     rows: int = 1024
     #: A link whose two modes cannot lie the needed separation apart (both are weighted means
     #: of the window's offsets or their starts, so they lie within the diameter of those points,
     #: and the mode from q within the furthest of them from the mode from p) skips the mean
     #: shifts. The bound must clear that separation by this relative margin, far more than the
     #: rounding of a mean (about 1e-14 relative; results never depend on it) (unitless).
+    #: origin: a rounding guard (above): results never depend on it
     bound_margin: float = 1e-9
     #: The bound is used only when the needed separation is within this many kernel widths
     #: (squared): then every weight of a mean within the bound is a normal number (above
     #: exp(-2 bound_reach)), so its rounding stays relative. The defaults need at most
     #: (1.5 / 0.35)^2 = 18.4 (unitless).
+    #: origin: derived (above): any value over the defaults' 18.4 gives the same results
     bound_reach: float = 100.0
 
 
@@ -278,12 +395,16 @@ class Shell(NamedTuple):
     """Stage 4: the shell test (:mod:`.junctions`, ``kernels/shell.py``)."""
 
     #: the shell radii grow by this many times the noise (in units of ``shell_*``)
+    #: origin: set with the shell widened for noise (a811460); no measurement recorded
     widen: float = 1.5
     #: a point in this many shell groups or more is a junction point (1: a free end, 2: a curve)
+    #: origin: definition: three branches meet at a junction (first version)
     junction_groups: int = 3
     #: the Dijkstra keeps up to this many frontier points in a list scanned for the nearest
     #: (cheaper than a heap for the few on a curve), more in a heap (points; results never
     #: depend on it; former ``FRONT_MAX``)
+    #: origin: measured speed, the shell kernel at 1e6 1.93-2.11 s -> 1.25-1.44 s (61a0b66); results
+    #: never depend on it
     front_max: int = 32
 
 
@@ -295,38 +416,49 @@ class Split(NamedTuple):
 
     #: a region whose radius exceeds this many outer shell radii may hold two junctions (one
     #: junction's region measures 0.35 to 0.45 on the benchmark)
+    #: origin: benchmark: one junction's region measures 0.35 to 0.45 there (5ab855e)
     radius: float = 0.65
     #: it is re-tested on a shell this many times the size; a region still too large for one
     #: junction at one scale (radius over ``radius`` times that scale's outer radius) is
     #: re-tested at the next, finer one
+    #: origin: benchmark: 0.6 (5ab855e), then 0.7 (c438275: CASSIE free creations 0.877 -> 0.891),
+    #: then the finer 0.5 (6165e16: kinds clean 0.482 -> 0.498)
     scales: tuple = (0.7, 0.5)
     #: and split into sub-regions of at least this many points
+    #: origin: set with the region split (5ab855e); no measurement recorded
     min_points: int = 2
     #: ... at the finer scales (after the first) at least this many: a pair of points there is
     #: too few to tell two junctions under 2h apart (a sketch's double junction) from one
+    #: origin: benchmark, with the finer scale (6165e16)
     fine_min_points: int = 3
     #: ... and only where their inner shell radius is over this many times the noise scale (a
     #: finer shell inside the noise's blur splits one junction: noise 0.3h with density x3
     #: lost junctions; noise 0.2h keeps the finer scale) (benchmark)
+    #: origin: benchmark: the sweep under noise 0.3h + x3 back to 0.961 (67077db)
     fine_noise: float = 6.0
     #: more than this many fine outer radii apart
+    #: origin: benchmark: 1.5 -> 1.2, fork stress test under noise 53 -> 57 of 90 (17e065f)
     sep: float = 1.2
     #: junctions a few spacings apart (a facade's ladder, a comb, short street links): a region
     #: still wider than one junction after the splits, its radius over this many outer shell
     #: radii (2.4 h by default: one junction's region measures at most 2.3 h on the speed
     #: benchmark's clean clouds, two junctions 3-5 h apart 2.4 h and more on the kinds) ...
+    #: origin: measured: region radii on the speed clouds (1e5 clean) and the kinds (issue 25, junc25)
     close_radius: float = 0.44
     #: ... is re-tested on shells these many times the size (about 1.4 to 3.3 h: a junction's
     #: flagged points stay within about 1.5 h of it); the scale separating the most junctions
     #: is kept (benchmark: kinds ladder, comb, streets)
+    #: origin: benchmark: kinds clean curve F1 0.498 -> 0.632 with the three scales (one scale: 0.5 alone or 0.55 alone lost ladder or comb) (junc25)
     close_scales: tuple = (0.6, 0.55, 0.5)
     #: ... its points flagged at that scale, joined by links of at most this many h (the
     #: next sample along a curve, not the one after), form one junction each; the region is
     #: replaced by them when two or more hold a junction point (noise-free input only)
+    #: origin: benchmark: kinds ladder, comb (1.2 kept fewer, junc25)
     close_link: float = 1.5
     #: ... and two of them joined by a segment lie more than this many h apart (centroids): the
     #: parts of one crossing or hub seen by such a shell lie 2-2.7 h apart (benchmark: window
     #: at density x3, CASSIE flower)
+    #: origin: benchmark: 3.0 -> 3.5, CASSIE flower and window density x3 back to main's; 4.0 lost kinds (junc25)
     close_sep: float = 3.5
 
 
@@ -338,26 +470,35 @@ class Chains(NamedTuple):
 
     #: a chain whose points, ordered by distance from one end, form a polyline this many times
     #: longer than that distance is a cycle of the linked graph (it would zigzag)
+    #: origin: benchmark: speaker under noise 0.3h + x3 exact on seeds 0-9 (efc248b)
     zigzag: float = 4.0
     #: ... tested on chains of at least this many points
+    #: origin: set with the zigzag test (efc248b); no measurement of this value recorded
     zigzag_min_points: int = 6
     #: a loop is cut where its links to both sides lie within this many h of the cut point
+    #: origin: first version (3e727c1), the cut rule of 7395488; no measurement recorded
     loop_cut: float = 3.0
-    #: ... or within this factor of its longest link there
+    #: ... or within this factor of its longest link there (unitless)
+    #: origin: set in 7395488 (loops cut across long links); no measurement recorded
     loop_cut_link: float = 1.01
     #: a loop is closed when it is longer than this many h
+    #: origin: first version (3e727c1); no measurement recorded
     loop_min: float = 6.0
     #: a loop of fewer points is an open piece
+    #: origin: first version (3e727c1); no measurement recorded
     loop_min_points: int = 3
     #: floor of an edge length in the chains' Dijkstra (length; coincident points still get an
     #: order)
+    #: origin: a rounding guard, not a tuning
     min_edge: float = 1e-12
     #: an end of a chain reads its contacts within ``min(L / 2, end_reach h)`` of it
     #: (spacings)
+    #: origin: first version (3e727c1); no measurement recorded
     end_reach: float = 4.0
     #: a chain of at most this many points with one end only, between two junctions separated
     #: a few spacings apart (``junctions.separate_close_junctions``), takes the other one as its
     #: second end: a segment of a single sample (points)
+    #: origin: benchmark: kinds comb clean 0.375 -> 0.647 with it; 2 points changed no kind (junc25)
     pair_points: int = 1
 
 
@@ -368,11 +509,15 @@ class Ends(NamedTuple):
     """End portions of chains and branches (``kernels/nodes.py``; as ``chains.end_portion``)."""
 
     #: an end portion holds at least ``min(min_points, n)`` points (points)
+    #: origin: first version (3e727c1); no measurement recorded
     min_points: int = 3
     #: the walk into a junction region aims along the end portion over this arc length
     #: (spacings)
+    #: origin: the first version's end portion of 3 h (3e727c1), kept for the junction walk
+    #: (a811460); no measurement recorded
     walk_span: float = 3.0
     #: chains with fewer points are not trimmed behind their nodes (points)
+    #: origin: set with the overshoot trim (e4922ab); no measurement recorded
     trim_min: int = 4
 
 
@@ -383,30 +528,43 @@ class Repairs(NamedTuple):
     """Stage 6: the repairs of :mod:`.repairs` (what noise and sparse sampling break)."""
 
     #: two tips (or a tip and a region) within this many link lengths are joined
+    #: origin: set with the join of facing free ends (8b94cf1); no measurement recorded
     tip_gap: float = 1.2
     #: a free end attaches to a chain at most this many link lengths (plus gap_noise times the
     #: noise) ahead of it: a link lost to noise; a longer gap on clean samples is in the data
+    #: origin: benchmark: 1.5 -> 1.0, CASSIE 0.8752 -> 0.8774, 2.5h gaps under noise still joined
+    #: (5171ee8)
     attach: float = 1.0
     #: ... within 45 degrees of its end's direction (cosine)
+    #: origin: benchmark: held-out seeds 5-9 density x3 0.964 -> 0.969 (8c10e3f)
     attach_cos: float = float(np.cos(np.radians(45.0)))
     #: the end portion (in h) that gives a free end's direction for the attach test
+    #: origin: set with the dangling-end attach (b34cd7a); no measurement recorded
     attach_span: float = 3.0
     #: a chain point within this many points of the other chain's end joins that end's region
+    #: origin: set with the dangling-end attach (b34cd7a); no measurement recorded
     attach_end_points: int = 2
     #: the end portion (in h) that gives a tip's node for the tip-to-junction test
+    #: origin: set with the tip-to-junction repair (45a8121); no measurement recorded
     tip_span: float = 4.0
     #: junctions joined by a chain at most this many h long may be one junction
+    #: origin: benchmark: CASSIE 0.849 -> 0.855 (49430c8)
     merge_len: float = 8.0
     #: ... when the other branches of one aim at the other within 10 degrees (tangent)
+    #: origin: benchmark: CASSIE hat 0.954 -> 0.969 (3e0684a)
     merge_tan: float = float(np.tan(np.radians(10.0)))
     #: a chain sampled this many times as densely as the median is two strokes run together:
     #: its length is measured in median spacings
+    #: origin: benchmark: CASSIE hat exact, 48 study sketches 0.8632 -> 0.8646 (fa86815)
     dense: float = 1.5
     #: a doubled chain into a hub of this many curves or more may aim within ``merge_tan_hub``
+    #: origin: benchmark: CASSIE hat exact, 48 study sketches 0.8632 -> 0.8646 (fa86815)
     hub_valence: int = 5
     #: 20 degrees (tangent): strokes drawn into a pole part from each other bent
+    #: origin: benchmark: CASSIE hat exact, 48 study sketches 0.8632 -> 0.8646 (fa86815)
     merge_tan_hub: float = float(np.tan(np.radians(20.0)))
     #: passes of the spur pruning (a pruned spur can make another)
+    #: origin: first version (3e727c1); no measurement recorded
     prune_passes: int = 3
 
 
@@ -418,40 +576,57 @@ class Nodes(NamedTuple):
     here arrive in a :class:`~curvenet.methods.robust.kernels.JunctionParams`)."""
 
     #: a region where this many curve ends meet or more is a junction (1: a free end, 2: no node)
+    #: origin: definition: three curve ends make a junction (first version)
     junction_valence: int = 3
     #: length (h) of the chain end that gives a chain's direction where it is trimmed at a node
     #: (the trim reaches twice this)
+    #: origin: an early tuning hook (RB_SPAN), made a constant in c5f96bf; the tuning runs were not
+    #: recorded
     span: float = 6.0
     #: length (h) of the walked branch end fitted for the junction node
+    #: origin: set with the walked-branch fit (2bace58); no measurement recorded
     fit_span: float = 4.0
     #: ... plus this many times the noise (a longer fit averages the noise out)
+    #: origin: set with the walked-branch fit (2bace58); no measurement recorded
     fit_noise: float = 6.0
     #: a walk into a junction stops where it strays this many link widths from its line
+    #: origin: benchmark: 1.5 -> 1.25, 5 seeds under noise + x3 0.889 -> 0.898 (3cc87ed)
     walk_dev: float = 1.25
     #: a walk reaches at most this many default outer shell radii (3 x 5.5 h)
+    #: origin: a bound of the node fit from the early versions (before c5f96bf); no measurement
+    #: recorded
     walk_far: float = 16.5
     #: the end portion (h) that gives a free end's node
+    #: origin: first version (3e727c1); no measurement recorded
     free_span: float = 4.0
     #: a region point beyond this fraction of the shell radius from its junction node, in a
     #: direction no incident branch takes, is a swallowed branch's tip
+    #: origin: benchmark: held-out seeds 5-9 under noise + x3 0.919 -> 0.923 (bce5eca)
     swallow: float = 0.8
     #: ... no branch within 25 degrees (cosine)
+    #: origin: benchmark: held-out seeds 5-9 under noise + x3 0.919 -> 0.923 (bce5eca)
     swallow_cos: float = float(np.cos(np.radians(25.0)))
     #: a free end's region holds a fork when a point lies this many shell radii from the path
     #: to its farthest point
+    #: origin: benchmark: held-out seeds 5-9 under noise + x3 0.923 -> 0.927 (892bc11)
     fork: float = 0.6
     #: ... in a region of at least this many points
+    #: origin: set with the hidden-fork test (892bc11); no measurement of this value recorded
     fork_min_points: int = 6
     #: the walk into a region takes a point only ahead of the branch end by more than this
     #: (spacings)
+    #: origin: set with the junction walk (a811460); no measurement recorded
     ahead: float = 0.25
     #: weight of the pull of the node towards the mean of the branch ends in the least
     #: squares (unitless; small: it only makes near-parallel lines well-posed)
+    #: origin: first version (3e727c1): a regularisation, not a tuning
     anchor_pull: float = 1e-2
     #: relative slack of the hidden-branch tests' comparisons (rounding guard; the exact test
     #: is ``junctions.swallowed_branches``)
+    #: origin: a rounding guard, not a tuning
     swallow_tol: float = 1e-9
     #: a branch can hide in a region of at least this many points (points)
+    #: origin: set with the hidden-branch test (bce5eca); no measurement recorded
     swallow_min: int = 3
 
 
@@ -462,14 +637,18 @@ class Curves(NamedTuple):
     """Stage 8: curves (:mod:`.curves`)."""
 
     #: two successive steps of a curve more than 120 degrees apart (cosine below) turn back
+    #: origin: benchmark: corners under noise 0.3h + x3 F1 0.67 -> 1.00 (444e1bc)
     turn_back_cos: float = -0.5
     #: the reach (in points along the curve) of one reordering move of the untangle kernel
+    #: origin: benchmark: 32 -> 64, corners 8 of 8 samplings exact (9f5c6f3)
     untangle_w: int = 64
     #: node and curve order: coordinates rounded to this many decimals
+    #: origin: first version (3e727c1): an ordering convention, only the order depends on it
     round_decimals: int = 9
     #: an interior sample farther than this many (spacing + noise scale) from the chord of its
     #: two neighbours is a spike (an outlier taken into the curve) and is dropped; a 30-degree
     #: corner sits 0.97 spacing from that chord
+    #: origin: benchmark: outliers 2% + noise 0.1h, curve F1 0.983 -> 1.000 (55a389d)
     spike: float = 1.5
 
 
@@ -483,20 +662,32 @@ class Fit(NamedTuple):
     #: widest kernel of the fit, in local spacings (the equivalent kernel of a cubic smoothing
     #: spline, Silverman 1984: it averages about this many samples on either side), the width
     #: on straight and gently bent stretches (benchmark)
+    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf)
     band: float = 4.0
     #: narrowest kernel, in local spacings: the width at sharp bends and corners (benchmark)
+    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf)
     band_min: float = 1.5
     #: within a few samples of a held end (a node) the kernel is at most this many spacings wide
     #: per sample from the end (benchmark)
+    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf)
     end_taper: float = 1.0
     #: squared L2 norm of the spline's equivalent kernel of width 1 (Silverman's kernel,
     #: ``3 / (8 sqrt(2))``): a fit of width ``b`` spacings keeps ``kernel_l2 / b`` of the
     #: noise variance
+    #: origin: derived: Silverman's kernel (above), not a tuning
     kernel_l2: float = 0.265
+    #: order of the spline's equivalent kernel (Silverman's kernel is of fourth order): the bias
+    #: of a fit of width ``b`` grows as ``b^q``, so the width of least expected squared error
+    #: minimises ``(b / wide)^(2q) bias2 + kernel_l2 sigma^2 / b`` (``bias2``: the squared bias
+    #: of the widest fit, of width ``wide``; a property of the kernel, not a tuning; unitless)
+    #: origin: a property of the kernel (above)
+    bias_order: float = 4.0
     #: curves of fewer samples are left as they are (points: an open curve's two ends are held)
+    #: origin: derived: a fit needs a sample between the two held ends
     min_points: int = 3
     #: a step between two samples counts as at least this fraction of the curve's median step
     #: (repeated samples: the divided differences stay finite)
+    #: origin: a rounding guard, not a tuning (71dc5cf)
     step_floor: float = 1e-3
 
 
@@ -507,11 +698,15 @@ class Untangle(NamedTuple):
     """Windowed 2-opt of a curve's points (``kernels/chains.py``, :func:`_untangle`)."""
 
     #: most sweeps per curve
+    #: origin: a cap on the iterations, set with the untangle kernel (444e1bc); no measurement
+    #: recorded
     sweeps: int = 50
     #: a reversal is made when it shortens the polyline by more than this fraction of the
     #: step it replaces (unitless; rounding guard)
+    #: origin: a rounding guard, not a tuning
     min_gain: float = 1e-9
     #: curves with fewer points are left as they are (points: a reversal needs two inner ones)
+    #: origin: derived: a reversal needs two inner points
     min_points: int = 4
 
 
@@ -521,13 +716,17 @@ UNTANGLE = Untangle()
 class Numeric(NamedTuple):
     """Rounding tolerances (not thresholds of the method: they make equal values compare equal)."""
 
-    #: relative tolerance of a comparison against a computed bound
+    #: relative tolerance of a comparison against a computed bound (unitless)
+    #: origin: a rounding guard, not a tuning
     rel: float = 1e-9
-    #: a looser one, for bounds of prefilters (the exact test follows)
+    #: a looser one, for bounds of prefilters (the exact test follows; unitless)
+    #: origin: a rounding guard, not a tuning
     rel_loose: float = 1e-6
-    #: a projection above minus this is ahead
+    #: a projection above minus this is ahead (input length units)
+    #: origin: a rounding guard, not a tuning
     ahead: float = 1e-12
     #: the smallest positive length (divisions and zero-length edges)
+    #: origin: a rounding guard, not a tuning
     tiny: float = 1e-300
 
 
@@ -539,22 +738,33 @@ class Linalg(NamedTuple):
     scatter matrices by Jacobi sweeps or in closed form, weighted PCA."""
 
     #: most cyclic Jacobi sweeps (a 3 x 3 matrix converges in about 5; a safety bound)
+    #: origin: a cap, set with the compiled PCA (9b95206); converged runs never reach it
     jacobi_sweeps: int = 60
     #: Jacobi stops when the off-diagonal sum is below this fraction of the diagonal sum
     #: (unitless; about 1e-14 of double precision's range squared: fully converged)
+    #: origin: a rounding guard, not a tuning: fully converged in double precision
     jacobi_tol: float = 1e-30
     #: a rotation angle ratio ``theta`` above this is treated as infinite, ``t = 1 / (2 theta)``
     #: (unitless; Numerical Recipes' guard against overflow of ``theta^2``)
+    #: origin: Numerical Recipes (above), not a tuning
     theta_max: float = 1e150
     #: the closed-form top eigenpair leaves a top eigenvalue closer than this (relative to the
     #: size of the eigenvalues) to the next one to the Jacobi sweeps: its direction is
     #: ill-defined there (unitless; former ``TOP_GAP``)
+    #: origin: set with the closed-form eigenpair (e9fe7c8); no measurement recorded
     top_gap: float = 1e-3
     #: most Newton steps for the largest root of the 3 x 3 characteristic polynomial (it
     #: decreases monotonically from an upper bound; a handful suffice, a safety bound)
+    #: origin: a cap, set with the closed form (e9fe7c8); converged runs never reach it
     newton_steps: int = 100
+    #: the largest size ``d`` of a matrix whose top eigenpair ``_eig_top`` finds in closed form
+    #: (its characteristic polynomial a cubic; the points are 2D or 3D); larger ones take the
+    #: Jacobi sweeps (a property of the code, not a tuning)
+    #: origin: a property of the code (above)
+    closed_dim: int = 3
     #: floor of a divisor that may vanish (a sum of weights, a top eigenvalue, a length): any
     #: positive double far below the data's scale (unitless)
+    #: origin: a rounding guard, not a tuning
     tiny: float = 1e-300
 
 

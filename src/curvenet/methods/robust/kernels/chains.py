@@ -56,7 +56,7 @@ def _chain_order(n, src, dst, dd, chn, n_chn, ch):  # pragma: no cover - compile
             deg[b + 1] += 1
     for i in range(n):
         deg[i + 1] += deg[i]
-    nbr = np.empty(deg[n], dtype=np.int64)
+    nbr = np.empty(deg[n], dtype=src.dtype)  # point ids in the ids' own width (int32)
     wt = np.empty(deg[n], dtype=np.float64)
     fill = deg[:-1].copy()
     for i in range(m):
@@ -95,8 +95,11 @@ def _chain_order(n, src, dst, dd, chn, n_chn, ch):  # pragma: no cover - compile
     heap_k = np.empty(cap, dtype=np.float64)
     heap_v = np.empty(cap, dtype=np.int64)
     gd = np.zeros(n, dtype=np.float64)
-    mark = np.full(n, -1, dtype=np.int64)  # == run when gd is set in that run
-    done = np.full(n, -1, dtype=np.int64)  # == run when settled in that run
+    # == run when gd is set in that run. No 'settled' mark is needed: a point's heap entries
+    # have strictly decreasing keys (a push needs a shorter distance), so only its last one
+    # equals gd when popped; and a settled neighbour b has gd[b] <= key < key + wt (every
+    # edge is at least ch.min_edge > 0 long), so the test below skips it
+    mark = np.full(n, -1, dtype=np.int64)
     ids_o = np.empty(bounds[n_chn], dtype=np.int64)
     par_o = np.empty(bounds[n_chn], dtype=np.float64)
     for c in range(n_chn):
@@ -114,16 +117,13 @@ def _chain_order(n, src, dst, dd, chn, n_chn, ch):  # pragma: no cover - compile
             k = b0
             while hs > 0:
                 key, a, hs = _heap_pop(heap_k, heap_v, hs)
-                if done[a] == run or key > gd[a]:
+                if key > gd[a]:
                     continue
-                done[a] = run
                 ids_o[k] = a
                 par_o[k] = key
                 k += 1
                 for e in range(deg[a], deg[a + 1]):
                     b = nbr[e]
-                    if done[b] == run:
-                        continue
                     nk = key + wt[e]
                     if mark[b] == run and gd[b] <= nk:
                         continue
@@ -287,7 +287,8 @@ def _untangle(X, off, which, w, cos_back, ut):  # pragma: no cover - compiled
             if not found:
                 break
             improved = False
-            for i in range(n - 3):
+            # (a reversal of [i + 1, j] needs i + 2 <= j <= n - 2: the j loop is empty from i = n - 3 on)
+            for i in range(n - 2):
                 if not near[s0 + i]:
                     continue
                 j1 = i + w + 1

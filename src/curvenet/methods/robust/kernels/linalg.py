@@ -90,7 +90,7 @@ def _eig_top(C, V, ev, la):  # pragma: no cover - compiled
     """Eigenvalues (ascending, into ``ev``) and top eigenvector (into ``V[:, d - 1]``; the other
     columns are not set) of a small symmetric matrix ``C`` (d, d).
 
-    For d = 2 and 3 in closed form: the largest root of the characteristic polynomial of the
+    For d = 2 and 3 (``la.closed_dim``) in closed form: the largest root of the characteristic polynomial of the
     traceless ``C - tr(C) / d`` by Newton's method from an upper bound (monotone there), the
     vector as the longest cross product of two rows of ``C - l_top I``, the other two
     eigenvalues from ``C`` restricted to the plane normal to it; a few times cheaper than the
@@ -116,13 +116,14 @@ def _eig_top(C, V, ev, la):  # pragma: no cover - compiled
         V[0, 1] = x * s
         V[1, 1] = y * s
         return
-    if d != 3:
+    if d != la.closed_dim:
         _eig_sym(C, V, ev, la)
         return
+    # d = 3 from here on
     a01 = C[0, 1]
     a02 = C[0, 2]
     a12 = C[1, 2]
-    q = (C[0, 0] + C[1, 1] + C[2, 2]) / 3.0
+    q = (C[0, 0] + C[1, 1] + C[2, 2]) / d
     b00 = C[0, 0] - q
     b11 = C[1, 1] - q
     b22 = C[2, 2] - q
@@ -134,10 +135,10 @@ def _eig_top(C, V, ev, la):  # pragma: no cover - compiled
     # where f is convex and increasing: Newton from the upper end decreases to it
     det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02) + a02 * (a01 * a12 - b11 * a02)
     hp = 0.5 * p2
-    x = np.sqrt(2.0 * p2 / 3.0)
+    x = np.sqrt(2.0 * p2 / d)
     for it in range(la.newton_steps):
         f = (x * x - hp) * x - det
-        df = 3.0 * x * x - hp
+        df = d * x * x - hp
         if not f > 0.0 or not df > 0.0:
             break
         xn = x - f / df
@@ -145,7 +146,7 @@ def _eig_top(C, V, ev, la):  # pragma: no cover - compiled
             break
         x = xn
     # the other two: sum -x, product x^2 - p2 / 2
-    disc = 2.0 * p2 - 3.0 * x * x
+    disc = 2.0 * p2 - d * x * x
     sq = np.sqrt(disc) if disc > 0.0 else 0.0
     x1 = 0.5 * (sq - x)
     if not x - x1 > la.top_gap * (np.sqrt(p2) + abs(q)):
