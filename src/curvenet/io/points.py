@@ -336,7 +336,9 @@ def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
         raise FormatError(f"{p}: LAS file has no points")
     blocks = []
     try:
-        with laspy.open(str(p)) as reader:
+        # a corrupt scale or offset overflows in laspy's scaling: the non-finite points are
+        # reported below, without numpy's RuntimeWarning on standard error
+        with laspy.open(str(p)) as reader, np.errstate(over="ignore", invalid="ignore"):
             for chunk in reader.chunk_iterator(LAS_CHUNK_POINTS):
                 blocks.append(np.column_stack([np.asarray(chunk.x, dtype=np.float64),
                                                np.asarray(chunk.y, dtype=np.float64),
