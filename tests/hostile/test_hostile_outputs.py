@@ -222,3 +222,23 @@ def test_the_command_leaves_stopping_signals_ignored_as_it_exits(ring, tmp_path)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+
+
+@pytest.mark.parametrize("option, what", [(["--dpi", "100000"], "too large"), (["--dpi", "0"], "must be positive"),
+                                          (["--dpi", "-5"], "must be positive"), (["--elev", "nan"], "elev must be"),
+                                          (["--azim", "inf"], "azim must be")])
+def test_bad_picture_options_fail_before_the_work(tmp_path, capsys, option, what):
+    """On main --dpi 100000 ran the reconstruction, then ended in 'out of memory' (exit 1); --dpi 0
+    was refused only after the work; --elev nan and --azim inf drew a picture (exit 0, with
+    RuntimeWarnings). The input here is not a point file: the option is refused before it is read."""
+    bad_input = tmp_path / "bad.xyz"
+    bad_input.write_text("not points\n")
+    code = main(["reconstruct", str(bad_input), "-o", str(tmp_path / "a.json"), "--png", str(tmp_path / "a.png"),
+                 *option])
+    err = capsys.readouterr().err
+    assert code == 2 and what in err and len(err.strip().splitlines()) == 1, err
+    net = tmp_path / "n.json"
+    net.write_text("not a network")
+    assert main(["render", str(net), "-o", str(tmp_path / "n.png"), *option]) == 2
+    assert what in capsys.readouterr().err
+    assert _files(tmp_path) == ["bad.xyz", "n.json"]

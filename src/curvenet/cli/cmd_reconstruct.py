@@ -183,6 +183,10 @@ def run(args) -> int:
         if ext not in WRITERS:
             raise FormatError(f"{out}: unknown output extension {ext!r}; writable: {', '.join(sorted(WRITERS))}"
                               + " (pictures: --png FILE.png, --html FILE.html)")
+    if args.png:
+        from .cmd_render import check_picture_options
+
+        check_picture_options(args)
     for flag, path, ext, what in (("png", args.png, ".png", "the --png picture"),
                                   ("html", args.html, ".html", "the --html viewer")):
         if path:
