@@ -71,7 +71,7 @@ def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list
     list of str, one per curve
     """
     k = len(palette)
-    node_key = [tuple(np.round(p, KEY_DECIMALS).tolist()) for p in net.nodes]
+    node_key = [tuple(_rounded(p).tolist()) for p in net.nodes]
     at_node: dict[int, list[int]] = {}
     counts = np.zeros(k, dtype=np.int64)
     out = [0] * net.n_curves
@@ -85,6 +85,14 @@ def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list
         for n in ends:
             at_node.setdefault(n, []).append(j)
     return [palette[j] for j in out]
+
+
+def _rounded(a: np.ndarray) -> np.ndarray:
+    """``a`` rounded to :data:`KEY_DECIMALS`; values so large that the rounding overflows (over
+    about 1e299) are whole numbers already and stay as they are."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        r = np.round(a, KEY_DECIMALS)
+    return np.where(np.isfinite(r), r, a)
 
 
 def curve_sort_key(c: Curve) -> tuple:
@@ -101,7 +109,7 @@ def curve_sort_key(c: Curve) -> tuple:
         Its lexicographically smallest and largest points, its number of points, then all its
         points sorted (coordinates rounded to :data:`KEY_DECIMALS`).
     """
-    p = np.round(np.asarray(c.points, dtype=float), KEY_DECIMALS)
+    p = _rounded(np.asarray(c.points, dtype=float))
     if not len(p):
         return ((), (), 0)
     rows = p[np.lexsort(p.T[::-1])] + 0.0  # sorted points (+ 0.0 turns -0.0 into 0.0)
