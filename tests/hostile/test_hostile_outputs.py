@@ -242,3 +242,24 @@ def test_bad_picture_options_fail_before_the_work(tmp_path, capsys, option, what
     assert main(["render", str(net), "-o", str(tmp_path / "n.png"), *option]) == 2
     assert what in capsys.readouterr().err
     assert _files(tmp_path) == ["bad.xyz", "n.json"]
+
+
+def test_an_immutable_folder_is_refused_before_the_work_even_for_root(ring, tmp_path, capsys):
+    """The read-only folder of the issue, in a form root cannot write either (the immutable
+    attribute; test_a_read_only_folder_is_refused is skipped under root, as in CI): refused
+    before the input is read, nothing written."""
+    import shutil
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if not shutil.which("chattr") or subprocess.run(["chattr", "+i", str(ro)], capture_output=True).returncode:
+        pytest.skip("chattr +i is not available here")
+    try:
+        bad_input = tmp_path / "bad.xyz"
+        bad_input.write_text("not points\n")
+        (tmp_path / "a.json").write_text("old")
+        assert main(["reconstruct", str(bad_input), "-o", str(tmp_path / "a.json"), "-o", str(ro / "b.json")]) == 2
+        assert "ro is not writable" in capsys.readouterr().err
+        assert (tmp_path / "a.json").read_text() == "old" and _files(ro) == []
+    finally:
+        subprocess.run(["chattr", "-i", str(ro)], capture_output=True)
