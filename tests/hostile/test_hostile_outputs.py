@@ -263,3 +263,20 @@ def test_an_immutable_folder_is_refused_before_the_work_even_for_root(ring, tmp_
         assert (tmp_path / "a.json").read_text() == "old" and _files(ro) == []
     finally:
         subprocess.run(["chattr", "-i", str(ro)], capture_output=True)
+
+
+def test_standard_output_gets_nothing_when_another_output_fails(ring, tmp_path, monkeypatch, capsys):
+    """``-o - --surface m.obj``: on main the network went to standard output before the surfacing
+    failed (the mug at 1e-200: exit 1 with 83 kB of JSON on standard output); now standard output
+    is written last."""
+    import curvenet.cli.cmd_surface as cmd_surface
+    from curvenet import InputError
+
+    def boom(*a, **k):
+        raise InputError("no surface")
+
+    monkeypatch.setattr(cmd_surface, "write_surface", boom)
+    code = main(["reconstruct", str(ring), "-o", "-", "--surface", str(tmp_path / "m.obj"), "-q"])
+    out = capsys.readouterr()
+    assert code == 2 and "no surface" in out.err and out.out == ""
+    assert _files(tmp_path) == ["ring.xyz"]

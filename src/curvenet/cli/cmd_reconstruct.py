@@ -228,11 +228,12 @@ def run(args) -> int:
         if times:
             st.info("  method stages: " + ", ".join(f"{k} {v:.3f} s" for k, v in times.items()))
     written = []
+    stdout_data = None  # written last, once every other output is (no network on standard output after a failure)
     with st.stage("writing", total=n_files, detail=f"{n_files} file(s)") as bar:
         for out in outputs:
             if out == STDIO:
                 ext = stdout_extension(args.output_format)
-                write_stdout(WRITERS[ext][0](net, **writer_options(args, ext)))
+                stdout_data = WRITERS[ext][0](net, **writer_options(args, ext))
             else:
                 write_network(net, out, inputs=inputs, **writer_options(args, extension(out)))
                 written.append(out)
@@ -264,6 +265,8 @@ def run(args) -> int:
         with st.stage("surfacing"):
             mesh, seconds = write_surface(net, args.surface, inputs=inputs)
         written.extend(args.surface)
+    if stdout_data is not None:
+        write_stdout(stdout_data)
     if not args.quiet:
         report = sys.stderr if to_stdout else sys.stdout  # standard output carries the network
         print_summary(net, "stdin" if from_stdin else Path(args.input).stem, written, file=report)
