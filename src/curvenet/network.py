@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .lengths import step_lengths
+
 if TYPE_CHECKING:  # optional packages, imported by the converters only when called
     import networkx
     import open3d
@@ -88,7 +90,7 @@ class Curve:
             return 0.0
         if self.closed:
             p = np.vstack([p, p[:1]])
-        return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+        return float(step_lengths(np.diff(p, axis=0)).sum())
 
     def reversed(self) -> "Curve":
         """The same curve traversed the other way."""

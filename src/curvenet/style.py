@@ -117,7 +117,7 @@ def curve_order(curves: Sequence[Curve]) -> list[int]:
     full = [p for p in pts if len(p)]
     if not full or len({np.shape(p)[1:] for p in full}) != 1 or np.ndim(full[0]) != 2:
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
-    P = np.round(np.concatenate(full).astype(float, copy=False), KEY_DECIMALS) + 0.0
+    P = _rounded(np.concatenate(full).astype(float, copy=False)) + 0.0
     if not np.isfinite(P).all():  # (tuples holding nan compare as Python does, not as numpy)
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
     has = sizes > 0
@@ -153,6 +153,14 @@ def _lexicographic_extreme(P: np.ndarray, cid: np.ndarray, starts: np.ndarray, u
     return out
 
 
+def _rounded(a: np.ndarray) -> np.ndarray:
+    """``a`` rounded to :data:`KEY_DECIMALS`; values so large that the rounding overflows (over
+    about 1e299) are whole numbers already and stay as they are."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        r = np.round(a, KEY_DECIMALS)
+    return np.where(np.isfinite(r), r, a)
+
+
 def curve_sort_key(c: Curve) -> tuple:
     """A key of a curve that depends neither on its direction nor on its place in the network.
 
@@ -167,7 +175,7 @@ def curve_sort_key(c: Curve) -> tuple:
         Its lexicographically smallest and largest points, its number of points, then all its
         points sorted (coordinates rounded to :data:`KEY_DECIMALS`).
     """
-    p = np.round(np.asarray(c.points, dtype=float), KEY_DECIMALS)
+    p = _rounded(np.asarray(c.points, dtype=float))
     if not len(p):
         return ((), (), 0)
     rows = p[np.lexsort(p.T[::-1])] + 0.0  # sorted points (+ 0.0 turns -0.0 into 0.0)

@@ -4,6 +4,8 @@ runaway allocation."""
 
 import io
 import struct
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -157,3 +159,98 @@ def test_las_header_counts_checked_against_the_file_size(tmp_path):
     f.write_bytes(bytes(b))
     with pytest.raises(CurvenetError, match="4294967295 points announced"):
         read_points(f)
+
+
+def test_laz_chunk_size_checked_before_the_decoder_reserves_it(tmp_path):
+    """The LASzip VLR's chunk size sets the buffer lazrs reserves (chunk size x record length):
+    one flipped bit (byte 296, bit 3: 134 million points) took 4.5 GB and 40 s, 2**30 points
+    aborted the process (exit 134, 'memory allocation of 36507205016 bytes failed'). Run in
+    a child process, so that an abort fails this test instead of killing the test run."""
+    raw = _las(True)
+    at = raw.index(b"laszip encoded") - 2 + 54 + 12  # the chunk size in the LASzip VLR's data
+    assert struct.unpack_from("<I", raw, at)[0] == 50_000
+    files = []
+    for size in (50_000 + 2**27, 2**30, 0xF0000000):
+        b = bytearray(raw)
+        b[at:at + 4] = struct.pack("<I", size)
+        files.append(tmp_path / f"c{size}.laz")
+        files[-1].write_bytes(bytes(b))
+    for f in files:
+        r = subprocess.run([sys.executable, "-m", "curvenet", "info", str(f)], capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 2, r.stderr[-300:]
+        assert r.stderr.strip().splitlines() == [r.stderr.strip()] and "LAZ chunks of" in r.stderr
+
+
+def test_every_bit_of_a_laz_header_flipped(tmp_path):
+    """Each of the 8 bits of each byte before the compressed points (public header, LASzip VLR,
+    chunk table offset: 2,728 files), read in one child process: points or the one-line error,
+    never an abort, another exception or a panic message."""
+    raw = _las(True)
+    offset = struct.unpack_from("<I", raw, 96)[0]
+    f = tmp_path / "flip.laz"
+    script = f"""
+import sys
+from curvenet import CurvenetError
+from curvenet.io import read_points
+raw = open({str(tmp_path / 'good.laz')!r}, "rb").read()
+outcomes = [0, 0]
+for i in range({offset + 8}):
+    for bit in range(8):
+        b = bytearray(raw)
+        b[i] ^= 1 << bit
+        open({str(f)!r}, "wb").write(b)
+        try:
+            read_points({str(f)!r})
+            outcomes[0] += 1
+        except CurvenetError as exc:
+            assert "\\n" not in str(exc), str(exc)
+            outcomes[1] += 1
+print(*outcomes)
+"""
+    (tmp_path / "good.laz").write_bytes(raw)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-500:]
+    points, errors = map(int, r.stdout.split())
+    assert points + errors == 8 * (offset + 8) and errors > 0
+    assert "panicked" not in r.stderr and "Warning" not in r.stderr, r.stderr[-500:]
+
+
+def test_a_corrupt_las_scale_is_one_line(tmp_path):
+    """A scale factor of 1e308 overflowed in laspy's scaling: numpy's RuntimeWarning (two more
+    lines on standard error) before the error."""
+    raw = bytearray(_las(False))
+    raw[131:139] = struct.pack("<d", 1e308)  # the x scale factor
+    f = tmp_path / "scale.las"
+    f.write_bytes(bytes(raw))
+    r = subprocess.run([sys.executable, "-m", "curvenet", "info", str(f)], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2
+    assert r.stderr.strip().splitlines() == [r.stderr.strip()] and "NaN or infinite" in r.stderr
+
+
+def test_a_las_file_is_read_without_copies(tmp_path, monkeypatch):
+    """The points of a LAS file decoded straight into the result: on main the blocks, their
+    vstack and the column selection made three copies (peak 3 times the result under
+    tracemalloc), and the last two ran after the last Ctrl-C checkpoint."""
+    import tracemalloc
+
+    import curvenet.io.points as points_module
+
+    laspy = pytest.importorskip("laspy")
+    monkeypatch.setattr(points_module, "LAS_CHUNK_POINTS", 50_000)
+    n = 400_000
+    las = laspy.LasData(laspy.LasHeader(point_format=0, version="1.2"))
+    t = np.linspace(0, 40, n)
+    las.x, las.y, las.z = np.cos(t), np.sin(t), t
+    f = tmp_path / "big.las"
+    las.write(str(f))
+    read_points(f)  # imports and caches outside the measure
+    tracemalloc.start()
+    try:
+        pts = read_points(f)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    np.testing.assert_allclose(pts[:, 2], t, atol=0.01)
+    assert peak < 1.5 * pts.nbytes, peak / pts.nbytes

@@ -103,3 +103,45 @@ def test_far_from_the_origin(mug, mug_net):
 def test_points_float64_cannot_resolve_are_refused(pts, what):
     with pytest.raises(InputError, match=what):
         reconstruct(pts)
+
+
+def _scaled(net, s):
+    from curvenet.network import Curve, CurveNetwork
+
+    return CurveNetwork(net.nodes * s, [Curve(c.points * s, c.start, c.end, c.closed, c.indices) for c in net.curves],
+                        parameters=dict(net.parameters))
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e200, 1e307])
+def test_the_network_writes_and_reads_at_extreme_scales(mug, mug_net, tmp_path, s):
+    """The network of the mug at 1e-200, 1e200, 1e307 through every writer, the labels, the
+    viewer and the lengths (info), with warnings as errors. On main: .dxf and .geojson ended in
+    internal errors at 1e200 (the lengths overflowed in np.linalg.norm), .svg, .dxf and the viewer
+    at 1e307 (rounding overflowed in the colour keys, the SVG height), info and .swc printed
+    RuntimeWarnings; at 1e-200 every length was 0."""
+    import warnings
+
+    from curvenet.io import WRITERS, write_network
+    from curvenet.io.labels import point_labels
+    from curvenet.viewer import network_to_html
+
+    net = _scaled(mug_net, s)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(net.lengths / s, mug_net.lengths, rtol=1e-12)
+        for ext in sorted(WRITERS):
+            write_network(net, tmp_path / f"n{ext}")
+        assert point_labels(net, mug * s).shape == (len(mug), 2)
+        network_to_html(net, points=mug * s)
+
+
+def test_step_lengths_match_numpy_where_numpy_holds():
+    from curvenet.lengths import step_lengths
+
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(1000, 3)) * 10.0 ** rng.integers(-100, 100, size=(1000, 1))
+    assert np.array_equal(step_lengths(d), np.linalg.norm(d, axis=1))  # bit for bit
+    for s in (1e-300, 1e-200, 1e200, 1e300):  # numpy gives 0 or inf here
+        np.testing.assert_allclose(step_lengths(np.array([[3.0, 4.0, 12.0], [-3.0, 0.0, 4.0]]) * s) / s, [13, 5],
+                                   rtol=1e-15)
+    assert step_lengths(np.zeros((2, 3))).tolist() == [0.0, 0.0]

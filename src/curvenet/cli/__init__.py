@@ -47,8 +47,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv=None) -> int:
-    """Run the command line; returns the exit code (0 ok, 1 method failure, 2 bad usage or input)."""
+def main(argv=None, *, exiting: bool | None = None) -> int:
+    """Run the command line; returns the exit code (0 ok, 1 method failure, 2 bad usage or input,
+    130, 143, 129 stopped by Ctrl-C, SIGTERM, SIGHUP with nothing written).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments; by default the process's own command line.
+    exiting : bool, optional
+        Whether the process ends when this returns (default: when ``argv`` is None, as for the
+        ``curvenet`` command): stopping signals then stay ignored after the run, so that one
+        coming while the interpreter shuts down cannot report a finished run as stopped.
+    """
     from ..errors import CurvenetError
 
     parser = build_parser()
@@ -65,7 +76,7 @@ def main(argv=None) -> int:
     try:
         # Ctrl-C, SIGTERM, SIGHUP acted on at safe points (see curvenet._sigint); the files a
         # command writes are renamed into place together when it succeeds, else none
-        with deferred(), all_or_nothing():
+        with deferred(exiting=argv is None if exiting is None else exiting), all_or_nothing():
             return int(args.func(args) or 0)
     except CurvenetError as exc:
         if verbose:

@@ -183,6 +183,10 @@ def run(args) -> int:
         if ext not in WRITERS:
             raise FormatError(f"{out}: unknown output extension {ext!r}; writable: {', '.join(sorted(WRITERS))}"
                               + " (pictures: --png FILE.png, --html FILE.html)")
+    if args.png:
+        from .cmd_render import check_picture_options
+
+        check_picture_options(args)
     for flag, path, ext, what in (("png", args.png, ".png", "the --png picture"),
                                   ("html", args.html, ".html", "the --html viewer")):
         if path:
@@ -224,11 +228,12 @@ def run(args) -> int:
         if times:
             st.info("  method stages: " + ", ".join(f"{k} {v:.3f} s" for k, v in times.items()))
     written = []
+    stdout_data = None  # written last, once every other output is (no network on standard output after a failure)
     with st.stage("writing", total=n_files, detail=f"{n_files} file(s)") as bar:
         for out in outputs:
             if out == STDIO:
                 ext = stdout_extension(args.output_format)
-                write_stdout(WRITERS[ext][0](net, **writer_options(args, ext)))
+                stdout_data = WRITERS[ext][0](net, **writer_options(args, ext))
             else:
                 write_network(net, out, inputs=inputs, **writer_options(args, extension(out)))
                 written.append(out)
@@ -260,6 +265,8 @@ def run(args) -> int:
         with st.stage("surfacing"):
             mesh, seconds = write_surface(net, args.surface, inputs=inputs)
         written.extend(args.surface)
+    if stdout_data is not None:
+        write_stdout(stdout_data)
     if not args.quiet:
         report = sys.stderr if to_stdout else sys.stdout  # standard output carries the network
         print_summary(net, "stdin" if from_stdin else Path(args.input).stem, written, file=report)

@@ -33,6 +33,15 @@ def add_picture_options(p, *, points: bool = True) -> None:
     g.add_argument("--title", default=None, help="picture title (default: the counts of nodes and curves)")
 
 
+def check_picture_options(args) -> None:
+    """Check ``--dpi``, ``--elev`` and ``--azim`` before any work (at the default 8 inch width;
+    the height, which follows a 2D network's shape, is checked again when drawing)."""
+    from ..plots.network_png import check_picture
+
+    opts = picture_options(args)
+    check_picture(width=8.0, height=1.0, dpi=opts["dpi"], elev=opts["elev"], azim=opts["azim"])
+
+
 def picture_options(args) -> dict:
     from ..plots.network_png import DEFAULT_AZIM, DEFAULT_ELEV
 
@@ -76,6 +85,7 @@ def run(args) -> int:
     from ..plots.network_png import save_png
 
     check_extension(args.output, ".png", "the picture")
+    check_picture_options(args)
     st, net, pts, inputs = open_network(args)
     with st.stage("drawing"):
         save_png(net, args.output, inputs=inputs, points=pts, **picture_options(args))

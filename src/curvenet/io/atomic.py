@@ -14,7 +14,7 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-from .._sigint import checkpoint
+from .._sigint import checkpoint, finishing
 from ..errors import OutputError
 
 __all__ = ["atomic_write", "check_output_path", "check_outputs", "all_or_nothing", "TEMP_PREFIX", "TEMP_SUFFIX"]
@@ -125,6 +125,7 @@ class _Batch:
 
     def commit(self) -> None:
         checkpoint()  # a signal before the renames: no file changes
+        finishing()  # a signal from here on: every file changes, and the run ends as done
         for key, (tmp, _, p) in list(self.staged.items()):
             try:
                 os.replace(tmp, p)
@@ -140,6 +141,8 @@ def all_or_nothing():
     Each output goes to its temporary file when written; when the block ends without error,
     every temporary file is renamed to its output, and on any error (a failed output,
     Ctrl-C, SIGTERM) every temporary file is removed and no output is written or changed.
+    Under :func:`curvenet._sigint.deferred`, a stopping signal that comes once the renames
+    have begun is ignored (:func:`curvenet._sigint.finishing`).
     A path written twice must get the same bytes.
     """
     batch = _Batch()

@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError, require
+from ..lengths import step_lengths
 from ..network import CurveNetwork
 from ..style import curve_colors
 from .numbers import table_groups, table_pieces
@@ -227,10 +228,10 @@ def _fit_points(pts: np.ndarray, closed: bool) -> np.ndarray:
     """(k, 3) spline fit points: no (nearly) repeated consecutive points, which break the
     interpolation; a closed curve ends where it starts."""
     tol = 1e-9 * max(float(np.ptp(pts, axis=0).max()), 1e-300)
-    keep = np.r_[True, np.linalg.norm(np.diff(pts, axis=0), axis=1) > tol]
+    keep = np.r_[True, step_lengths(np.diff(pts, axis=0)) > tol]
     fit = pts[keep]
     if closed and len(fit) > 2:
-        if np.linalg.norm(fit[-1] - fit[0]) <= tol:
+        if step_lengths(fit[-1] - fit[0]) <= tol:
             fit = fit[:-1]
         fit = np.vstack([fit, fit[:1]])
     return fit
@@ -242,7 +243,7 @@ def _interpolating_bspline(fit: np.ndarray, closed: bool) -> tuple[int, np.ndarr
     periodic (C2 at the seam) for a loop, whose knots are clamped at the seam by knot insertion."""
     from scipy.interpolate import make_interp_spline
 
-    u = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(fit, axis=0), axis=1))]
+    u = np.r_[0.0, np.cumsum(step_lengths(np.diff(fit, axis=0)))]
     k = min(3, len(fit) - 1)
     if not closed:
         b = make_interp_spline(u, fit, k=k)

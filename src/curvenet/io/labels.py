@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InputError
+from ..lengths import step_lengths
 from ..network import CurveNetwork
 from .numbers import int_rows_text
 
@@ -88,7 +89,7 @@ def _spacing(net: CurveNetwork) -> float:
     h = net.parameters.get("spacing")
     if isinstance(h, (int, float)) and not isinstance(h, bool) and np.isfinite(h) and h > 0:
         return float(h)
-    parts = [np.linalg.norm(np.diff(c.points, axis=0), axis=1) for c in net.curves if len(c.points) > 1]
+    parts = [step_lengths(np.diff(c.points, axis=0)) for c in net.curves if len(c.points) > 1]
     steps = np.concatenate(parts) if parts else np.zeros(0)
     steps = steps[steps > 0]
     return float(np.median(steps)) if len(steps) else 0.0

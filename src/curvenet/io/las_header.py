@@ -39,6 +39,11 @@ LASZIP_VLR_FIXED = 34
 #: The chunk size of a LAZ file whose chunks vary in size (LASzip).
 LAZ_VARIABLE_CHUNKS = 0xFFFFFFFF
 
+#: Largest buffer in bytes that a LAZ chunk may need (points of the chunk x point record length):
+#: the decoder (lazrs) reserves it before decoding, and aborts the process when it cannot. LASzip
+#: writes chunks of 50,000 points (1.7 MB of 34-byte records); 512 MiB is 300 times that.
+LAZ_CHUNK_BYTES_MAX = 2**29
+
 
 @dataclass(frozen=True)
 class LasLayout:
@@ -79,7 +84,8 @@ def check_las(path) -> LasLayout:
     FormatError
         When the signature, the version, the header size, the VLRs, the offset to the points,
         the point record length, the number of points (against the bytes there are, for LAS),
-        the LAZ chunk table or the extended VLRs do not fit the file.
+        the LAZ chunk table or the extended VLRs do not fit the file, or a LAZ chunk would need a
+        decoding buffer over :data:`LAZ_CHUNK_BYTES_MAX`.
     """
     p = Path(path)
     size = p.stat().st_size
@@ -121,7 +127,7 @@ def check_las(path) -> LasLayout:
             if n_points * rec_len > end - offset:
                 raise _bad(p, f"{n_points} points of {rec_len} bytes announced, {end - offset} bytes of point data")
         else:
-            _check_chunks(p, f, offset, end, size, n_points, laszip)
+            _check_chunks(p, f, offset, end, size, n_points, rec_len, laszip)
     return LasLayout(int(n_points), compressed, fmt)
 
 
@@ -157,14 +163,24 @@ def _walk_evlrs(p, f, start: int, n: int, size: int) -> None:
             raise _bad(p, f"extended VLR {i + 1} of {n} runs past the end of the file")
 
 
-def _check_chunks(p, f, offset: int, end: int, size: int, n_points: int, laszip) -> None:
-    """The LAZ chunk table: its offset inside the point data, and a number of chunks that
-    matches the number of points (fixed chunk size) or the bytes there are (variable)."""
+def _check_chunk_buffer(p, n: int, rec_len: int) -> None:
+    """A chunk of ``n`` points must fit the decoder's buffer bound :data:`LAZ_CHUNK_BYTES_MAX`."""
+    if n * rec_len > LAZ_CHUNK_BYTES_MAX:
+        raise _bad(p, f"LAZ chunks of {n} points of {rec_len} bytes, over the {LAZ_CHUNK_BYTES_MAX >> 20} MiB "
+                      "a chunk may take")
+
+
+def _check_chunks(p, f, offset: int, end: int, size: int, n_points: int, rec_len: int, laszip) -> None:
+    """The LAZ chunk table: its offset inside the point data, a number of chunks that matches
+    the number of points (fixed chunk size) or the bytes there are (variable), and chunks whose
+    decoding buffer stays within :data:`LAZ_CHUNK_BYTES_MAX`."""
     if laszip is None or len(laszip) < LASZIP_VLR_FIXED:
         raise _bad(p, "compressed points without a valid LASzip VLR")
     chunk_size = struct.unpack_from("<I", laszip, 12)[0]
     if chunk_size == 0:
         raise _bad(p, "LAZ chunk size 0")
+    if chunk_size != LAZ_VARIABLE_CHUNKS:
+        _check_chunk_buffer(p, chunk_size, rec_len)
     if end - offset < 8:
         raise _bad(p, "no compressed point data")
     f.seek(offset)
@@ -182,10 +198,11 @@ def _check_chunks(p, f, offset: int, end: int, size: int, n_points: int, laszip)
         raise _bad(p, f"{n_chunks} LAZ chunks announced in {table - offset - 8} bytes of point data")
     if chunk_size != LAZ_VARIABLE_CHUNKS and n_chunks != -(-n_points // chunk_size):
         raise _bad(p, f"{n_points} points announced, {n_chunks} LAZ chunks of {chunk_size} points")
-    _check_chunk_entries(p, f, offset, table, n_points, chunk_size, laszip)
+    _check_chunk_entries(p, f, offset, table, n_points, chunk_size, rec_len, laszip)
 
 
-def _check_chunk_entries(p, f, offset: int, table: int, n_points: int, chunk_size: int, laszip) -> None:
+def _check_chunk_entries(p, f, offset: int, table: int, n_points: int, chunk_size: int, rec_len: int,
+                         laszip) -> None:
     """The entries of the LAZ chunk table (read by lazrs, when installed): the chunks' bytes
     within the compressed data, their points (variable chunks) adding up to ``n_points``. A
     garbage entry makes the decoder reserve an impossible buffer and panic."""
@@ -205,6 +222,8 @@ def _check_chunk_entries(p, f, offset: int, table: int, n_points: int, chunk_siz
     for i, (n, nbytes) in enumerate(entries):
         used += nbytes
         points += n
+        if chunk_size == LAZ_VARIABLE_CHUNKS:
+            _check_chunk_buffer(p, n, rec_len)
         if used > room:
             raise _bad(p, f"LAZ chunk {i + 1} of {len(entries)} ends after the compressed data ({room} bytes)")
     if chunk_size == LAZ_VARIABLE_CHUNKS and points != n_points:

@@ -325,7 +325,8 @@ def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     """Read the x, y, z coordinates of a LAS or LAZ point cloud (needs laspy, extra ``io``).
 
     The header is checked against the file's size first (:func:`curvenet.io.las_header.check_las`),
-    then the points are decoded :data:`LAS_CHUNK_POINTS` at a time.
+    then the points are decoded :data:`LAS_CHUNK_POINTS` at a time (a LAS file's straight into
+    the (N, 3) result, no other copy of it), with a Ctrl-C checkpoint after each block.
     """
     from .las_header import check_las
 
@@ -334,21 +335,33 @@ def read_las(path, *, columns: Columns = None, drop_nonfinite: bool = False) -> 
     layout = check_las(p)
     if layout.n_points == 0:
         raise FormatError(f"{p}: LAS file has no points")
-    blocks = []
+    # an uncompressed file's points go straight into one array: their number was checked
+    # against the file's size (a LAZ file's number of points is not bounded by its size)
+    arr = np.empty((layout.n_points, 3)) if not layout.compressed else None
+    blocks, done = [], 0
     try:
-        with laspy.open(str(p)) as reader:
+        # a corrupt scale or offset overflows in laspy's scaling: the non-finite points are
+        # reported below, without numpy's RuntimeWarning on standard error
+        with laspy.open(str(p)) as reader, np.errstate(over="ignore", invalid="ignore"):
             for chunk in reader.chunk_iterator(LAS_CHUNK_POINTS):
-                blocks.append(np.column_stack([np.asarray(chunk.x, dtype=np.float64),
-                                               np.asarray(chunk.y, dtype=np.float64),
-                                               np.asarray(chunk.z, dtype=np.float64)]))
+                if arr is None:
+                    block = np.empty((len(chunk), 3))
+                    blocks.append(block)
+                else:
+                    block = arr[done:done + len(chunk)]
+                block[:, 0], block[:, 1], block[:, 2] = chunk.x, chunk.y, chunk.z
+                done += len(block)
                 checkpoint()
     except (KeyboardInterrupt, SystemExit, MemoryError):
         raise
     except BaseException as exc:  # laspy and lazrs raise many types (a Rust panic is a BaseException)
         msg = str(exc).split("\n")[0] or type(exc).__name__
         raise FormatError(f"{p}: not a valid LAS/LAZ file ({msg})") from None
-    arr = np.vstack(blocks) if blocks else np.zeros((0, 3))
+    arr = arr[:done] if arr is not None else np.vstack(blocks) if blocks else np.zeros((0, 3))
     if len(arr) == 0:
         raise FormatError(f"{p}: LAS file has no points")
     cols = select_columns(p, ["x", "y", "z"], 3, columns)
-    return _finite(p, arr[:, cols], drop_nonfinite)
+    if cols != [0, 1, 2]:
+        arr = arr[:, cols]
+    checkpoint()
+    return _finite(p, arr, drop_nonfinite)

@@ -7,6 +7,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..lengths import step_lengths
 from ..network import Curve, CurveNetwork
 
 __all__ = ["curve_lengths", "polyline_arrays", "polyline_vertices", "segments"]
@@ -34,7 +35,7 @@ def curve_lengths(curves: Sequence[Curve]) -> np.ndarray:
         P = np.stack([curves[i].points for i in ids])
         if closed:
             P = np.concatenate([P, P[:, :1]], axis=1)
-        out[ids] = np.linalg.norm(np.diff(P, axis=1), axis=2).sum(axis=1)
+        out[ids] = step_lengths(np.diff(P, axis=1)).sum(axis=1)
     return out
 
 

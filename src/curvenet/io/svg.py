@@ -101,7 +101,7 @@ def network_to_svg(
     pad = 0.03 * big
     span = np.maximum(span, 1e-3 * big)
     vb = (lo[0] - pad, -(lo[1] + span[1]) - pad, span[0] + 2 * pad, span[1] + 2 * pad)
-    height = max(1, int(round(width * vb[3] / vb[2])))
+    height = max(1, int(round(width * (vb[3] / vb[2]))))  # (the ratio first: no overflow near 1e308)
     sw = 0.004 * big
     r = 0.008 * big
 

@@ -12,6 +12,7 @@ from collections import deque
 import numpy as np
 
 from ..errors import InputError
+from ..lengths import step_lengths
 from ..network import CurveNetwork
 from .numbers import int_rows_text, join_columns, rows_text, shortest, table_text
 
@@ -166,6 +167,6 @@ def _median_step(curves: list) -> float:
     if not long:
         return 0.0
     P = np.concatenate(long)
-    steps = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    steps = step_lengths(np.diff(P, axis=0))
     last = np.cumsum([len(p) for p in long])[:-1] - 1  # the step from one curve to the next
     return float(np.median(np.delete(steps, last)))

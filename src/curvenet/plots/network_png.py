@@ -29,6 +29,9 @@ from ..style import (
 __all__ = [
     "DEFAULT_ELEV",
     "DEFAULT_AZIM",
+    "MAX_PICTURE_SIDE",
+    "MAX_PICTURE_AREA",
+    "check_picture",
     "plot_network",
     "render_png",
     "save_png",
@@ -37,6 +40,42 @@ __all__ = [
 #: Default 3D view (degrees), looking slightly from above and from the front left.
 DEFAULT_ELEV = 25.0
 DEFAULT_AZIM = -60.0
+
+#: Longest side of a picture in pixels: matplotlib's Agg renderer refuses 2**16 and more.
+MAX_PICTURE_SIDE = 2**16 - 1
+#: Most pixels in a picture: 2**28 pixels of 4 bytes are the 1 GiB canvas Agg allocates.
+MAX_PICTURE_AREA = 2**28
+
+
+def check_picture(*, width: float, height: float, dpi: float, elev: float = DEFAULT_ELEV,
+                  azim: float = DEFAULT_AZIM) -> None:
+    """Check the size and the view of a picture before any drawing.
+
+    Parameters
+    ----------
+    width, height : float
+        Figure size in inches.
+    dpi : float
+        Pixels per inch.
+    elev, azim : float
+        3D view angles in degrees.
+
+    Raises
+    ------
+    InputError
+        When a size is not positive, the picture has a side over :data:`MAX_PICTURE_SIDE` or
+        more than :data:`MAX_PICTURE_AREA` pixels, or an angle is not finite.
+    """
+    if not (width > 0 and height > 0 and dpi > 0):
+        raise InputError(f"picture size must be positive, got {width} x {height} in at {dpi} dpi")
+    w, h = width * dpi, height * dpi
+    if max(w, h) > MAX_PICTURE_SIDE or w * h > MAX_PICTURE_AREA:
+        raise InputError(f"a picture of {w:.0f} x {h:.0f} pixels ({width:g} x {height:g} in at {dpi} dpi) is too "
+                         f"large: at most {MAX_PICTURE_SIDE} pixels a side and {MAX_PICTURE_AREA} pixels; "
+                         "lower --dpi")
+    for name, v in (("elev", elev), ("azim", azim)):
+        if not np.isfinite(v):
+            raise InputError(f"{name} must be a finite angle in degrees, got {v}")
 
 
 def _check_points(net: CurveNetwork, points) -> np.ndarray | None:
@@ -253,8 +292,7 @@ def render_png(
     points = _check_points(net, points)
     if height is None:
         height = _default_height(net, points, width)
-    if not (width > 0 and height > 0 and dpi > 0):
-        raise InputError(f"picture size must be positive, got {width} x {height} in at {dpi} dpi")
+    check_picture(width=width, height=height, dpi=dpi, elev=elev, azim=azim)
     fig = Figure(figsize=(width, height), dpi=dpi)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(**_subplot_kw(net.dimension))
