@@ -145,3 +145,38 @@ def test_step_lengths_match_numpy_where_numpy_holds():
         np.testing.assert_allclose(step_lengths(np.array([[3.0, 4.0, 12.0], [-3.0, 0.0, 4.0]]) * s) / s, [13, 5],
                                    rtol=1e-15)
     assert step_lengths(np.zeros((2, 3))).tolist() == [0.0, 0.0]
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e200])
+def test_the_mug_surfaces_at_extreme_scales(mug_net, s):
+    """On main the surfacing failed at 1e200 (ValueError in the cycle selection) and at 1e-200
+    (Triangle: invalid geometry): a network far outside ordinary units is surfaced scaled by an
+    exact power of two and the mesh scaled back."""
+    pytest.importorskip("triangle")
+    from curvenet.surfacing import surface
+
+    ref = surface(mug_net, check=False)
+    mesh = surface(_scaled(mug_net, s), check=False)
+    assert mesh.n_patches == ref.n_patches and mesh.euler_characteristic == ref.euler_characteristic
+    assert np.isfinite(mesh.vertices).all()
+    lo, hi = mesh.vertices.min(axis=0) / s, mesh.vertices.max(axis=0) / s
+    np.testing.assert_allclose(lo, ref.vertices.min(axis=0), rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(hi, ref.vertices.max(axis=0), rtol=1e-6, atol=1e-6)
+    assert mesh.stats["target_edge"] / s == pytest.approx(ref.stats["target_edge"], rel=1e-6)
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e200])
+def test_a_picture_at_extreme_scales_is_a_clear_error(mug_net, tmp_path, s, capsys):
+    """On main matplotlib failed inside (LinAlgError, exit 1) at 1e200 and warned at 1e-200."""
+    pytest.importorskip("matplotlib")
+    from curvenet.cli import main
+    from curvenet.plots.network_png import render_png
+
+    net = _scaled(mug_net, s)
+    with pytest.raises(InputError, match="cannot draw"):
+        render_png(net)
+    path = tmp_path / "n.json"
+    net.save(path)
+    assert main(["render", str(path), "-o", str(tmp_path / "n.png")]) == 2
+    assert "cannot draw" in capsys.readouterr().err
+    assert not (tmp_path / "n.png").exists()

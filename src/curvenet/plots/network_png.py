@@ -78,6 +78,33 @@ def check_picture(*, width: float, height: float, dpi: float, elev: float = DEFA
             raise InputError(f"{name} must be a finite angle in degrees, got {v}")
 
 
+#: Pictures are drawn for coordinates whose magnitude and extent lie within these bounds
+#: (matplotlib's transforms square coordinates: beyond about 1e150 they overflow, below about
+#: 1e-150 they vanish); outside, :func:`render_png` refuses with an :class:`InputError`
+#: instead of failing inside matplotlib.
+DRAWABLE_RANGE = (1e-100, 1e100)
+
+
+def _check_drawable(net: CurveNetwork, points) -> None:
+    """Refuse coordinates too large or too small for matplotlib (see :data:`DRAWABLE_RANGE`)."""
+    parts = [np.asarray(net.nodes, dtype=float).reshape(-1, net.dimension)]
+    parts += [np.asarray(c.points, dtype=float).reshape(-1, net.dimension) for c in net.curves]
+    if points is not None:
+        parts.append(points)
+    X = np.concatenate(parts) if parts else np.zeros((0, net.dimension))
+    if not len(X):
+        return
+    lo, hi = DRAWABLE_RANGE
+    with np.errstate(over="ignore", invalid="ignore"):
+        size = float(np.abs(X).max())
+        extent = float(np.ptp(X, axis=0).max())
+    if size > hi or (extent > 0 and extent < lo):
+        raise InputError(
+            f"cannot draw coordinates of magnitude {size:.3g} spanning {extent:.3g}: pictures need "
+            f"extents between {lo:g} and {hi:g} (scale the points or the network)"
+        )
+
+
 def _check_points(net: CurveNetwork, points) -> np.ndarray | None:
     if points is None:
         return None
@@ -290,6 +317,7 @@ def render_png(
     from matplotlib.figure import Figure
 
     points = _check_points(net, points)
+    _check_drawable(net, points)
     if height is None:
         height = _default_height(net, points, width)
     check_picture(width=width, height=height, dpi=dpi, elev=elev, azim=azim)

@@ -129,6 +129,27 @@ def _chains(net: CurveNetwork, tol: float):
     return nodes, chains
 
 
+#: Networks whose extent lies within ``2**-UNIT_EXPONENT_LIMIT`` to ``2**UNIT_EXPONENT_LIMIT``
+#: (about 1e-18 to 1e18) are surfaced as they are; others are first scaled by a power of two
+#: (exact) to an extent near 1 (:func:`surface`).
+UNIT_EXPONENT_LIMIT = 60
+
+
+def _unit_exponent(extent: float) -> int:
+    """0 for an extent within the ordinary range, else the power of two that brings it near 1."""
+    e = int(np.frexp(extent)[1])
+    return e if abs(e) > UNIT_EXPONENT_LIMIT else 0
+
+
+def _scaled(network: CurveNetwork, k: int) -> CurveNetwork:
+    """The network with every coordinate multiplied by ``2**k`` (exact)."""
+    from ..network import Curve
+
+    curves = [Curve(np.ldexp(np.asarray(c.points, dtype=float), k), c.start, c.end, c.closed, c.indices)
+              for c in network.curves]
+    return CurveNetwork(np.ldexp(np.asarray(network.nodes, dtype=float), k), curves, dict(network.parameters))
+
+
 def surface(
     network: CurveNetwork,
     *,
@@ -216,6 +237,17 @@ def surface(
     if not np.isfinite(network.nodes).all():
         raise InputError("the network has nodes with non-finite coordinates (NaN or infinity)")
     scale = max((float(np.ptp(p, axis=0).max()) for p in allpts), default=1.0) or 1.0
+    k = _unit_exponent(scale)
+    if k:
+        # far outside ordinary units the triangulation and the solvers under- or overflow: the
+        # network is surfaced scaled by 2**-k (exact in floating point) and the mesh scaled back
+        unit = _scaled(network, -k)
+        mesh = surface(unit, target_edge=None if target_edge is None else float(np.ldexp(target_edge, -k)),
+                       fair=fair, fold_angle=fold_angle, min_angle=min_angle, time_limit=time_limit,
+                       max_triangles=max_triangles, check=check)
+        mesh.vertices = np.ldexp(mesh.vertices, k)
+        mesh.stats["target_edge"] = float(np.ldexp(mesh.stats["target_edge"], k))
+        return mesh
     tol = 1e-9 * scale
     nodes, chains = _chains(network, tol)
     edges = network.edges
