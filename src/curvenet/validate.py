@@ -78,7 +78,8 @@ MIN_RECONSTRUCT_POINTS = 3
 
 def reconstructable(points, *, name: str = "points") -> np.ndarray:
     """Check points for a reconstruction: :func:`as_points`, at least
-    :data:`MIN_RECONSTRUCT_POINTS` of them, not all identical.
+    :data:`MIN_RECONSTRUCT_POINTS` of them, not all identical, an extent float64 resolves
+    (:func:`unit_frame`).
 
     Parameters
     ----------
@@ -98,6 +99,10 @@ def reconstructable(points, *, name: str = "points") -> np.ndarray:
     pts = as_points(points, min_points=MIN_RECONSTRUCT_POINTS, name=name)
     if not (pts.max(axis=0) > pts.min(axis=0)).any():
         raise InputError(f"{name}: all {len(pts)} points are identical; nothing to reconstruct")
+    try:  # extents float64 cannot resolve, refused here with the name (the method checks them too)
+        unit_frame(pts)
+    except InputError as e:
+        raise InputError(f"{name}: {e}") from None
     return pts
 
 

@@ -180,3 +180,15 @@ def test_a_picture_at_extreme_scales_is_a_clear_error(mug_net, tmp_path, s, caps
     assert main(["render", str(path), "-o", str(tmp_path / "n.png")]) == 2
     assert "cannot draw" in capsys.readouterr().err
     assert not (tmp_path / "n.png").exists()
+
+
+def test_an_unresolvable_extent_names_the_file_before_the_work(mug, tmp_path, capsys):
+    """On main the 1e-300 error came from the method, after reading, without the file's name."""
+    from curvenet.cli import main
+
+    path = tmp_path / "tiny.xyz"
+    np.savetxt(path, mug * 1e-300, fmt="%.17g")
+    assert main(["reconstruct", str(path), "-o", str(tmp_path / "n.json")]) == 2
+    err = capsys.readouterr().err
+    assert "tiny.xyz: points span only" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "n.json").exists()
