@@ -210,6 +210,10 @@ def surface(
 
     Notes
     -----
+    A network whose extent lies outside ``2**-UNIT_EXPONENT_LIMIT`` to ``2**UNIT_EXPONENT_LIMIT``
+    is surfaced scaled by a power of two (exact) and the mesh scaled back, so that coordinates
+    of any magnitude float64 holds can be surfaced.
+
     The paper (Section 3.1, Figure 3(e)) surfaced its networks with the cycle discovery of Zhuang
     et al. (2013) and the triangulation of Zou et al. (2013); this is an independent
     implementation of the same two steps (global cycle selection by a 0-1 program, then
