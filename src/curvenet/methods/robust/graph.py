@@ -17,7 +17,7 @@ from .frames import Frames, Neighbours, noisy_tangents, pair_distances, vote_tan
 from .params import RobustParams
 from .thresholds import LAYOUT, LINKS, NOISE, TANGENTS
 
-__all__ = ["Graph", "linked_graph", "linked_edges", "edge_lengths", "cut_strand_links", "components"]
+__all__ = ["Graph", "linked_graph", "linked_edges", "edge_lengths", "cut_strand_links", "components", "csr_edges"]
 
 
 class Graph(NamedTuple):
@@ -134,3 +134,23 @@ def components(n, a, b, mask):
     lab, count = _k.components(int(n), np.asarray(a, dtype=_k.INDEX), np.asarray(b, dtype=_k.INDEX),
                                np.ascontiguousarray(mask, dtype=np.bool_))
     return lab, int(count)
+
+
+def csr_edges(indptr: np.ndarray, indices: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of the CSR adjacency ``(indptr, indices)`` that leave the points ``rows``.
+
+    Parameters
+    ----------
+    indptr : (N + 1,) ndarray of int
+    indices : ndarray of int
+    rows : (R,) ndarray of int
+
+    Returns
+    -------
+    ea, eb : (E,) ndarray
+        Every edge ``(ea[i], eb[i])`` of the rows, row by row, each row's in its CSR order.
+    """
+    lens = indptr[rows + 1] - indptr[rows]
+    ea = np.repeat(rows, lens)
+    eb = indices[np.repeat(indptr[rows] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
+    return ea, eb

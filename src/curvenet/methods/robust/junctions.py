@@ -21,7 +21,7 @@ from scipy.sparse.csgraph import dijkstra
 from . import kernels as _k
 from .chains import end_portion, fit_line, polylen
 from .frames import Frames, Neighbours
-from .graph import Graph, components
+from .graph import Graph, components, csr_edges, edge_lengths
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NOISE, NUMERIC, SHELL, SPLIT
 
@@ -259,52 +259,48 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     big = rad > SPLIT.close_radius * prm.shell_outer * hmean
     if not big.any():
         return none
+    sel = big[r]
+    sub, rsub = ids[sel], r[sel]  # the big regions' points and their regions
     # the fine links: short links among the big regions' points, at most close_link h long
     inbig = np.zeros(N, dtype=bool)
-    inbig[ids[big[r]]] = True
+    inbig[sub] = True
     m = inbig[ka] & inbig[kb]
     fa, fb = ka[m], kb[m]
-    near = np.sqrt(((P[fa] - P[fb]) ** 2).sum(axis=1)) <= SPLIT.close_link * 0.5 * (hs[fa] + hs[fb])
+    near = edge_lengths(P, fa, fb) <= SPLIT.close_link * 0.5 * (hs[fa] + hs[fb])
     fa, fb = fa[near], fb[near]
     del inbig, m, near
     # every scale's candidates; each big region takes the scale with the most (two or more)
     best = np.ones(n_reg, dtype=np.int64)
     pick = np.full(n_reg, -1, dtype=np.int64)
     found = []
-    exits = None
+    exits = _exits(indptr, indices, flagged, sub, rsub, ka, kb, n_reg)
     for k, sc in enumerate(SPLIT.close_scales):
-        ok = big
-        sel = ok[r]
-        cand, good, fine = _close_candidates(P, hs, indptr, indices, ids[sel], fa, fb, prm, sc)
+        cand, good, fine = _close_candidates(P, hs, indptr, indices, sub, fa, fb, prm, sc)
         found.append((cand, good))
-        n_cand = _candidates_per_region(P, hs, indptr, indices, ids[sel], r[sel], cand, good, n_reg)
-        if exits is None:
-            exits = _exits(indptr, indices, flagged, ids[big[r]], r[big[r]], ka, kb, n_reg)
+        n_cand = _candidates_per_region(P, hs, indptr, indices, sub, rsub, cand, good, n_reg)
         # branch count: the candidates' branches, less the two ends of each segment joining
         # them, are at most the region's own
-        sub = ids[sel]
         ing = np.isin(cand[sub], good)
         if ing.any():
-            key = np.stack([r[sel][ing], cand[sub][ing]], axis=1)
+            key = np.stack([rsub[ing], cand[sub][ing]], axis=1)
             u, inv = np.unique(key, axis=0, return_inverse=True)
             vmax = np.zeros(len(u), dtype=np.int64)
             np.maximum.at(vmax, inv.ravel(), fine[sub][ing])
             tot = np.bincount(u[:, 0], weights=vmax, minlength=n_reg)
             n_cand[(n_cand >= 2) & (tot - 2 * (n_cand - 1) > exits)] = 0
-        better = ok & (n_cand > best)
+        better = big & (n_cand > best)
         best[better] = n_cand[better]
         pick[better] = k
     if not (pick >= 0).any():
         return none
     out = flagged.copy()
     sep = np.zeros(N, dtype=bool)  # points of the separated regions
-    for k, f in enumerate(found):
-        sel = pick[r] == k
-        if f is None or not sel.any():
+    for k, (cand, good) in enumerate(found):
+        at = ids[pick[r] == k]  # the points of the regions resolved at this scale
+        if not len(at):
             continue
-        cand, good = f
-        out[ids[sel]] = False
-        keep = ids[sel][np.isin(cand[ids[sel]], good)]
+        out[at] = False
+        keep = at[np.isin(cand[at], good)]
         out[keep] = True
         sep[keep] = True
     # the separated regions are joined by the fine links only, the others stay as they were;
@@ -344,9 +340,7 @@ def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
     freed = np.zeros(N, dtype=bool)
     freed[sub] = ~ing[sub]
     fs = np.flatnonzero(freed)
-    lens = indptr[fs + 1] - indptr[fs]
-    ea = np.repeat(fs, lens)
-    eb = indices[np.repeat(indptr[fs] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
+    ea, eb = csr_edges(indptr, indices, fs)
     lab, _ = components(N, ea, eb, freed)
     t = ing[eb]
     touch = np.unique(np.stack([lab[ea[t]], cand[eb[t]]], axis=1), axis=0)
@@ -388,9 +382,7 @@ def _exits(indptr, indices, flagged, sub, rs, ka, kb, n_reg):
     """How many branches leave each region: its points' linked neighbours outside every region,
     in groups joined by short links (one group per chain leaving it)."""
     N = len(flagged)
-    lens = indptr[sub + 1] - indptr[sub]
-    ea = np.repeat(sub, lens)
-    eb = indices[np.repeat(indptr[sub] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
+    ea, eb = csr_edges(indptr, indices, sub)
     out = ~flagged[eb]
     region_of = np.full(N, -1, dtype=np.int64)
     region_of[sub] = rs
@@ -455,9 +447,7 @@ def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm, scale) -> _Fin
     freed[sub] = ~nf[sub]
     # the freed points' chains (linked graph) and the sub-regions each touches (short links)
     fs = np.flatnonzero(freed)
-    lens = indptr[fs + 1] - indptr[fs]
-    ea = np.repeat(fs, lens)
-    eb = indices[np.repeat(indptr[fs] - np.cumsum(np.r_[0, lens[:-1]]), lens) + np.arange(lens.sum())]
+    ea, eb = csr_edges(indptr, indices, fs)
     lab, _ = components(N, ea, eb, freed)
     t = freed[ka] & nf[kb]
     touch = np.unique(np.stack([lab[ka[t]], reg2[kb[t]]], axis=1), axis=0)  # sorted by chain
