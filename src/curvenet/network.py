@@ -572,28 +572,20 @@ class CurveNetwork:
     def save(self, path: str | Path, **options: Any) -> Path:
         """Write the network to ``path``, the format chosen by the extension, atomically.
 
-        The same as :func:`curvenet.save` (``net.save(p)`` is ``curvenet.save(net, p)``);
+        ``net.save(p, **options)`` is :func:`curvenet.save` ``(net, p, **options)``: its
+        documentation lists the formats, the writers' options and the errors;
         :func:`curvenet.load` reads a ``.json`` back (``load(p) == net``).
 
         Parameters
         ----------
         path : str or Path
-            ``.json``, ``.ply``, ``.obj``, ``.vtu``, ``.svg``, ``.dxf``, ``.geojson``, ``.swc``...
-            (``curvenet formats`` lists them).
         **options
-            Options of the format's writer (e.g. ``projection="iso"`` for ``.svg``).
+            As :func:`curvenet.save`.
 
         Returns
         -------
         Path
             The written file.
-
-        Raises
-        ------
-        FormatError
-            For an unknown extension.
-        OutputError
-            When the file cannot be written.
         """
         if _file_writer is None:  # only when this module was loaded without its package
             from .errors import OutputError
