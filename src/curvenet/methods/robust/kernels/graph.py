@@ -241,13 +241,18 @@ def _dist2_to(x, y):  # pragma: no cover - compiled
     return s
 
 
+def _upper(x, y):  # pragma: no cover - compiled
+    """The larger of ``x`` and ``y``, inf when ``y`` is NaN (a bound that NaN cannot lower)."""
+    if y <= x:
+        return x
+    return y if y == y else np.inf
+
+
 def _spread2(L, cnt, x):  # pragma: no cover - compiled
     """The largest ``|L_i - x|^2`` over the rows ``L[:cnt]`` (0 for none; inf if one is NaN)."""
     f = 0.0
     for i in range(cnt):
-        r2 = _dist2_to(L[i], x)
-        if not (r2 <= f):
-            f = r2 if r2 == r2 else np.inf
+        f = _upper(f, _dist2_to(L[i], x))
     return f
 
 
@@ -385,37 +390,21 @@ def _strand_cuts(P, h, idx, t, src, dst, sig, sd, la):  # pragma: no cover - com
                     sl2 = -1.0  # no bound: a mean's weights could underflow (not with the defaults)
                 dw = _spread2(L, cnt, zero)  # squared diameter of the window's offsets and the origin
                 for i in range(cnt):
-                    r2 = _spread2(L, i, L[i])
-                    if not (r2 <= dw):
-                        dw = r2 if r2 == r2 else np.inf
+                    dw = _upper(dw, _spread2(L, i, L[i]))
             # Both modes are weighted means of the window's offsets (or their starts, the origin
             # and q's offset): they cannot lie further apart than the diameter of those points,
             # nor further from the mode from p than its furthest point. When that bound is short
             # of the separation the test needs, the link cannot be cut (exact: the bound is kept
             # a relative sd.bound_margin clear of the rounding of the means).
-            r2 = _spread2(L, cnt, lq)
-            z = _dist2_to(lq, zero)
-            if not (z <= r2):
-                r2 = z if z == z else np.inf
-            if not (r2 <= dw):
-                r2 = r2 if r2 == r2 else np.inf
-            else:
-                r2 = dw
+            r2 = _upper(dw, _upper(_spread2(L, cnt, lq), _dist2_to(lq, zero)))
             if r2 < sl2:
                 continue
             if not have_ms:
                 _shift_mode(L, cnt, zero, b, ms, sd)
                 have_ms = True
                 have_fs = False
-                rs = _spread2(L, cnt, ms)
-                z = _dist2_to(ms, zero)
-                if not (z <= rs):
-                    rs = z if z == z else np.inf
-            r2 = _dist2_to(lq, ms)
-            if not (r2 <= rs):
-                r2 = r2 if r2 == r2 else np.inf
-            else:
-                r2 = rs
+                rs = _upper(_spread2(L, cnt, ms), _dist2_to(ms, zero))
+            r2 = _upper(rs, _dist2_to(lq, ms))
             if r2 < sl2:
                 continue
             _shift_mode(L, cnt, lq, b, mq, sd)

@@ -88,7 +88,7 @@ PARALLEL = frozenset({"tangents", "shell_groups", "linked_edges", "vote_eig", "n
 #: Helpers inlined into their callers when compiled (as calls, the heap's cost the shell
 #: kernel 25%).
 INLINE = frozenset({heap._heap_pop, heap._heap_push, linalg._sym2, chains._dist2, graph._dist, frames._noisy_scales,
-                    graph._mean_line_offset, graph._dist2_to, graph._spread2})
+                    graph._mean_line_offset, graph._dist2_to, graph._spread2, graph._upper})
 
 
 class Kernel(NamedTuple):
