@@ -380,26 +380,23 @@ class _Chains:
                 continue
             Ap = A[part]
             rhs = X[part] - Ap[:, held] @ X[held] if len(held) else X[part]
-            Y[part] = _spd_solve(Ap[:, part], rhs, banded=part is self.free_open)
+            Y[part] = _spd_solve(Ap[:, part], rhs)
         return Y
 
 
-def _spd_solve(A, rhs: np.ndarray, *, banded: bool) -> np.ndarray:
-    """Solve the symmetric positive definite sparse system ``A`` (n, n) for ``rhs`` (n, d):
-    by the banded Cholesky (LAPACK) where ``A`` has at most two diagonals on either side of its
-    own (the open curves), else by a sparse LU without reordering or pivoting (the loops: banded
-    but for their wrap-around, whose fill stays in their last rows)."""
-    from scipy.linalg import solveh_banded
-    from scipy.sparse.linalg import splu
+def _spd_solve(A, rhs: np.ndarray) -> np.ndarray:
+    """Solve the symmetric positive definite sparse system ``A`` (n, n) for ``rhs`` (n, d) by
+    the envelope Cholesky kernel (:func:`~.kernels.linalg._envelope_solve`): banded for the
+    open curves, banded but for their wrap-around for the loops (whose fill stays in their last
+    rows). Its fixed order of operations gives the same bits on every machine (LAPACK's banded
+    Cholesky and SuperLU, used before, did not: their BLAS kernels depend on the processor)."""
+    from scipy.sparse import tril
 
-    if banded:
-        n, w = A.shape[0], 2  # w: the diagonals above the main one
-        ab = np.zeros((w + 1, n))  # LAPACK's upper banded form: diagonal j in row w - j
-        for j in range(w + 1):
-            ab[w - j, j:] = A.diagonal(j)
-        return solveh_banded(ab, np.ascontiguousarray(rhs), check_finite=False)
-    lu = splu(A.tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    return lu.solve(np.ascontiguousarray(rhs))
+    low = tril(A, format="csr")
+    low.sort_indices()
+    return _k.envelope_solve(low.indptr.astype(np.int64), low.indices.astype(np.int64),
+                             np.ascontiguousarray(low.data, dtype=np.float64),
+                             np.ascontiguousarray(rhs, dtype=np.float64))
 
 
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):

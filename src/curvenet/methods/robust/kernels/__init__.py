@@ -19,7 +19,7 @@ from .frames import noisy_reach
 from .nodes import JunctionParams
 from .registry import (
     HAVE_NUMBA, NUMBA_MIN_POINTS_NOISY, STRAND_KERNELS, chain_ends, chain_order,
-    compiled_active, compiled_for, components, csr_union, end_count, end_counts, junction_nodes,
+    compiled_active, compiled_for, components, csr_union, end_count, end_counts, envelope_solve, junction_nodes,
     linked_edges, noisy_tangents, shell_groups, short_links, spacing, strand_cuts, tangents, trim_ends,
     untangle, vote_agreement, vote_eig,
 )
@@ -37,7 +37,7 @@ NOISY_CAND = NOISY.cand
 __all__ = [
     "CAND_MARGIN", "INDEX", "NOISY_CAND", "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS",
     "HAVE_NUMBA", "JunctionParams", "chain_ends", "chain_order", "compiled_active", "compiled_for",
-    "components", "csr_union", "end_count", "end_counts", "junction_nodes", "linked_edges",
+    "components", "csr_union", "end_count", "end_counts", "envelope_solve", "junction_nodes", "linked_edges",
     "noisy_reach", "noisy_tangents", "shell_groups", "short_links", "spacing", "strand_cuts",
     "tangents", "trim_ends", "untangle", "vote_agreement", "vote_eig",
 ]

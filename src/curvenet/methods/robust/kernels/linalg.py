@@ -278,3 +278,66 @@ def _solve_small(A, b, x):  # pragma: no cover - compiled
             acc -= A[k, j] * x[j]
         x[k] = acc / A[k, k]
     return True
+
+
+def _envelope_solve(indptr, indices, data, rhs):  # pragma: no cover - compiled
+    """``x = A^-1 rhs`` for a sparse symmetric positive definite ``A`` (n, n) by the Cholesky
+    factor of its envelope, in one fixed order of operations (the same bits on every machine,
+    unlike LAPACK's, whose BLAS kernels depend on the processor).
+
+    Parameters
+    ----------
+    indptr, indices, data : ndarray
+        The lower triangle of ``A`` (diagonal included) in CSR form, columns sorted in each row.
+    rhs : ndarray of float64, shape (n, d)
+        The right-hand sides.
+
+    Returns
+    -------
+    ndarray of float64, shape (n, d)
+
+    Notes
+    -----
+    Row ``i`` of the factor ``L`` is stored from the first column of row ``i`` of ``A`` to the
+    diagonal (its envelope: no fill outside it): a banded matrix of half-width w costs
+    O(n w^2); a cyclic band (a closed curve, ordered along it) adds its last rows, dense back to
+    the curve's first sample, still O(n w) in all. Only ``+ - * /`` and ``sqrt``.
+    """
+    n = rhs.shape[0]
+    d = rhs.shape[1]
+    first = np.empty(n, dtype=np.int64)
+    start = np.empty(n + 1, dtype=np.int64)
+    start[0] = 0
+    for i in range(n):
+        first[i] = indices[indptr[i]] if indptr[i + 1] > indptr[i] else i
+        start[i + 1] = start[i] + i - first[i] + 1
+    L = np.zeros(start[n])
+    for i in range(n):  # A's row i into L's envelope
+        for q in range(indptr[i], indptr[i + 1]):
+            L[start[i] + indices[q] - first[i]] = data[q]
+    for i in range(n):
+        fi = first[i]
+        for j in range(fi, i + 1):
+            k0 = max(fi, first[j])
+            acc = L[start[i] + j - fi]
+            for k in range(k0, j):
+                acc -= L[start[i] + k - fi] * L[start[j] + k - first[j]]
+            if j < i:
+                L[start[i] + j - fi] = acc / L[start[j + 1] - 1]
+            else:
+                L[start[i + 1] - 1] = np.sqrt(acc)
+    x = np.empty((n, d))
+    for i in range(n):  # L y = rhs
+        fi = first[i]
+        for c in range(d):
+            acc = rhs[i, c]
+            for k in range(fi, i):
+                acc -= L[start[i] + k - fi] * x[k, c]
+            x[i, c] = acc / L[start[i + 1] - 1]
+    for i in range(n - 1, -1, -1):  # L^T x = y, column i of L^T is row i of L
+        fi = first[i]
+        for c in range(d):
+            x[i, c] = x[i, c] / L[start[i + 1] - 1]
+            for k in range(fi, i):
+                x[k, c] -= L[start[i] + k - fi] * x[i, c]
+    return x

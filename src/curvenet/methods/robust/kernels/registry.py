@@ -40,7 +40,7 @@ __all__ = [
     "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS", "PAR_MIN", "spacing", "shell_groups", "csr_union",
     "components", "chain_order", "chain_ends", "end_count", "end_counts", "tangents", "linked_edges",
     "short_links", "junction_nodes", "trim_ends", "untangle", "noisy_tangents", "strand_cuts",
-    "vote_agreement", "vote_eig",
+    "vote_agreement", "vote_eig", "envelope_solve",
 ]
 
 #: Inputs with fewer points than this run the plain-Python kernels even when numba is there,
@@ -177,6 +177,7 @@ _PLAIN = {
     "end_counts": (nodes._end_counts, (ENDS,)),
     "junction_nodes": (nodes._junction_nodes, (ENDS, NODES, LINALG)),
     "trim_ends": (nodes._trim_ends, (ENDS,)),
+    "envelope_solve": (linalg._envelope_solve, ()),
 }
 
 
@@ -335,6 +336,7 @@ untangle = _dispatch("untangle")
 strand_cuts = _dispatch("strand_cuts")
 vote_agreement = _dispatch("vote_agreement")
 vote_eig = _dispatch("vote_eig")
+envelope_solve = _dispatch("envelope_solve")
 
 
 def _order(P):
