@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import Curve, CurveNetwork
+from .arith import norm
 
 __all__ = ["CorridorLayout", "corridor_layout", "corridor_span", "corridor_truth", "spans_for_points",
            "SPAN_RANGE", "TOWER_HEIGHT", "ARM_HALF", "INSULATOR", "SAG", "TURN", "OUTLIER_BOX"]
@@ -105,14 +106,14 @@ def corridor_layout(n_spans: int, *, wires: int | None = None, rng=0) -> Corrido
 
 
 def _line(a, b, spacing):
-    n = max(int(np.ceil(np.linalg.norm(np.subtract(b, a)) / spacing)), 1)
+    n = max(int(np.ceil(norm(np.subtract(b, a)) / spacing)), 1)
     t = np.arange(n + 1) / n
     return np.asarray(a) + t[:, None] * np.subtract(b, a)
 
 
 def _catenary(a, b, spacing, *, with_ends=True):
     """Points every ``spacing`` (about) along a wire hanging from ``a`` to ``b`` (3D)."""
-    L = float(np.linalg.norm((b - a)[:2]))
+    L = norm((b - a)[:2])
     n = max(int(np.ceil(L * (1 + 8 / 3 * SAG**2) / spacing)), 2)
     t = np.arange(n + 1) / n
     c = L / (8 * SAG)  # the catenary parameter of a sag SAG * L
@@ -131,7 +132,7 @@ def _tower(lay: CorridorLayout, i: int, spacing: float) -> list[np.ndarray]:
     out = [_line(lay.base[i], mid, spacing)[:-1]]  # the pole, up to (not with) the arm's middle
     stops = np.vstack([ends[0], top[: lay.wires // 2], mid, top[lay.wires // 2:], ends[1]])
     for a, b in zip(stops[:-1], stops[1:]):  # the crossarm through its junctions
-        out.append(_line(a, b, spacing)[:-1] if np.linalg.norm(b - a) > 0 else np.zeros((0, 3)))
+        out.append(_line(a, b, spacing)[:-1] if norm(b - a) > 0 else np.zeros((0, 3)))
     out.append(ends[1][None])
     for a, b in zip(top, bottom):
         out.append(_line(a, b, spacing)[1:])  # insulators, from below the arm to the wire junction

@@ -19,6 +19,7 @@ from typing import Callable
 import numpy as np
 
 from ..network import CurveNetwork
+from .arith import matvec, norm
 from .models import _Builder, _param, _poly, _rot
 
 __all__ = ["KIND_MODELS", "TANGENT_ANGLES"]
@@ -41,8 +42,8 @@ def _ladder() -> CurveNetwork:
     gaps = np.array([4.0, 5.0, 4.0, 3.0, 4.0, 5.0, 4.0, 4.0, 3.0, 5.0, 4.0]) * h
     x = np.r_[0.0, np.cumsum(gaps)]
     height = 20 * h
-    bot = [b.node(R @ [xi, 0.0, 0.0]) for xi in x]
-    top = [b.node(R @ [xi, height, 0.0]) for xi in x]
+    bot = [b.node(matvec(R, [xi, 0.0, 0.0])) for xi in x]
+    top = [b.node(matvec(R, [xi, height, 0.0])) for xi in x]
     ids = bot + top
     n = len(x)
     _lines(b, ids, [(k, k + 1) for k in range(n - 1)] + [(n + k, n + k + 1) for k in range(n - 1)]
@@ -104,9 +105,9 @@ def _twigs() -> CurveNetwork:
     rng = np.random.default_rng(5)
 
     def seg(p0, d, length, a, bend):
-        d = d / np.linalg.norm(d)
+        d = d / norm(d)
         w = np.cross(d, [0.2, 0.6, 0.77])
-        w = bend * length * w / np.linalg.norm(w)
+        w = bend * length * w / norm(w)
         f = lambda t: p0 + t[:, None] * (length * d) + np.sin(np.pi * t)[:, None] * w
         e = b.node(f(np.array([1.0]))[0])
         b.param(f, 0.0, 1.0, a, e)
@@ -114,7 +115,7 @@ def _twigs() -> CurveNetwork:
 
     def perp(d):
         u = np.cross(d, [1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.cross(d, [0.0, 1.0, 0.0])
-        return u / np.linalg.norm(u)
+        return u / norm(u)
 
     def branch(a, p0, d, length, depth):
         # a branch: a stem, then a twig 3-6h long a few spacings before its end, then two children

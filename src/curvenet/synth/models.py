@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import Curve, CurveNetwork
+from .arith import matmul, matvec, norm
 
 __all__ = ["MODELS", "h_of", "model_names"]
 
@@ -47,7 +48,7 @@ def _poly(vertices, step: float, *, closed: bool = False) -> np.ndarray:
         v = np.vstack([v, v[:1]])
     parts = []
     for a, b in zip(v[:-1], v[1:]):
-        n = max(int(np.ceil(np.linalg.norm(b - a) / step)), 1)
+        n = max(int(np.ceil(norm(b - a) / step)), 1)
         t = np.linspace(0.0, 1.0, n + 1)[:-1]
         parts.append(a + (b - a) * t[:, None])
     if not closed:
@@ -70,7 +71,7 @@ class _Builder:
 
     def curve(self, pts: np.ndarray, a: int, b: int) -> None:
         pts = np.array(pts, dtype=float)
-        if np.linalg.norm(pts[0] - self.nodes[a]) > 1e-9 or np.linalg.norm(pts[-1] - self.nodes[b]) > 1e-9:
+        if norm(pts[0] - self.nodes[a]) > 1e-9 or norm(pts[-1] - self.nodes[b]) > 1e-9:
             raise AssertionError("model piece does not end at its nodes")  # a bug in a model
         pts[0], pts[-1] = self.nodes[a], self.nodes[b]
         self.curves.append(Curve(pts, a, b, a == b))
@@ -97,7 +98,7 @@ def _rot(ax: float, ay: float, az: float) -> np.ndarray:
     rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
     ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
     rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rz @ ry @ rx
+    return matmul(matmul(rz, ry), rx)
 
 
 def _circle(c, r, e1, e2):
@@ -176,9 +177,9 @@ def _tree() -> CurveNetwork:
     rng = np.random.default_rng(7)
 
     def branch(p0, d, length, depth, parent):
-        d = d / np.linalg.norm(d)
+        d = d / norm(d)
         w = np.cross(d, [0.3, 0.5, 0.8])
-        w = 0.12 * length * w / np.linalg.norm(w)
+        w = 0.12 * length * w / norm(w)
         f = lambda t: p0 + t[:, None] * (length * d) + np.sin(np.pi * t)[:, None] * w
         p1 = f(np.array([1.0]))[0]
         child = b.node(p1)
@@ -187,7 +188,7 @@ def _tree() -> CurveNetwork:
             return
         k = 3 if depth == 2 else 2
         base = np.cross(d, [1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.cross(d, [0.0, 1.0, 0.0])
-        base /= np.linalg.norm(base)
+        base /= norm(base)
         other = np.cross(d, base)
         phase = rng.uniform(0, 2 * np.pi)
         for i in range(k):
@@ -222,13 +223,13 @@ def _eye() -> CurveNetwork:
     def prof(t):  # rises from 0 with slope tan(30 deg), plateaus at s, back down to 0
         return s * (1 - np.exp(-k * t)) * (1 - np.exp(-k * (L - t)))
 
-    A = b.node(R @ [0.0, 0.0, 0.0])
-    B = b.node(R @ [L, 0.0, 0.0])
+    A = b.node(matvec(R, [0.0, 0.0, 0.0]))
+    B = b.node(matvec(R, [L, 0.0, 0.0]))
     for sign in (1.0, 0.0, -1.0):
-        f = lambda t, sg=sign: (R @ np.vstack([t, sg * prof(t), 0 * t])).T
+        f = lambda t, sg=sign: matmul(R, np.vstack([t, sg * prof(t), 0 * t])).T
         b.param(f, 0.0, L, A, B)
-    tA = b.node(R @ [-0.4, 0.0, 0.0])
-    tB = b.node(R @ [L + 0.4, 0.0, 0.0])
+    tA = b.node(matvec(R, [-0.4, 0.0, 0.0]))
+    tB = b.node(matvec(R, [L + 0.4, 0.0, 0.0]))
     b.curve(_poly([b.nodes[A], b.nodes[tA]], b.step), A, tA)
     b.curve(_poly([b.nodes[B], b.nodes[tB]], b.step), B, tB)
     return b.build("eye", "3D (tilted plane); three curves between two nodes, 2.5h apart, meeting at 30 degrees")
@@ -241,7 +242,7 @@ def _window() -> CurveNetwork:
     ids = {}
     for i, x in enumerate(g):
         for j, y in enumerate(g):
-            ids[i, j] = b.node(R @ [x, y, 0.0])
+            ids[i, j] = b.node(matvec(R, [x, y, 0.0]))
     for i in range(4):
         for j in range(3):
             b.curve(_poly([b.nodes[ids[i, j]], b.nodes[ids[i, j + 1]]], b.step), ids[i, j], ids[i, j + 1])
@@ -292,7 +293,7 @@ def _star8() -> CurveNetwork:
             for sz in (-1, 1):
                 d = np.array([sx, sy, sz], dtype=float) / np.sqrt(3)
                 w = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.array([1.0, 0, 0])
-                w = 0.1 * w / np.linalg.norm(w)
+                w = 0.1 * w / norm(w)
                 f = lambda t, d=d, w=w: t[:, None] * d + (t**2)[:, None] * w
                 e = b.node(f(np.array([1.0]))[0])
                 b.param(f, 0.0, 1.0, o, e)

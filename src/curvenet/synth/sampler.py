@@ -6,6 +6,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..network import CurveNetwork
+from .arith import matvec, norm
 
 __all__ = ["sample"]
 
@@ -77,8 +78,8 @@ def sample(
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     a = (density_ratio - 1.0) / (density_ratio + 1.0)
     w = gen.normal(size=d)
-    w /= np.linalg.norm(w)
-    lam = max(0.5 * float(np.linalg.norm(hi - lo)), 10 * h)
+    w /= norm(w)
+    lam = max(0.5 * norm(hi - lo), 10 * h)
     phi = gen.uniform(0.0, 2 * np.pi)
 
     pts, labels = [], []
@@ -99,7 +100,7 @@ def sample(
         fine = max(int(np.ceil(s[-1] / (h / 10.0))), len(p) - 1)
         u = np.linspace(0.0, s[-1], fine + 1)
         xu = np.column_stack([np.interp(u, s, p[:, k]) for k in range(d)])
-        rho = (1.0 + a * np.sin(2 * np.pi * (xu @ w) / lam + phi)) / h
+        rho = (1.0 + a * np.sin(2 * np.pi * matvec(xu, w) / lam + phi)) / h
         F = np.r_[0.0, np.cumsum(0.5 * (rho[1:] + rho[:-1]) * np.diff(u))]
         total = F[-1]
         if c.start is None:  # free loop: evenly in F, random start
