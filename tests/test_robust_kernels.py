@@ -14,6 +14,8 @@ from curvenet.methods.robust.thresholds import LINALG, SHELL, SPACING, STRIP, TA
 from curvenet import synth
 from curvenet.neighbors import build_tree, knn
 
+from blas_kernels import has_avx512, output_under
+
 
 def _plain(name):
     """The plain-Python version of the kernel ``name``, its threshold groups appended."""
@@ -809,35 +811,16 @@ def test_envelope_solve_matches_numpy_and_is_the_same_compiled(sizes, loops):
             assert np.array_equal(KR.KERNELS["envelope_solve"].compiled(*args, rhs), x)
 
 
-def _has_avx512() -> bool:
-    try:
-        with open("/proc/cpuinfo") as f:
-            return " avx512f" in f.read()
-    except OSError:
-        return False
-
-
-@pytest.mark.skipif(not _has_avx512(), reason="OpenBLAS picks other kernels only on AVX-512 processors")
+@pytest.mark.skipif(not has_avx512(), reason="OpenBLAS picks other kernels only on AVX-512 processors")
 def test_noisy_network_does_not_depend_on_openblas_s_processor_kernels():
-    # OpenBLAS picks its kernels by processor (OPENBLAS_CORETYPE forces one); the curve fit's
-    # banded Cholesky and sparse LU (LAPACK, SuperLU) gave other last bits with the AVX-512
-    # kernels (12 of the 20 CI digest runs differed between a Haswell and a SkylakeX kernel):
-    # the same network to the bit under both
-    import os
-    import subprocess
-    import sys
-
-    code = ("import sys, hashlib, numpy as np, curvenet\n"
+    # the curve fit's banded Cholesky and sparse LU (LAPACK, SuperLU) gave other last bits
+    # with OpenBLAS's AVX-512 kernels (12 of the 20 CI digest runs differed between its Haswell
+    # and SkylakeX kernels): the same network to the bit under both
+    code = ("import hashlib, numpy as np, curvenet\n"
             "from curvenet import synth\n"
             "pts, _ = synth.sample(synth.model('wheel'), noise=0.2, rng=11)\n"
             "c = curvenet.reconstruct(pts).canonical()\n"
             "d = hashlib.sha256(np.ascontiguousarray(c.nodes).tobytes())\n"
             "[d.update(np.ascontiguousarray(x.points).tobytes()) for x in c.curves]\n"
             "print(d.hexdigest())\n")
-    out = []
-    for core in ("Haswell", "SkylakeX"):
-        env = dict(os.environ, OPENBLAS_CORETYPE=core)
-        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
-        assert r.returncode == 0, r.stderr
-        out.append(r.stdout.strip())
-    assert out[0] == out[1]
+    assert output_under("Haswell", code) == output_under("SkylakeX", code)
