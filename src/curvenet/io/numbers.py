@@ -462,3 +462,201 @@ def join_columns(blocks: Sequence[str], sep: str = " ", end: str = "\n") -> str:
     if any(len(c) != len(cols[0]) for c in cols):
         raise ValueError("blocks of different numbers of lines")
     return end.join(map(sep.join, zip(*cols))) + end
+
+
+# ------------------------------------------------------------------ %g with a fixed precision
+#: Precisions that :func:`g_matrix` computes in bulk: the scaled value (below 10**precision)
+#: keeps a margin of a thousand of its ulps to the nearest rounding tie; above, ``%`` writes all.
+G_BULK_PRECISION = 12
+
+#: Magnitudes computed in bulk by :func:`g_matrix` (powers of ten within float64's range and
+#: scaled values far from subnormal); zeros too. Others go through ``%``.
+G_BULK_RANGE = (1e-290, 1e290)
+
+#: Relative error bound of the scaled value ``|x| * 10**k`` (the power and the product each
+#: rounded: under 2 ulps), times a safety factor of 1000: values whose scaled fraction lies this
+#: close to one half are written by ``%`` (a few in a million at precision 9).
+_G_TIE_MARGIN = 1e3 * 2.0**-51
+
+
+#: 10.0 ** k for k = 0..308 (numpy's power of each; a table: ``**`` of an array is slow).
+_POW10 = 10.0 ** np.arange(309)
+
+
+def _g_digits(ax: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Decimal exponent (n,), ``p``-digit integer mantissa (n,) and a mask of the values too
+    close to a rounding tie to trust (n,), for positive finite ``ax`` in :data:`G_BULK_RANGE`:
+    ``ax`` rounded to ``p`` significant digits is ``m * 10**(e - p + 1)``."""
+
+    def scaled(e: np.ndarray) -> np.ndarray:
+        k = p - 1 - e
+        return np.where(k >= 0, ax * _POW10[np.maximum(k, 0)], ax / _POW10[np.maximum(-k, 0)])
+
+    e = np.floor(np.log10(ax)).astype(np.int64)
+    s = scaled(e)
+    off = (s >= 10.0**p).astype(np.int64) - (s < 10.0 ** (p - 1))  # log10 one off near 10**k
+    if off.any():
+        e += off
+        s = scaled(e)
+    frac = s - np.floor(s)
+    unsure = (np.abs(frac - 0.5) <= _G_TIE_MARGIN * s) | (s < 10.0 ** (p - 1)) | (s >= 10.0**p)
+    m = np.floor(s + 0.5).astype(np.int64)
+    up = m == 10**p  # rounded up to the next power of ten
+    m[up] //= 10
+    return e + up, m, unsure
+
+
+def _digit_chars(m: np.ndarray, p: int) -> np.ndarray:
+    """(n, p) ASCII digits of integers ``m`` (n,) of exactly ``p`` digits (orjson writes them
+    when installed: a tenth of the time of numpy's divisions)."""
+    if _orjson() is not None and len(m):
+        text = np.frombuffer(_dumps(np.ascontiguousarray(m, dtype=np.int64)), dtype=np.uint8)
+        return text[1:].reshape(len(m), p + 1)[:, :p].copy()  # each number then ',' (the last: ']')
+    pw = 10 ** np.arange(p - 1, -1, -1, dtype=np.int64)
+    return ((m[:, None] // pw) % 10 + ord("0")).astype(np.uint8)
+
+
+def g_matrix(values: ArrayLike, precision: int, out: np.ndarray | None = None) -> np.ndarray:
+    """``"%.{precision}g" % v`` of every value, as rows of bytes padded with NUL bytes.
+
+    The padding may sit anywhere in a row (where ``%g`` drops trailing zeros, the sign of a
+    positive value); removing every NUL byte of the row leaves the text. Rows of several
+    columns side by side with glue columns between them, then all NUL bytes removed, make a
+    table's text (:func:`g_table_bytes`).
+
+    Parameters
+    ----------
+    values : (n,) array_like of float
+    precision : int
+        Significant digits, at least 1. Up to :data:`G_BULK_PRECISION`, values are converted
+        with numpy (several times faster than ``%``); the values near a rounding tie, outside
+        :data:`G_BULK_RANGE` (but zeros) or not finite go through ``%``.
+    out : (n, precision + 7) uint8 ndarray, optional
+        Where to write (all NUL on entry), e.g. columns of a larger table.
+
+    Returns
+    -------
+    (n, precision + 7) uint8 ndarray
+        ``out`` when given.
+    """
+    x = np.asarray(values, dtype=np.float64).ravel()
+    p = int(precision)
+    if p < 1:
+        raise ValueError(f"precision must be at least 1, got {precision}")
+    if out is None:
+        out = np.zeros((len(x), p + 7), dtype=np.uint8)
+    out[:, 0] = np.where(np.signbit(x), ord("-"), 0)
+    ax = np.abs(x)
+    done = (ax >= G_BULK_RANGE[0]) & (ax < G_BULK_RANGE[1]) if p <= G_BULK_PRECISION else np.zeros(len(x), bool)
+    e, m, unsure = _g_digits(ax[done], p)
+    done[np.flatnonzero(done)[unsure]] = False
+    _g_layout(out, done, e[~unsure], m[~unsure], p)
+    zero = x == 0
+    out[zero, 1] = ord("0")
+    for i in np.flatnonzero(~done & ~zero).tolist():
+        t = (f"%.{p}g" % x[i]).encode()
+        out[i, :] = 0
+        out[i, :len(t)] = np.frombuffer(t, dtype=np.uint8)
+    return out
+
+
+def _g_layout(out: np.ndarray, rows: np.ndarray, e: np.ndarray, m: np.ndarray, p: int) -> None:
+    """Write the ``%g`` text of mantissas ``m`` (r,) with exponents ``e`` (r,) into the rows
+    ``rows`` (a mask) of ``out`` from column 1 on: fixed notation for ``-4 <= e < p``, else
+    ``d.ddde+XX``; trailing zeros of the fraction (and a point left alone) are left NUL.
+
+    The rows are sorted by their layout (the exponent, or "scientific") so that each layout is
+    written into a block of consecutive rows by slices, then put in place in one copy."""
+    fixed = (e >= -4) & (e < p)
+    key = np.where(fixed, e + 4, p + 4).astype(np.int16)  # 0 .. p + 4
+    order = np.argsort(key, kind="stable")
+    key, e, chars = key[order], e[order], _digit_chars(m[order], p)
+    ints = np.where((key >= 4) & (key < p + 4), key - 3, 1)  # digits before the point (1 in "d.ddde+XX")
+    nz = np.zeros(len(e), dtype=np.int16)  # digits up to the last nonzero one
+    for j in range(p):
+        np.maximum(nz, (chars[:, j] != ord("0")) * np.int16(j + 1), out=nz)
+    chars *= np.arange(p, dtype=np.int16) < np.maximum(nz, ints)[:, None]  # trailing zeros of the fraction
+    dot = np.where(nz > ints, ord("."), 0).astype(np.uint8)
+    body = np.zeros((len(e), out.shape[1] - 1), dtype=np.uint8)
+    starts = np.searchsorted(key, np.arange(p + 6))
+    for k in range(p + 5):
+        a, b = starts[k], starts[k + 1]
+        if a < b:
+            _g_block(body[a:b], chars[a:b], dot[a:b], e[a:b], k - 4, p)
+    if rows.all():  # a gather by the inverse order is faster than a scatter
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(len(order))
+        out[:, 1:] = body[inverse]
+    else:
+        out[np.flatnonzero(rows)[order], 1:] = body
+
+
+def _g_block(body: np.ndarray, chars: np.ndarray, dot: np.ndarray, e: np.ndarray, x: int, p: int) -> None:
+    """The ``%g`` texts of one layout: fixed notation with exponent ``x`` (``-4 <= x < p``), or
+    scientific (``x == p``), written into ``body`` (r, p + 6) from the digits ``chars`` (r, p)
+    (trailing zeros NUL), the points ``dot`` (r,) and the exponents ``e`` (r,)."""
+    if 0 <= x < p:  # d..d.ddd
+        body[:, :x + 1] = chars[:, :x + 1]
+        body[:, x + 1] = dot
+        body[:, x + 2:p + 1] = chars[:, x + 1:]
+    elif x < 0:  # 0.000ddd
+        body[:, 0] = ord("0")
+        body[:, 1] = ord(".")
+        body[:, 2:1 - x] = ord("0")
+        body[:, 1 - x:1 - x + p] = chars
+    else:  # d.ddde+XX
+        a = np.abs(e)
+        body[:, 0] = chars[:, 0]
+        body[:, 1] = dot
+        body[:, 2:p + 1] = chars[:, 1:]
+        body[:, p + 1] = ord("e")
+        body[:, p + 2] = np.where(e < 0, ord("-"), ord("+"))
+        body[:, p + 3] = np.where(a >= 100, a // 100 + ord("0"), 0)
+        body[:, p + 4] = (a // 10) % 10 + ord("0")
+        body[:, p + 5] = a % 10 + ord("0")
+
+
+def g_table_bytes(rows: ArrayLike, precision: int, glue: Sequence[str | bytes], prefix: str | bytes = b"") -> bytes:
+    """Every row of an (n, m) float array as text: ``prefix``, then each value as
+    ``"%.{precision}g"`` writes it followed by the glue of its column.
+
+    Parameters
+    ----------
+    rows : (n, m) array_like of float
+    precision : int
+        Significant digits (see :func:`g_matrix`).
+    glue : sequence of m str or bytes
+        ``glue[j]`` follows each value of column ``j``; no NUL bytes.
+    prefix : str or bytes
+        Text before each row; no NUL bytes.
+
+    Returns
+    -------
+    bytes
+        The text ``%`` writes with the format ``prefix + "%.9g" + glue[0] + ...`` for each row.
+
+    Examples
+    --------
+    >>> g_table_bytes([[1.0, 0.1 + 0.2], [-0.0, 1e-7]], 9, [" ", "\\n"], "v ")
+    b'v 1 0.3\\nv -0 1e-07\\n'
+    """
+    a = np.asarray(rows, dtype=np.float64)
+    a = a.reshape(-1, 1) if a.ndim == 1 else a
+    n, m = a.shape
+    g = [x.encode() if isinstance(x, str) else bytes(x) for x in glue]
+    pre = prefix.encode() if isinstance(prefix, str) else bytes(prefix)
+    if len(g) != m:
+        raise ValueError(f"rows must be (n, {len(g)}) for {len(g)} glue strings, got shape {a.shape}")
+    if not n:
+        return b""
+    w = int(precision) + 7
+    table = np.zeros((n, len(pre) + m * w + sum(map(len, g))), dtype=np.uint8)
+    at = 0
+    for j, text in enumerate([pre] + [b""] * m):
+        if j:
+            g_matrix(a[:, j - 1], precision, out=table[:, at:at + w])
+            at += w
+            text = g[j - 1]
+        table[:, at:at + len(text)] = np.frombuffer(text, dtype=np.uint8)
+        at += len(text)
+    return table.tobytes().translate(None, b"\x00")
