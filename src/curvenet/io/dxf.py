@@ -18,7 +18,7 @@ from ..errors import InputError, require
 from ..lengths import step_lengths
 from ..network import CurveNetwork
 from ..style import curve_colors
-from .numbers import table_groups, table_pieces
+from .numbers import glued_groups, table_groups, table_pieces
 from .splines import DEGREE, cubic_splines, open_fit_points
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
@@ -151,7 +151,7 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
         s_idx = np.flatnonzero(is_spline[written])
         heads = _spline_heads(handles[s_idx], rgb[s_idx], closed[written[s_idx]], sp, owner)
         for k, a, b in zip(s_idx.tolist(), heads, _spline_texts(sp)):
-            out[3 * k:3 * k + 2] = a, b
+            out[3 * k:3 * k + 3] = a, b, b"\n"
     n_vert = int(keep.sum())
     seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
     return [*fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
@@ -172,7 +172,7 @@ def _spline_heads(handles: np.ndarray, rgb: np.ndarray, closed: np.ndarray, sp: 
     """The tags of each spline before its knots (one ``%`` for all), for splines of handles
     (s,), true colours (s,) and flags (s,)."""
     head = (f"  0\nSPLINE\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n%d\n"
-            "100\nAcDbSpline\n 70\n%d\n 71\n%d\n 72\n%d\n 73\n%d\n 74\n%d\n\x00")
+            "100\nAcDbSpline\n 70\n%d\n 71\n%d\n 72\n%d\n 73\n%d\n 74\n%d\n 40\n\x00")
     values = np.column_stack([handles, rgb, closed, sp.degree, np.diff(sp.knot_off), np.diff(sp.ctrl_off),
                               np.diff(sp.fit_off)])
     return ((head * len(handles)) % tuple(values.ravel().tolist())).encode().split(b"\x00")[:-1]
@@ -309,14 +309,27 @@ def _gather(n_curves: int, batched: np.ndarray, F: np.ndarray, f_off: np.ndarray
     return _SplineTables(is_spline, degree, fit_all, fit_off, ctrl_all, ctrl_off, knot_all, knot_off)
 
 
+#: The glue after the numbers of a spline (:func:`_spline_texts`), by index.
+_SPLINE_GLUE = ["\n 40\n", "\n 10\n", "\n 20\n", "\n 30\n", "\n 11\n", "\n 21\n", "\n 31\n"]
+
+
 def _spline_texts(sp: _SplineTables) -> list[bytes]:
-    """The tags of each spline from its knots on: knots, control points, fit points."""
+    """The tags of each spline from its first knot's value to its last fit point's z: knots,
+    control points, fit points, in one bulk call (:func:`curvenet.io.numbers.glued_groups`)."""
     if not len(sp.degree):
         return []
-    parts = [table_groups(sp.knots.reshape(-1, 1), ["\n 40\n"], groups=sp.knot_off),
-             table_groups(sp.control, ["\n 20\n", "\n 30\n", "\n 10\n"], groups=sp.ctrl_off),
-             table_groups(sp.fit, ["\n 21\n", "\n 31\n", "\n 11\n"], groups=sp.fit_off)]
-    return [b" 40\n" + k + b"\n 10\n" + c + b"\n 11\n" + f + b"\n" for k, c, f in zip(*parts)]
+    nk, nc, nf = np.diff(sp.knot_off), 3 * np.diff(sp.ctrl_off), 3 * np.diff(sp.fit_off)
+    size = nk + nc + nf
+    start = np.concatenate([[0], np.cumsum(size)])
+    values = np.empty(start[-1])
+    glue = np.empty(start[-1], dtype=np.int8)
+    for part, n, first, codes, last in ((sp.knots, nk, 0, [0], 1), (sp.control.ravel(), nc, nk, [2, 3, 1], 4),
+                                        (sp.fit.ravel(), nf, nk + nc, [5, 6, 4], 4)):
+        at = np.arange(len(part)) + np.repeat(start[:-1] + first - np.concatenate([[0], np.cumsum(n)])[:-1], n)
+        values[at] = part
+        glue[at] = np.tile(np.array(codes, dtype=np.int8), len(part) // len(codes))
+        glue[start[:-1] + first + n - 1] = last
+    return glued_groups(values, glue, _SPLINE_GLUE, groups=start)
 
 
 #: Fit points closer than this fraction of their curve's extent to the one before are dropped.

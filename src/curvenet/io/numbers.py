@@ -27,7 +27,8 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
-    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE",
+    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE", "glued_groups", "g_matrix",
+    "g_table_bytes",
 ]
 
 #: The magnitudes that ``repr`` writes without exponent (and orjson writes the same way):
@@ -284,6 +285,64 @@ def table_pieces(
         return out, _as_is
     body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
     return _grouped(body.split(group_mark), off), fill
+
+
+def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike) -> list[bytes]:
+    """The text of each group of values, each value followed by a glue of its own choosing.
+
+    :func:`table_groups` with the glue chosen value by value instead of by column: one bulk
+    call writes the numbers of tables of different widths (a DXF spline's knots, control points
+    and fit points) in the order of a file.
+
+    Parameters
+    ----------
+    values : (n,) array_like of float
+        Written as ``repr`` writes them.
+    glue_of : (n,) array_like of int
+        Index into ``glue`` of the text after each value (ignored for the last of a group).
+    glue : sequence of str or bytes
+        Texts free of control characters other than tab and line ends.
+    groups : (g + 1,) array_like of int
+        Value offsets: group ``k`` is values ``groups[k]:groups[k + 1]``.
+
+    Returns
+    -------
+    list of g bytes
+        Each group's values and the glue between them (none after the last).
+
+    Examples
+    --------
+    >>> glued_groups([1.0, 2.0, 3.0, 4.0], [0, 1, 0, 0], [" ", ";"], groups=[0, 3, 4])
+    [b'1.0 2.0;3.0', b'4.0']
+    """
+    x = np.ascontiguousarray(values, dtype=np.float64).ravel()
+    ids = np.asarray(glue_of, dtype=np.intp).ravel()
+    off = np.asarray(groups, dtype=np.int64)
+    g = [t.encode() if isinstance(t, str) else bytes(t) for t in glue]
+    if len(ids) != len(x):
+        raise ValueError(f"glue_of must have one entry per value: {len(ids)} for {len(x)}")
+    if not len(x) or len(x) < _SMALL or _orjson() is None:
+        texts = [repr(v).encode() + g[j] for v, j in zip(x.tolist(), ids.tolist())]
+        return [b"".join(texts[a:b])[: -len(g[ids[b - 1]]) or None] if b > a else b""
+                for a, b in zip(off[:-1].tolist(), off[1:].tolist())]
+    body = bytearray(_bulk(x))
+    body.append(44)  # every value followed by a comma
+    buf = np.frombuffer(body, dtype=np.uint8)
+    commas = np.flatnonzero(buf == 44)
+    free = [c for c in _MARKS if c not in set(b"".join(g))]
+    code = np.array([t[0] if len(t) == 1 else free.pop() for t in g], dtype=np.uint8)
+    group_mark = free.pop()
+    marks = code[ids]
+    marks[(off[1:] - 1)[np.diff(off) > 0]] = group_mark
+    buf[commas] = marks
+    todo = sorted(((bytes([c]), t) for c, t in zip(code.tolist(), g) if len(t) != 1), key=lambda ct: len(ct[1]))
+    pieces = []
+    for i in range(0, len(body), _FILL_PIECE):
+        piece = body[i:i + _FILL_PIECE]
+        for mark, t in todo:
+            piece = piece.replace(mark, t)
+        pieces.append(piece)
+    return _grouped(b"".join(pieces).split(bytes([group_mark])), off)
 
 
 def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
