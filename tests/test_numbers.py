@@ -144,3 +144,25 @@ def test_g_table_bytes(bulk):
     assert numbers.g_table_bytes(np.zeros((0, 3)), 9, [" ", " ", "\n"]) == b""
     with pytest.raises(ValueError):
         numbers.g_matrix([1.0], 0)
+
+
+def test_chunks_change_nothing(monkeypatch):
+    """The bulk writers work in chunks of numbers.{_CHUNK} values (whole rows, whole groups):
+    tiny chunks give the text of one chunk."""
+    pytest.importorskip("orjson")
+    rng = np.random.default_rng(12)
+    x = rng.normal(size=(3000, 3)) * 10.0 ** rng.integers(-8, 8, (3000, 1))
+    ints = rng.integers(-10**6, 10**6, (3000, 3))
+    off = np.unique(np.r_[0, rng.integers(0, 3000, 200), 3000])
+    off = np.insert(off, 5, off[5])  # an empty group
+    ids = rng.integers(0, 3, x.size)
+    glue = ["\n 40\n", " ", "\n 10\n"]
+
+    def run():
+        return (numbers.table_bytes(x, [" ", " 1.5 ", "\n"]), numbers.table_groups(ints, [" ", " ", "\nf "], groups=off),
+                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "))
+
+    whole = run()
+    for chunk in (7, 100, 4096):
+        monkeypatch.setattr(numbers, "_CHUNK", chunk)
+        assert run() == whole
