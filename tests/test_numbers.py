@@ -166,3 +166,23 @@ def test_chunks_change_nothing(monkeypatch):
     for chunk in (7, 100, 4096):
         monkeypatch.setattr(numbers, "_CHUNK", chunk)
         assert run() == whole
+
+
+@pytest.mark.parametrize("glue", [["\n 40\n", "\n 10\n", "\n 21\n"], [" ", ";", "\n"], ["ab", "ab"], [" x ", "\n", ""]])
+def test_glued_groups(glue, monkeypatch):
+    """Glue of one length (scattered in place), of one byte and of mixed lengths; with orjson
+    and without, in one chunk and in several."""
+    rng = np.random.default_rng(13)
+    x = rng.normal(size=5000) * 10.0 ** rng.integers(-8, 8, 5000)
+    ids = rng.integers(0, len(glue), 5000)
+    off = np.unique(np.r_[0, rng.integers(0, 5000, 300), 5000])
+    off = np.insert(off, 3, off[3])  # an empty group
+    want = []
+    for a, b in zip(off[:-1].tolist(), off[1:].tolist()):
+        t = "".join(repr(v) + glue[j] for v, j in zip(x[a:b].tolist(), ids[a:b].tolist()))
+        want.append(t[:len(t) - len(glue[ids[b - 1]])].encode() if b > a else b"")
+    assert numbers.glued_groups(x, ids, glue, groups=off) == want
+    monkeypatch.setattr(numbers, "_CHUNK", 50)
+    assert numbers.glued_groups(x, ids, glue, groups=off) == want
+    monkeypatch.setattr(numbers, "_orjson", lambda: None)
+    assert numbers.glued_groups(x, ids, glue, groups=off) == want

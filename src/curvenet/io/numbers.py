@@ -201,6 +201,28 @@ def table_groups(
     return _grouped(b"".join(fill(body)).split(group_mark), off)
 
 
+def _equal_glue(body: bytearray, commas: np.ndarray, ids: np.ndarray, glue: list[bytes], ends: np.ndarray,
+                group_mark: int) -> bytes:
+    """The numbers ``body`` (each followed by a comma, at ``commas``) with the comma after value
+    ``k`` replaced by ``glue[ids[k]]``, all glue of one length ``L``, but at the values ``ends``
+    (by ``group_mark``): one ``replace`` pass widens every comma to the first glue, then the
+    bytes where the glue differ are scattered in place (for a DXF's ``"\\n 40\\n"``,
+    ``"\\n 10\\n"``...: two numpy assignments instead of a pass per glue)."""
+    L = len(glue[0])
+    buf = np.frombuffer(body, dtype=np.uint8)
+    buf[commas[ends]] = group_mark
+    regular = np.ones(len(commas), dtype=bool)
+    regular[ends] = False
+    table = np.frombuffer(b"".join(glue), dtype=np.uint8).reshape(len(glue), L)
+    text = body.replace(b",", table[0].tobytes())  # the bytes all glue shares are in place then
+    out = np.frombuffer(text, dtype=np.uint8)
+    pos = commas[regular] + (L - 1) * np.arange(int(regular.sum()))
+    which = ids[regular]
+    for q in np.flatnonzero((table != table[0]).any(axis=0)).tolist():
+        out[pos + q] = table[which, q]
+    return bytes(text)
+
+
 def _chunk_groups(off: np.ndarray, m: int) -> list[int]:
     """Group indices that cut groups of rows (offsets ``off``, ``m`` values a row) into chunks
     of about :data:`_CHUNK` values (a group larger than that is a chunk of its own): the first
@@ -359,8 +381,12 @@ def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | byt
     free = [c for c in _MARKS if c not in set(b"".join(g))]
     code = np.array([t[0] if len(t) == 1 else free.pop() for t in g], dtype=np.uint8)
     group_mark = free.pop()
+    ends = (off[1:] - 1)[np.diff(off) > 0]
+    if len({len(t) for t in g}) == 1 and len(g[0]) > 1:  # glue of one length: scattered in place
+        text = _equal_glue(body, commas, ids, g, ends, group_mark)
+        return _grouped(text.split(bytes([group_mark])), off)
     marks = code[ids]
-    marks[(off[1:] - 1)[np.diff(off) > 0]] = group_mark
+    marks[ends] = group_mark
     buf[commas] = marks
     todo = sorted(((bytes([c]), t) for c, t in zip(code.tolist(), g) if len(t) != 1), key=lambda ct: len(ct[1]))
     pieces = []
