@@ -112,3 +112,77 @@ def test_table_text(kind, piece, bulk, monkeypatch):
     assert group_texts(np.zeros((0, 2)), [" ", "\n"], groups=[0, 0, 0]) == ["", ""]
     with pytest.raises(ValueError):
         table_text(np.zeros((3, 2)), ["\n"])
+
+
+def _g_values() -> np.ndarray:
+    """Doubles of every magnitude, powers of ten and their neighbours, halves (rounding ties at
+    low precision), integers, zeros of both signs, subnormals and non-finite values."""
+    rng = np.random.default_rng(11)
+    p10 = 10.0 ** np.arange(-300, 300)
+    return np.concatenate([
+        rng.normal(size=20000) * 10.0 ** rng.integers(-30, 30, 20000), rng.random(5000),
+        np.round(rng.normal(size=5000), 3), p10, np.nextafter(p10, 0), np.nextafter(p10, np.inf),
+        (rng.integers(1, 10**9, 5000) + 0.5) * 10.0 ** rng.integers(-12, 12, 5000),
+        rng.integers(-10**12, 10**12, 5000).astype(float),
+        [0.0, -0.0, np.inf, -np.inf, np.nan, 5e-324, -1e-310, 1e300, 1.5, 2.5, 0.5, 999999999.5, 9999999995.0],
+    ])
+
+
+@pytest.mark.parametrize("precision", [1, 4, 9, 12, 13, 17])
+def test_g_matrix_is_percent_g(precision, bulk):
+    x = _g_values()
+    mat = numbers.g_matrix(x, precision)
+    got = [row[row != 0].tobytes() for row in mat]
+    want = [(f"%.{precision}g" % v).encode() for v in x.tolist()]
+    assert got == want
+
+
+def test_g_table_bytes(bulk):
+    x = _g_values()[:30000].reshape(-1, 3)
+    want = "".join("v %.9g %.9g %.9g\n" % tuple(r) for r in x.tolist()).encode()
+    assert numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v ") == want
+    assert numbers.g_table_bytes(np.zeros((0, 3)), 9, [" ", " ", "\n"]) == b""
+    with pytest.raises(ValueError):
+        numbers.g_matrix([1.0], 0)
+
+
+def test_chunks_change_nothing(monkeypatch):
+    """The bulk writers work in chunks of numbers.{_CHUNK} values (whole rows, whole groups):
+    tiny chunks give the text of one chunk."""
+    pytest.importorskip("orjson")
+    rng = np.random.default_rng(12)
+    x = rng.normal(size=(3000, 3)) * 10.0 ** rng.integers(-8, 8, (3000, 1))
+    ints = rng.integers(-10**6, 10**6, (3000, 3))
+    off = np.unique(np.r_[0, rng.integers(0, 3000, 200), 3000])
+    off = np.insert(off, 5, off[5])  # an empty group
+    ids = rng.integers(0, 3, x.size)
+    glue = ["\n 40\n", " ", "\n 10\n"]
+
+    def run():
+        return (numbers.table_bytes(x, [" ", " 1.5 ", "\n"]), numbers.table_groups(ints, [" ", " ", "\nf "], groups=off),
+                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "))
+
+    whole = run()
+    for chunk in (7, 100, 4096):
+        monkeypatch.setattr(numbers, "_CHUNK", chunk)
+        assert run() == whole
+
+
+@pytest.mark.parametrize("glue", [["\n 40\n", "\n 10\n", "\n 21\n"], [" ", ";", "\n"], ["ab", "ab"], [" x ", "\n", ""]])
+def test_glued_groups(glue, monkeypatch):
+    """Glue of one length (scattered in place), of one byte and of mixed lengths; with orjson
+    and without, in one chunk and in several."""
+    rng = np.random.default_rng(13)
+    x = rng.normal(size=5000) * 10.0 ** rng.integers(-8, 8, 5000)
+    ids = rng.integers(0, len(glue), 5000)
+    off = np.unique(np.r_[0, rng.integers(0, 5000, 300), 5000])
+    off = np.insert(off, 3, off[3])  # an empty group
+    want = []
+    for a, b in zip(off[:-1].tolist(), off[1:].tolist()):
+        t = "".join(repr(v) + glue[j] for v, j in zip(x[a:b].tolist(), ids[a:b].tolist()))
+        want.append(t[:len(t) - len(glue[ids[b - 1]])].encode() if b > a else b"")
+    assert numbers.glued_groups(x, ids, glue, groups=off) == want
+    monkeypatch.setattr(numbers, "_CHUNK", 50)
+    assert numbers.glued_groups(x, ids, glue, groups=off) == want
+    monkeypatch.setattr(numbers, "_orjson", lambda: None)
+    assert numbers.glued_groups(x, ids, glue, groups=off) == want

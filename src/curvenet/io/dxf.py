@@ -10,7 +10,7 @@ audits it and compares its entities with those ezdxf builds from the same networ
 from __future__ import annotations
 
 import io
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -18,7 +18,8 @@ from ..errors import InputError, require
 from ..lengths import step_lengths
 from ..network import CurveNetwork
 from ..style import curve_colors
-from .numbers import table_groups, table_pieces
+from .numbers import glued_groups, table_groups, table_pieces
+from .splines import DEGREE, cubic_splines, open_fit_points
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
 
@@ -127,51 +128,54 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
     sizes = np.fromiter((len(c.points) for c in curves), dtype=np.int64, count=len(curves))
     off = np.concatenate([[0], np.cumsum(sizes)])
     P = _xyz_rows(np.concatenate([c.points for c in curves if len(c.points)])) if off[-1] else np.zeros((0, 3))
-    closed = [bool(c.closed) for c in curves]
+    closed = np.fromiter((bool(c.closed) for c in curves), dtype=bool, count=len(curves))
     names = curve_colors(net)
     true_color = {h: _true_color(h) for h in set(names)}
-    is_spline = np.zeros(len(curves), dtype=bool)
-    spline_data = {}  # curve -> (degree, control (n, 3), knots (n + degree + 1,), fit points (k, 3))
-    if splines:
-        for i in np.flatnonzero(sizes >= 2).tolist():
-            fit = _fit_points(P[off[i]:off[i + 1]], closed[i])
-            if len(fit) >= (_MIN_LOOP if closed[i] else 3):
-                degree, control, knots = _interpolating_bspline(fit, closed[i])
-                spline_data[i] = (degree, np.asarray(control, dtype=float), np.asarray(knots, dtype=float), fit)
-                is_spline[i] = True
+    sp = _splines(P, off, closed) if splines else None
+    is_spline = sp.is_spline if sp else np.zeros(len(curves), dtype=bool)
     written = np.flatnonzero(sizes >= 2)
     poly = written[~is_spline[written]]
     step = np.where(is_spline[written], 1, 2)  # handles of each written curve
-    handles = (first + np.concatenate([[0], np.cumsum(step)])[:-1]).tolist()
+    handles = first + np.concatenate([[0], np.cumsum(step)])[:-1]
     last = first + int(step.sum()) - 1
     base = 10 ** len(f"{max(last, first):X}")  # decimal-looking handles above the curves'
     keep = np.repeat(~is_spline & (sizes >= 2), sizes)  # the points of the polylines
     vertex_text, fill = _vertex_texts(P[keep], sizes[poly], base, owner)
-    spline_texts = dict(zip(spline_data, _spline_texts(list(spline_data.values()))))
-    rgb = [true_color[names[i]] for i in written.tolist()]
-    # the tags of each curve before and after its vertices, all in one % call
-    head = (f"  0\nPOLYLINE\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n%d\n"
-            "100\nAcDb3dPolyline\n 66\n1\n 10\n0.0\n 20\n0.0\n 30\n0.0\n 70\n%d\n  0\nVERTEX\n  5\n\x00"
-            f"\n 70\n32\n  0\nSEQEND\n  5\n%X\n330\n%X\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n\x00")
-    p_idx = np.flatnonzero(~is_spline[written])
-    h = np.asarray(handles, dtype=np.int64)[p_idx]
-    values = np.column_stack([h, np.asarray(rgb, dtype=np.int64)[p_idx], 8 + np.asarray(closed)[poly], h + 1, h])
-    tags = ((head * len(p_idx)) % tuple(values.ravel().tolist())).encode().split(b"\x00")
+    rgb = np.array([true_color[names[i]] for i in written.tolist()], dtype=np.int64)
     out: list = [b""] * (3 * len(written))
+    p_idx = np.flatnonzero(~is_spline[written])
+    tags = _polyline_tags(handles[p_idx], rgb[p_idx], closed[poly], owner)
     for k, (a, b) in enumerate(zip(p_idx.tolist(), vertex_text)):
         out[3 * a:3 * a + 3] = tags[2 * k], b, tags[2 * k + 1]
-    for k, (i, hh) in enumerate(zip(written.tolist(), handles)):
-        if is_spline[i]:
-            degree, control, knots, fit = spline_data[i]
-            out[3 * k] = (
-                f"  0\nSPLINE\n  5\n{hh:X}\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n{rgb[k]}\n"
-                f"100\nAcDbSpline\n 70\n{int(closed[i])}\n 71\n{degree}\n"
-                f" 72\n{len(knots)}\n 73\n{len(control)}\n 74\n{len(fit)}\n".encode()
-            )
-            out[3 * k + 1] = spline_texts[i]
+    if sp is not None:
+        s_idx = np.flatnonzero(is_spline[written])
+        heads = _spline_heads(handles[s_idx], rgb[s_idx], closed[written[s_idx]], sp, owner)
+        for k, a, b in zip(s_idx.tolist(), heads, _spline_texts(sp)):
+            out[3 * k:3 * k + 3] = a, b, b"\n"
     n_vert = int(keep.sum())
     seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
     return [*fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
+
+
+def _polyline_tags(handles: np.ndarray, rgb: np.ndarray, closed: np.ndarray, owner: str) -> list[bytes]:
+    """The tags of each polyline before its vertices and after them (two pieces a polyline,
+    all written by one ``%``), for polylines of handles (p,), true colours (p,) and flags (p,)."""
+    head = (f"  0\nPOLYLINE\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n%d\n"
+            "100\nAcDb3dPolyline\n 66\n1\n 10\n0.0\n 20\n0.0\n 30\n0.0\n 70\n%d\n  0\nVERTEX\n  5\n\x00"
+            f"\n 70\n32\n  0\nSEQEND\n  5\n%X\n330\n%X\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n\x00")
+    values = np.column_stack([handles, rgb, 8 + closed, handles + 1, handles])
+    return ((head * len(handles)) % tuple(values.ravel().tolist())).encode().split(b"\x00")
+
+
+def _spline_heads(handles: np.ndarray, rgb: np.ndarray, closed: np.ndarray, sp: "_SplineTables",
+                  owner: str) -> list[bytes]:
+    """The tags of each spline before its knots (one ``%`` for all), for splines of handles
+    (s,), true colours (s,) and flags (s,)."""
+    head = (f"  0\nSPLINE\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n420\n%d\n"
+            "100\nAcDbSpline\n 70\n%d\n 71\n%d\n 72\n%d\n 73\n%d\n 74\n%d\n 40\n\x00")
+    values = np.column_stack([handles, rgb, closed, sp.degree, np.diff(sp.knot_off), np.diff(sp.ctrl_off),
+                              np.diff(sp.fit_off)])
+    return ((head * len(handles)) % tuple(values.ravel().tolist())).encode().split(b"\x00")[:-1]
 
 
 def _xyz_rows(points) -> np.ndarray:
@@ -207,18 +211,129 @@ def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
     return b"  0\nPOINT\n  5\n" + table_groups(table, glue, int_cols=(0,), groups=[0, len(P)])[0] + b"\n"
 
 
-def _spline_texts(splines: list[tuple]) -> list[bytes]:
-    """The tags of each spline (degree, control points, knots, fit points) from its knots on:
-    knots, control points, fit points."""
-    if not splines:
-        return []
-    parts = []
-    for col, glue in ((2, ["\n 40\n"]), (1, ["\n 20\n", "\n 30\n", "\n 10\n"]), (3, ["\n 21\n", "\n 31\n", "\n 11\n"])):
-        arrays = [np.asarray(k[col], dtype=float).reshape(len(k[col]), -1) for k in splines]
-        sizes = np.array([len(a) for a in arrays], dtype=np.int64)
-        parts.append(table_groups(np.concatenate(arrays), glue, groups=np.concatenate([[0], np.cumsum(sizes)])))
-    return [b" 40\n" + k + b"\n 10\n" + c + b"\n 11\n" + f + b"\n" for k, c, f in zip(*parts)]
+class _SplineTables(NamedTuple):
+    """The splines of a drawing, in the order of their curves: ``s`` splines."""
 
+    is_spline: np.ndarray  #: (C,) bool: which curves are splines
+    degree: np.ndarray  #: (s,) int
+    fit: np.ndarray  #: (F, 3) fit points; spline ``j``: rows ``fit_off[j]:fit_off[j + 1]``
+    fit_off: np.ndarray  #: (s + 1,) int
+    control: np.ndarray  #: (K, 3) control points, by ``ctrl_off`` (s + 1,)
+    ctrl_off: np.ndarray
+    knots: np.ndarray  #: (T,) knots, by ``knot_off`` (s + 1,)
+    knot_off: np.ndarray
+
+
+def _splines(P: np.ndarray, off: np.ndarray, closed: np.ndarray) -> _SplineTables:
+    """The splines through the curves (see :func:`network_to_dxf`): fit points, control points
+    and knots of each curve that gets one.
+
+    The open curves with at least 4 fit points, nearly all, are made together
+    (:func:`curvenet.io.splines.cubic_splines`, SciPy's splines to the bit); loops and curves of
+    3 fit points one by one (:func:`_interpolating_bspline`).
+
+    Parameters
+    ----------
+    P : (N, 3) float ndarray
+        The points of all curves, curve ``c`` being rows ``off[c]:off[c + 1]``.
+    off : (C + 1,) int ndarray
+    closed : (C,) bool ndarray
+
+    Returns
+    -------
+    _SplineTables
+    """
+    two = np.flatnonzero(np.diff(off) >= 2)
+    rows, r_off = _open_fit_rows(P, off, two)
+    counts = np.diff(r_off)
+    one = {}  # curve -> (degree, control, knots, fit) made alone
+    for j in np.flatnonzero(closed[two] | (counts == 3)).tolist():
+        i = int(two[j])
+        fit = _fit_points(P[off[i]:off[i + 1]], True) if closed[i] else P[rows[r_off[j]:r_off[j + 1]]]
+        if len(fit) >= (_MIN_LOOP if closed[i] else 3):
+            one[i] = (*_interpolating_bspline(fit, bool(closed[i])), fit)
+    batch = ~closed[two] & (counts >= 4)
+    F = P[rows[np.repeat(batch, counts)]]
+    f_off = np.concatenate([[0], np.cumsum(counts[batch])])
+    made = cubic_splines(F, f_off)
+    if made is None:  # SciPy would raise (or find a singular system): one by one, for its error
+        for i, fit in zip(two[batch].tolist(), np.split(F, f_off[1:-1])):
+            one[i] = (*_interpolating_bspline(fit, False), fit)
+        batch[:], F, f_off = False, F[:0], f_off[:1]
+        made = cubic_splines(F, f_off)
+    return _gather(len(closed), two[batch], F, f_off, made, one)
+
+
+def _open_fit_rows(P: np.ndarray, off: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of ``P`` kept as fit points of the curves ``two`` (w,), of 2 or more points,
+    were they open (:func:`_fit_points`): all rows (R,) and the offsets of each curve's (w + 1,)."""
+    sizes = np.diff(off)[two]
+    sub = np.concatenate([[0], np.cumsum(sizes)])
+    idx = np.arange(sub[-1]) + np.repeat(off[two] - sub[:-1], sizes)
+    keep = open_fit_points(P[idx], sub, _FIT_TOL) if len(two) else np.zeros(0, dtype=bool)
+    counts = np.add.reduceat(keep, sub[:-1]) if len(two) else np.zeros(0, dtype=np.int64)
+    return idx[keep], np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+
+
+def _gather(n_curves: int, batched: np.ndarray, F: np.ndarray, f_off: np.ndarray, made: tuple,
+            one: dict) -> _SplineTables:
+    """The splines made together (curves ``batched``, their fit points ``F`` by ``f_off``, and
+    ``made``, the control points and knots of :func:`cubic_splines`) and those made alone
+    (``one``: curve -> (degree, control, knots, fit)) in curve order."""
+    control, knots = made
+    order = np.union1d(batched, np.fromiter(one, dtype=np.int64, count=len(one))).astype(np.int64)
+    is_spline = np.zeros(n_curves, dtype=bool)
+    is_spline[order] = True
+    pos = np.searchsorted(order, batched)  # where the batched splines go
+    nb = np.diff(f_off)
+    degree = np.full(len(order), DEGREE, dtype=np.int64)
+    nf = np.zeros(len(order), dtype=np.int64)
+    nf[pos] = nb
+    nc, nk = nf.copy(), nf + DEGREE + 1
+    for i, (deg, c, k, fit) in one.items():
+        j = int(np.searchsorted(order, i))
+        degree[j], nf[j], nc[j], nk[j] = deg, len(fit), len(c), len(k)
+    fit_off, ctrl_off, knot_off = (np.concatenate([[0], np.cumsum(x)]) for x in (nf, nc, nk))
+    fit_all, ctrl_all = np.empty((fit_off[-1], 3)), np.empty((ctrl_off[-1], 3))
+    knot_all = np.empty(knot_off[-1])
+    src = np.arange(f_off[-1])
+    fit_all[src + np.repeat(fit_off[pos] - f_off[:-1], nb)] = F
+    ctrl_all[src + np.repeat(ctrl_off[pos] - f_off[:-1], nb)] = control
+    k_src = np.arange(len(knots))
+    knot_all[k_src + np.repeat(knot_off[pos] - f_off[:-1] - (DEGREE + 1) * np.arange(len(nb)), nb + DEGREE + 1)] = knots
+    for i, (_, c, k, fit) in one.items():
+        j = int(np.searchsorted(order, i))
+        fit_all[fit_off[j]:fit_off[j + 1]] = fit
+        ctrl_all[ctrl_off[j]:ctrl_off[j + 1]] = np.asarray(c, dtype=float).reshape(len(c), -1)
+        knot_all[knot_off[j]:knot_off[j + 1]] = k
+    return _SplineTables(is_spline, degree, fit_all, fit_off, ctrl_all, ctrl_off, knot_all, knot_off)
+
+
+#: The glue after the numbers of a spline (:func:`_spline_texts`), by index.
+_SPLINE_GLUE = ["\n 40\n", "\n 10\n", "\n 20\n", "\n 30\n", "\n 11\n", "\n 21\n", "\n 31\n"]
+
+
+def _spline_texts(sp: _SplineTables) -> list[bytes]:
+    """The tags of each spline from its first knot's value to its last fit point's z: knots,
+    control points, fit points, in one bulk call (:func:`curvenet.io.numbers.glued_groups`)."""
+    if not len(sp.degree):
+        return []
+    nk, nc, nf = np.diff(sp.knot_off), 3 * np.diff(sp.ctrl_off), 3 * np.diff(sp.fit_off)
+    size = nk + nc + nf
+    start = np.concatenate([[0], np.cumsum(size)])
+    values = np.empty(start[-1])
+    glue = np.empty(start[-1], dtype=np.int8)
+    for part, n, first, codes, last in ((sp.knots, nk, 0, [0], 1), (sp.control.ravel(), nc, nk, [2, 3, 1], 4),
+                                        (sp.fit.ravel(), nf, nk + nc, [5, 6, 4], 4)):
+        at = np.arange(len(part)) + np.repeat(start[:-1] + first - np.concatenate([[0], np.cumsum(n)])[:-1], n)
+        values[at] = part
+        glue[at] = np.tile(np.array(codes, dtype=np.int8), len(part) // len(codes))
+        glue[start[:-1] + first + n - 1] = last
+    return glued_groups(values, glue, _SPLINE_GLUE, groups=start)
+
+
+#: Fit points closer than this fraction of their curve's extent to the one before are dropped.
+_FIT_TOL = 1e-9
 
 #: A loop needs this many fit points (its first repeated last) for a periodic cubic spline.
 _MIN_LOOP = 5
@@ -227,7 +342,7 @@ _MIN_LOOP = 5
 def _fit_points(pts: np.ndarray, closed: bool) -> np.ndarray:
     """(k, 3) spline fit points: no (nearly) repeated consecutive points, which break the
     interpolation; a closed curve ends where it starts."""
-    tol = 1e-9 * max(float(np.ptp(pts, axis=0).max()), 1e-300)
+    tol = _FIT_TOL * max(float(np.ptp(pts, axis=0).max()), 1e-300)
     keep = np.r_[True, step_lengths(np.diff(pts, axis=0)) > tol]
     fit = pts[keep]
     if closed and len(fit) > 2:

@@ -27,7 +27,8 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
-    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE",
+    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE", "glued_groups", "g_matrix",
+    "g_table_bytes",
 ]
 
 #: The magnitudes that ``repr`` writes without exponent (and orjson writes the same way):
@@ -76,6 +77,12 @@ def _repr_row(row: np.ndarray, sep: str) -> str:
 #: which glue may hold).
 _MARKS = bytes(b for b in range(1, 32) if b not in (9, 10, 13))
 
+
+#: The bulk writers take at most this many values at a time (rows or groups of rows): the text
+#: of a chunk (about 2 MB) stays in the processor's cache through the passes over it (orjson's,
+#: the search of the commas, the marking, the glue), which made the SWC table of a million
+#: points 1.1 -> 0.8 s of processor time.
+_CHUNK = 1 << 17
 
 #: The glue goes into a long text in pieces of this many bytes: each piece stays in the
 #: processor's cache through the passes of ``bytes.replace`` (one a glue), which made the
@@ -149,6 +156,9 @@ def table_bytes(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Seque
     a, g, _ = _table_input(rows, glue, None)
     if not len(a):
         return b""
+    step = max(1, _CHUNK // a.shape[1])
+    if len(a) > step and _orjson() is not None:  # rows in chunks: the passes over them stay in cache
+        return b"".join(table_bytes(a[i:i + step], g, int_cols=int_cols) for i in range(0, len(a), step))
     if a.size < _SMALL or _orjson() is None:
         return b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))
     cols = tuple(int_cols) if a.dtype.kind == "f" else ()
@@ -181,10 +191,46 @@ def table_groups(
     """
     a, g, off = _table_input(rows, glue, groups)
     assert off is not None
+    cuts = _chunk_groups(off, a.shape[1])
+    if len(cuts) > 2 and _orjson() is not None:  # whole groups in chunks of about _CHUNK values
+        return [t for ga, gb in zip(cuts[:-1], cuts[1:]) for t in
+                table_groups(a[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga], int_cols=int_cols)]
     if not len(a) or a.size < _SMALL or _orjson() is None:
         return table_pieces(a, g, groups=off, int_cols=int_cols)[0]  # (the glue in already)
     body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
     return _grouped(b"".join(fill(body)).split(group_mark), off)
+
+
+def _equal_glue(body: bytearray, commas: np.ndarray, ids: np.ndarray, glue: list[bytes], ends: np.ndarray,
+                group_mark: int) -> bytes:
+    """The numbers ``body`` (each followed by a comma, at ``commas``) with the comma after value
+    ``k`` replaced by ``glue[ids[k]]``, all glue of one length ``L``, but at the values ``ends``
+    (by ``group_mark``): one ``replace`` pass widens every comma to the first glue, then the
+    bytes where the glue differ are scattered in place (for a DXF's ``"\\n 40\\n"``,
+    ``"\\n 10\\n"``...: two numpy assignments instead of a pass per glue)."""
+    L = len(glue[0])
+    buf = np.frombuffer(body, dtype=np.uint8)
+    buf[commas[ends]] = group_mark
+    regular = np.ones(len(commas), dtype=bool)
+    regular[ends] = False
+    table = np.frombuffer(b"".join(glue), dtype=np.uint8).reshape(len(glue), L)
+    text = body.replace(b",", table[0].tobytes())  # the bytes all glue shares are in place then
+    out = np.frombuffer(text, dtype=np.uint8)
+    pos = commas[regular] + (L - 1) * np.arange(int(regular.sum()))
+    which = ids[regular]
+    for q in np.flatnonzero((table != table[0]).any(axis=0)).tolist():
+        out[pos + q] = table[which, q]
+    return bytes(text)
+
+
+def _chunk_groups(off: np.ndarray, m: int) -> list[int]:
+    """Group indices that cut groups of rows (offsets ``off``, ``m`` values a row) into chunks
+    of about :data:`_CHUNK` values (a group larger than that is a chunk of its own): the first
+    group of each chunk, then ``len(off) - 1``."""
+    if not len(off) or off[-1] * m <= _CHUNK:
+        return [0, max(len(off) - 1, 0)]
+    cuts = np.unique(np.searchsorted(off, np.arange(0, off[-1], max(1, _CHUNK // m)), side="right") - 1)
+    return np.append(cuts[cuts < len(off) - 1], len(off) - 1).tolist()
 
 
 def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
@@ -284,6 +330,72 @@ def table_pieces(
         return out, _as_is
     body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
     return _grouped(body.split(group_mark), off), fill
+
+
+def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike) -> list[bytes]:
+    """The text of each group of values, each value followed by a glue of its own choosing.
+
+    :func:`table_groups` with the glue chosen value by value instead of by column: one bulk
+    call writes the numbers of tables of different widths (a DXF spline's knots, control points
+    and fit points) in the order of a file.
+
+    Parameters
+    ----------
+    values : (n,) array_like of float
+        Written as ``repr`` writes them.
+    glue_of : (n,) array_like of int
+        Index into ``glue`` of the text after each value (ignored for the last of a group).
+    glue : sequence of str or bytes
+        Texts free of control characters other than tab and line ends.
+    groups : (g + 1,) array_like of int
+        Value offsets: group ``k`` is values ``groups[k]:groups[k + 1]``.
+
+    Returns
+    -------
+    list of g bytes
+        Each group's values and the glue between them (none after the last).
+
+    Examples
+    --------
+    >>> glued_groups([1.0, 2.0, 3.0, 4.0], [0, 1, 0, 0], [" ", ";"], groups=[0, 3, 4])
+    [b'1.0 2.0;3.0', b'4.0']
+    """
+    x = np.ascontiguousarray(values, dtype=np.float64).ravel()
+    ids = np.asarray(glue_of, dtype=np.intp).ravel()
+    off = np.asarray(groups, dtype=np.int64)
+    g = [t.encode() if isinstance(t, str) else bytes(t) for t in glue]
+    if len(ids) != len(x):
+        raise ValueError(f"glue_of must have one entry per value: {len(ids)} for {len(x)}")
+    cuts = _chunk_groups(off, 1)
+    if len(cuts) > 2 and _orjson() is not None:  # whole groups in chunks of about _CHUNK values
+        return [t for ga, gb in zip(cuts[:-1], cuts[1:]) for t in
+                glued_groups(x[off[ga]:off[gb]], ids[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga])]
+    if not len(x) or len(x) < _SMALL or _orjson() is None:
+        texts = [repr(v).encode() + g[j] for v, j in zip(x.tolist(), ids.tolist())]
+        return [b"".join(texts[a:b])[: -len(g[ids[b - 1]]) or None] if b > a else b""
+                for a, b in zip(off[:-1].tolist(), off[1:].tolist())]
+    body = bytearray(_bulk(x))
+    body.append(44)  # every value followed by a comma
+    buf = np.frombuffer(body, dtype=np.uint8)
+    commas = np.flatnonzero(buf == 44)
+    free = [c for c in _MARKS if c not in set(b"".join(g))]
+    code = np.array([t[0] if len(t) == 1 else free.pop() for t in g], dtype=np.uint8)
+    group_mark = free.pop()
+    ends = (off[1:] - 1)[np.diff(off) > 0]
+    if len({len(t) for t in g}) == 1 and len(g[0]) > 1:  # glue of one length: scattered in place
+        text = _equal_glue(body, commas, ids, g, ends, group_mark)
+        return _grouped(text.split(bytes([group_mark])), off)
+    marks = code[ids]
+    marks[ends] = group_mark
+    buf[commas] = marks
+    todo = sorted(((bytes([c]), t) for c, t in zip(code.tolist(), g) if len(t) != 1), key=lambda ct: len(ct[1]))
+    pieces = []
+    for i in range(0, len(body), _FILL_PIECE):
+        piece = body[i:i + _FILL_PIECE]
+        for mark, t in todo:
+            piece = piece.replace(mark, t)
+        pieces.append(piece)
+    return _grouped(b"".join(pieces).split(bytes([group_mark])), off)
 
 
 def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
@@ -462,3 +574,204 @@ def join_columns(blocks: Sequence[str], sep: str = " ", end: str = "\n") -> str:
     if any(len(c) != len(cols[0]) for c in cols):
         raise ValueError("blocks of different numbers of lines")
     return end.join(map(sep.join, zip(*cols))) + end
+
+
+# ------------------------------------------------------------------ %g with a fixed precision
+#: Precisions that :func:`g_matrix` computes in bulk: the scaled value (below 10**precision)
+#: keeps a margin of a thousand of its ulps to the nearest rounding tie; above, ``%`` writes all.
+G_BULK_PRECISION = 12
+
+#: Magnitudes computed in bulk by :func:`g_matrix` (powers of ten within float64's range and
+#: scaled values far from subnormal); zeros too. Others go through ``%``.
+G_BULK_RANGE = (1e-290, 1e290)
+
+#: Relative error bound of the scaled value ``|x| * 10**k`` (the power and the product each
+#: rounded: under 2 ulps), times a safety factor of 1000: values whose scaled fraction lies this
+#: close to one half are written by ``%`` (a few in a million at precision 9).
+_G_TIE_MARGIN = 1e3 * 2.0**-51
+
+
+#: 10.0 ** k for k = 0..308 (numpy's power of each; a table: ``**`` of an array is slow).
+_POW10 = 10.0 ** np.arange(309)
+
+
+def _g_digits(ax: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Decimal exponent (n,), ``p``-digit integer mantissa (n,) and a mask of the values too
+    close to a rounding tie to trust (n,), for positive finite ``ax`` in :data:`G_BULK_RANGE`:
+    ``ax`` rounded to ``p`` significant digits is ``m * 10**(e - p + 1)``."""
+
+    def scaled(e: np.ndarray) -> np.ndarray:
+        k = p - 1 - e
+        return np.where(k >= 0, ax * _POW10[np.maximum(k, 0)], ax / _POW10[np.maximum(-k, 0)])
+
+    e = np.floor(np.log10(ax)).astype(np.int64)
+    s = scaled(e)
+    off = (s >= 10.0**p).astype(np.int64) - (s < 10.0 ** (p - 1))  # log10 one off near 10**k
+    if off.any():
+        e += off
+        s = scaled(e)
+    frac = s - np.floor(s)
+    unsure = (np.abs(frac - 0.5) <= _G_TIE_MARGIN * s) | (s < 10.0 ** (p - 1)) | (s >= 10.0**p)
+    m = np.floor(s + 0.5).astype(np.int64)
+    up = m == 10**p  # rounded up to the next power of ten
+    m[up] //= 10
+    return e + up, m, unsure
+
+
+def _digit_chars(m: np.ndarray, p: int) -> np.ndarray:
+    """(n, p) ASCII digits of integers ``m`` (n,) of exactly ``p`` digits (orjson writes them
+    when installed: a tenth of the time of numpy's divisions)."""
+    if _orjson() is not None and len(m):
+        text = np.frombuffer(_dumps(np.ascontiguousarray(m, dtype=np.int64)), dtype=np.uint8)
+        return text[1:].reshape(len(m), p + 1)[:, :p].copy()  # each number then ',' (the last: ']')
+    pw = 10 ** np.arange(p - 1, -1, -1, dtype=np.int64)
+    return ((m[:, None] // pw) % 10 + ord("0")).astype(np.uint8)
+
+
+def g_matrix(values: ArrayLike, precision: int, out: np.ndarray | None = None) -> np.ndarray:
+    """``"%.{precision}g" % v`` of every value, as rows of bytes padded with NUL bytes.
+
+    The padding may sit anywhere in a row (where ``%g`` drops trailing zeros, the sign of a
+    positive value); removing every NUL byte of the row leaves the text. Rows of several
+    columns side by side with glue columns between them, then all NUL bytes removed, make a
+    table's text (:func:`g_table_bytes`).
+
+    Parameters
+    ----------
+    values : (n,) array_like of float
+    precision : int
+        Significant digits, at least 1. Up to :data:`G_BULK_PRECISION`, values are converted
+        with numpy (several times faster than ``%``); the values near a rounding tie, outside
+        :data:`G_BULK_RANGE` (but zeros) or not finite go through ``%``.
+    out : (n, precision + 7) uint8 ndarray, optional
+        Where to write (all NUL on entry), e.g. columns of a larger table.
+
+    Returns
+    -------
+    (n, precision + 7) uint8 ndarray
+        ``out`` when given.
+    """
+    x = np.asarray(values, dtype=np.float64).ravel()
+    p = int(precision)
+    if p < 1:
+        raise ValueError(f"precision must be at least 1, got {precision}")
+    if out is None:
+        out = np.zeros((len(x), p + 7), dtype=np.uint8)
+    out[:, 0] = np.where(np.signbit(x), ord("-"), 0)
+    ax = np.abs(x)
+    done = (ax >= G_BULK_RANGE[0]) & (ax < G_BULK_RANGE[1]) if p <= G_BULK_PRECISION else np.zeros(len(x), bool)
+    e, m, unsure = _g_digits(ax[done], p)
+    done[np.flatnonzero(done)[unsure]] = False
+    _g_layout(out, done, e[~unsure], m[~unsure], p)
+    zero = x == 0
+    out[zero, 1] = ord("0")
+    for i in np.flatnonzero(~done & ~zero).tolist():
+        t = (f"%.{p}g" % x[i]).encode()
+        out[i, :] = 0
+        out[i, :len(t)] = np.frombuffer(t, dtype=np.uint8)
+    return out
+
+
+def _g_layout(out: np.ndarray, rows: np.ndarray, e: np.ndarray, m: np.ndarray, p: int) -> None:
+    """Write the ``%g`` text of mantissas ``m`` (r,) with exponents ``e`` (r,) into the rows
+    ``rows`` (a mask) of ``out`` from column 1 on: fixed notation for ``-4 <= e < p``, else
+    ``d.ddde+XX``; trailing zeros of the fraction (and a point left alone) are left NUL.
+
+    The rows are sorted by their layout (the exponent, or "scientific") so that each layout is
+    written into a block of consecutive rows by slices, then put in place in one copy."""
+    fixed = (e >= -4) & (e < p)
+    key = np.where(fixed, e + 4, p + 4).astype(np.int16)  # 0 .. p + 4
+    order = np.argsort(key, kind="stable")
+    key, e, chars = key[order], e[order], _digit_chars(m[order], p)
+    ints = np.where((key >= 4) & (key < p + 4), key - 3, 1)  # digits before the point (1 in "d.ddde+XX")
+    nz = np.zeros(len(e), dtype=np.int16)  # digits up to the last nonzero one
+    for j in range(p):
+        np.maximum(nz, (chars[:, j] != ord("0")) * np.int16(j + 1), out=nz)
+    chars *= np.arange(p, dtype=np.int16) < np.maximum(nz, ints)[:, None]  # trailing zeros of the fraction
+    dot = np.where(nz > ints, ord("."), 0).astype(np.uint8)
+    body = np.zeros((len(e), out.shape[1] - 1), dtype=np.uint8)
+    starts = np.searchsorted(key, np.arange(p + 6))
+    for k in range(p + 5):
+        a, b = starts[k], starts[k + 1]
+        if a < b:
+            _g_block(body[a:b], chars[a:b], dot[a:b], e[a:b], k - 4, p)
+    if rows.all():  # a gather by the inverse order is faster than a scatter
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(len(order))
+        out[:, 1:] = body[inverse]
+    else:
+        out[np.flatnonzero(rows)[order], 1:] = body
+
+
+def _g_block(body: np.ndarray, chars: np.ndarray, dot: np.ndarray, e: np.ndarray, x: int, p: int) -> None:
+    """The ``%g`` texts of one layout: fixed notation with exponent ``x`` (``-4 <= x < p``), or
+    scientific (``x == p``), written into ``body`` (r, p + 6) from the digits ``chars`` (r, p)
+    (trailing zeros NUL), the points ``dot`` (r,) and the exponents ``e`` (r,)."""
+    if 0 <= x < p:  # d..d.ddd
+        body[:, :x + 1] = chars[:, :x + 1]
+        body[:, x + 1] = dot
+        body[:, x + 2:p + 1] = chars[:, x + 1:]
+    elif x < 0:  # 0.000ddd
+        body[:, 0] = ord("0")
+        body[:, 1] = ord(".")
+        body[:, 2:1 - x] = ord("0")
+        body[:, 1 - x:1 - x + p] = chars
+    else:  # d.ddde+XX
+        a = np.abs(e)
+        body[:, 0] = chars[:, 0]
+        body[:, 1] = dot
+        body[:, 2:p + 1] = chars[:, 1:]
+        body[:, p + 1] = ord("e")
+        body[:, p + 2] = np.where(e < 0, ord("-"), ord("+"))
+        body[:, p + 3] = np.where(a >= 100, a // 100 + ord("0"), 0)
+        body[:, p + 4] = (a // 10) % 10 + ord("0")
+        body[:, p + 5] = a % 10 + ord("0")
+
+
+def g_table_bytes(rows: ArrayLike, precision: int, glue: Sequence[str | bytes], prefix: str | bytes = b"") -> bytes:
+    """Every row of an (n, m) float array as text: ``prefix``, then each value as
+    ``"%.{precision}g"`` writes it followed by the glue of its column.
+
+    Parameters
+    ----------
+    rows : (n, m) array_like of float
+    precision : int
+        Significant digits (see :func:`g_matrix`).
+    glue : sequence of m str or bytes
+        ``glue[j]`` follows each value of column ``j``; no NUL bytes.
+    prefix : str or bytes
+        Text before each row; no NUL bytes.
+
+    Returns
+    -------
+    bytes
+        The text ``%`` writes with the format ``prefix + "%.9g" + glue[0] + ...`` for each row.
+
+    Examples
+    --------
+    >>> g_table_bytes([[1.0, 0.1 + 0.2], [-0.0, 1e-7]], 9, [" ", "\\n"], "v ")
+    b'v 1 0.3\\nv -0 1e-07\\n'
+    """
+    a = np.asarray(rows, dtype=np.float64)
+    a = a.reshape(-1, 1) if a.ndim == 1 else a
+    n, m = a.shape
+    g = [x.encode() if isinstance(x, str) else bytes(x) for x in glue]
+    pre = prefix.encode() if isinstance(prefix, str) else bytes(prefix)
+    if len(g) != m:
+        raise ValueError(f"rows must be (n, {len(g)}) for {len(g)} glue strings, got shape {a.shape}")
+    if not n:
+        return b""
+    step = max(1, _CHUNK // m)
+    if n > step:  # rows in chunks: the passes over them stay in cache
+        return b"".join(g_table_bytes(a[i:i + step], precision, g, pre) for i in range(0, n, step))
+    w = int(precision) + 7
+    table = np.zeros((n, len(pre) + m * w + sum(map(len, g))), dtype=np.uint8)
+    at = 0
+    for j, text in enumerate([pre] + [b""] * m):
+        if j:
+            g_matrix(a[:, j - 1], precision, out=table[:, at:at + w])
+            at += w
+            text = g[j - 1]
+        table[:, at:at + len(text)] = np.frombuffer(text, dtype=np.uint8)
+        at += len(text)
+    return table.tobytes().translate(None, b"\x00")

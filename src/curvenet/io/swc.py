@@ -73,36 +73,66 @@ def network_to_swc(
     d = net.dimension
     val = net.valence
     n = net.n_nodes
+    sizes = np.fromiter((len(c.points) for c in net.curves), dtype=np.int64, count=net.n_curves)
+    first = np.concatenate([[0], np.cumsum(sizes)])  # each curve's first row in the stack below
+    stack = np.concatenate([np.reshape(c.points, (-1, d)) for c in net.curves] + [np.reshape(net.nodes, (-1, d))])
     if radius is None:
-        step = _median_step(net.curves)
+        step = _median_step(stack[:first[-1]], sizes)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type)).tolist()
+    runs, cut = _walk(net, sizes.tolist(), first.tolist(), node_type, sample_type)
+    count = int(runs[:, 1].sum()) if len(runs) else 0
+    out = [
+        f"# curvenet network: {n} nodes, {net.n_curves} curves; {count} samples",
+        f"# types: {sample_type} curve sample, {fork_type} junction, {end_type} free end",
+        f"# cycles cut: {cut} (links to an already written sample left out)",
+        "# n T x y z R P",
+    ]
+    return "\n".join(out) + "\n" + _sample_lines(stack, runs, d, shortest([radius]))
+
+
+def _walk(net: CurveNetwork, sizes: list, first: list, node_type: list, sample_type: int) -> tuple[np.ndarray, int]:
+    """The runs of samples of :func:`network_to_swc`'s breadth-first walk, in writing order.
+
+    Parameters
+    ----------
+    net : CurveNetwork
+    sizes, first : list of int
+        Points of each curve and its first row in the stack of all curves' points then the nodes.
+    node_type : list of int
+        SWC type of each node.
+    sample_type : int
+
+    Returns
+    -------
+    runs : (r, 5) int ndarray
+        Per run: first row in the stack, number of samples, 1 if written backwards, SWC type,
+        parent id of its first sample (each other sample's parent is the sample before).
+    cut : int
+        Links left out (cycles).
+    """
+    n = net.n_nodes
+    node_row = first[-1]  # the nodes follow the curves in the stack
+    starts = [-1 if c.start is None else int(c.start) for c in net.curves]
+    ends = [-1 if c.end is None else int(c.end) for c in net.curves]
     at_node: list[list[int]] = [[] for _ in range(n)]
-    for i, c in enumerate(net.curves):
-        if c.start is not None and c.end is not None:
-            at_node[int(c.start)].append(i)
-            if int(c.end) != int(c.start):
-                at_node[int(c.end)].append(i)
-    blocks: list[tuple[np.ndarray, int, int]] = []  # runs of samples: (positions, type, parent of the first)
+    for i, (a, b) in enumerate(zip(starts, ends)):
+        if a >= 0 and b >= 0:
+            at_node[a].append(i)
+            if b != a:
+                at_node[b].append(i)
+    runs: list[tuple[int, int, int, int, int]] = []
     count = 0  # samples so far
-    sample_of_node = [0] * n  # 0: not written yet (Python lists: the walk reads them one by one)
-    used = [False] * len(net.curves)
+    sample_of_node = [0] * n  # 0: not written yet
+    used = [False] * len(sizes)
     cut = 0
-
-    def add(pts: np.ndarray, t: int, parent: int) -> int:
-        """Samples at ``pts`` in a chain (each the parent of the next); returns the last id."""
-        nonlocal count
-        if not len(pts):
-            return parent
-        blocks.append((pts, int(t), parent))
-        count += len(pts)
-        return count
-
-    roots = sorted(range(n), key=(val != 1).tolist().__getitem__)  # free ends first (stable)
-    for root in roots:
+    val = net.valence
+    for root in sorted(range(n), key=(val != 1).tolist().__getitem__):  # free ends first (stable)
         if sample_of_node[root]:
             continue
-        sample_of_node[root] = add(net.nodes[root:root + 1], node_type[root], -1)
+        runs.append((node_row + root, 1, 0, node_type[root], -1))
+        count += 1
+        sample_of_node[root] = count
         queue = deque([root])
         while queue:
             j = queue.popleft()
@@ -110,46 +140,49 @@ def network_to_swc(
                 if used[i]:
                     continue
                 used[i] = True
-                c = net.curves[i]
-                a, b = int(c.start or 0), int(c.end or 0)  # curves listed at a node have both
-                pts = c.points if a == j else c.points[::-1]
+                a, b = starts[i], ends[i]
                 other = b if a == j else a
-                parent = add(pts[1:-1], sample_type, sample_of_node[j])
+                parent = sample_of_node[j]
+                if sizes[i] > 2:  # inner points, from the end at j
+                    runs.append((first[i] + 1, sizes[i] - 2, int(a != j), sample_type, parent))
+                    count += sizes[i] - 2
+                    parent = count
                 if sample_of_node[other]:
                     cut += 1
                 else:
-                    sample_of_node[other] = add(net.nodes[other:other + 1], node_type[other], parent)
+                    runs.append((node_row + other, 1, 0, node_type[other], parent))
+                    count += 1
+                    sample_of_node[other] = count
                     queue.append(other)
     for i, c in enumerate(net.curves):  # loops that meet no node
-        if c.start is None and len(c.points):
-            add(c.points, sample_type, -1)
+        if c.start is None and sizes[i]:
+            runs.append((first[i], sizes[i], 0, sample_type, -1))
+            count += sizes[i]
             cut += bool(c.closed)
-    out = [
-        f"# curvenet network: {n} nodes, {net.n_curves} curves; {count} samples",
-        f"# types: {sample_type} curve sample, {fork_type} junction, {end_type} free end",
-        f"# cycles cut: {cut} (links to an already written sample left out)",
-        "# n T x y z R P",
-    ]
-    return "\n".join(out) + "\n" + _sample_lines(blocks, count, d, shortest([radius]))
+    return np.array(runs, dtype=np.int64).reshape(-1, 5), cut
 
 
-def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
-    """The sample lines ``n T x y z R P`` of the runs of samples ``blocks`` (see
-    :func:`network_to_swc`), ``count`` samples in all."""
-    if not count:
+def _sample_lines(stack: np.ndarray, runs: np.ndarray, d: int, radius: str) -> str:
+    """The sample lines ``n T x y z R P`` of the runs of samples (see :func:`_walk`), whose
+    positions are rows of ``stack`` (m, d)."""
+    if not len(runs):
         return ""
-    sizes = np.array([len(pts) for pts, _, _ in blocks], dtype=np.int64)
-    types = np.repeat(np.array([t for _, t, _ in blocks], dtype=np.int64), sizes)
+    row, size, back, kind, parent0 = runs.T
+    count = int(size.sum())
+    run_start = np.concatenate([[0], np.cumsum(size)[:-1]])
+    k = np.arange(count) - np.repeat(run_start, size)  # position within the run
+    rows = np.repeat(row, size) + np.where(np.repeat(back, size) == 1, np.repeat(size - 1, size) - k, k)
+    types = np.repeat(kind, size)
     parents = np.arange(count, dtype=np.int64)  # within a run, the sample before
-    parents[np.concatenate([[0], np.cumsum(sizes)[:-1]])] = [parent for _, _, parent in blocks]
+    parents[run_start] = parent0
     ids = np.arange(1, count + 1)
     if types.max() < _EXACT_INT:  # one table: integers as floats, written as integers
         table = np.zeros((count, 6))
         table[:, 0], table[:, 1], table[:, 5] = ids, types, parents
-        table[:, 2:2 + d] = np.concatenate([pts for pts, _, _ in blocks])
+        table[:, 2:2 + d] = stack[rows]
         return table_text(table, [" ", " ", " ", " ", f" {radius} ", "\n"], int_cols=(0, 1, 5))
     xyz = np.zeros((count, 3))
-    xyz[:, :d] = np.concatenate([pts for pts, _, _ in blocks])
+    xyz[:, :d] = stack[rows]
     return join_columns([
         int_rows_text(np.column_stack([ids, types])),
         rows_text(xyz, "", " ", f" {radius}\n"),
@@ -161,12 +194,18 @@ def _sample_lines(blocks: list, count: int, d: int, radius: str) -> str:
 _EXACT_INT = 2**53
 
 
-def _median_step(curves: list) -> float:
-    """Median distance between consecutive points of the same curve (0 without any)."""
-    long = [c.points for c in curves if len(c.points) > 1]
-    if not long:
+def _median_step(P: np.ndarray, sizes: np.ndarray) -> float:
+    """Median distance between consecutive points of the same curve (0 without any).
+
+    Parameters
+    ----------
+    P : (N, d) float ndarray
+        The points of all curves, one after the other.
+    sizes : (C,) int ndarray
+        Points of each curve.
+    """
+    curve = np.repeat(np.arange(len(sizes)), sizes)
+    within = curve[1:] == curve[:-1]  # steps from one curve to the next left out
+    if not within.any():
         return 0.0
-    P = np.concatenate(long)
-    steps = step_lengths(np.diff(P, axis=0))
-    last = np.cumsum([len(p) for p in long])[:-1] - 1  # the step from one curve to the next
-    return float(np.median(np.delete(steps, last)))
+    return float(np.median(step_lengths(np.diff(P, axis=0))[within]))
