@@ -10,7 +10,7 @@ from curvenet.methods.robust import frames as RF
 from curvenet.methods.robust import graph as RG
 from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust.kernels import heap, linalg, nodes, registry as KR, shell
-from curvenet.methods.robust.thresholds import LINALG, SHELL, SPACING, STRIP, TANGENTS
+from curvenet.methods.robust.thresholds import ENDS, LINALG, NODES, SHELL, SPACING, STRIP, TANGENTS
 from curvenet import synth
 from curvenet.neighbors import build_tree, knn
 
@@ -407,6 +407,61 @@ def test_junction_nodes_match_the_numpy_least_squares(py, d):
         err_anchor.append(np.linalg.norm(anchor - truth[j]))
     # and it is the junction: far nearer to it than the mean of the branch ends (>= 1.5 away)
     assert max(err) < 0.35 and np.mean(err) < 0.3 * np.mean(err_anchor)
+
+
+def _tangent_junction(d, ang, gap=6.0, over=3.0):
+    """A node at 0 where a line leaves a circle of radius 30 at ``ang`` degrees from its tangent
+    (spacing 1, no noise), as sampled near-tangent junctions come: the arc before the node runs
+    ``over`` past it (the branches are told apart only where they separate), the arc after it
+    and the line stop ``gap`` short of it. Returns the junction_nodes arguments."""
+    R = 30.0
+    arc = lambda s: np.column_stack([R * np.sin(s / R), R * np.cos(s / R) - R])  # node at s = 0
+    a = np.radians(ang)
+    line = lambda r: np.column_stack([r * np.cos(a), r * np.sin(a)])  # leaves outwards (+y: away)
+    parts = [arc(np.arange(-40.0, over + 1e-9, 1.0)), arc(np.arange(40.0, gap - 1e-9, -1.0)),
+             line(np.arange(30.0, gap - 1e-9, -1.0))]
+    P = np.concatenate(parts)
+    if d == 3:  # tilted out of the xy plane
+        rot = np.linalg.qr(np.array([[1.0, 0.2, 0.1], [0.3, 1.0, -0.2], [0.1, 0.4, 1.0]]))[0]
+        P = np.column_stack([P, np.zeros(len(P))]) @ rot.T
+    lens = [len(p) for p in parts]
+    bflat = np.arange(len(P), dtype=np.int64)
+    boff = np.r_[0, np.cumsum(lens)].astype(np.int64)
+    consts = K.JunctionParams(4.0, 6.0, 1.25, 4.5, 16.5, 0.8 * 5.5, 0.9, 1.5, False)
+    return (P, np.ones(len(P)), np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), bflat, boff,
+            np.array([0, 3], dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(2, dtype=np.int64),
+            np.ones(1), 1.0, 0.0, consts)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+@pytest.mark.parametrize("ang", [0.0, 3.0, 10.0])
+def test_near_tangent_junction_is_where_the_circles_meet(d, ang):
+    # the lines fitted on the three ends are near-parallel (and those of the arcs are chords):
+    # their least squares leaves the node to the anchor's pull along the tangent (1 to 3 away);
+    # the circles fitted on the ends meet at the node. Compiled and plain runs: the same bits.
+    args = _tangent_junction(d, ang)
+    X, _ = _plain("junction_nodes")(*args)
+    assert np.linalg.norm(X[0]) < 0.1, X[0]
+    off = NODES._replace(tangent_weak=0.0)  # the lines' node alone
+    k = KR.KERNELS["junction_nodes"]
+    X0, _ = k.plain(*args, ENDS, off, LINALG)
+    assert np.linalg.norm(X0[0]) > 0.5, X0[0]
+    if k.compiled is not None:
+        Xc, _ = k.compiled(*args, *k.groups)
+        assert np.array_equal(Xc, X)
+
+
+def test_near_tangent_placement_needs_the_circles_to_meet():
+    # the line leaves 3 off the circle's tangent point (a line crossing near, not touching):
+    # the circles do not meet within NODES.tangent_meet, the lines' node stays
+    args = list(_tangent_junction(2, 0.0))
+    P = args[0].copy()
+    P[args[5][2]:] += [0.0, 3.0]
+    args[0] = P
+    k = KR.KERNELS["junction_nodes"]
+    X, _ = k.plain(*args, *k.groups)
+    X0, _ = k.plain(*args, ENDS, NODES._replace(tangent_weak=0.0), LINALG)
+    assert np.array_equal(X, X0)
 
 
 @pytest.mark.parametrize("d", [2, 3])

@@ -628,6 +628,43 @@ class Nodes(NamedTuple):
     #: a branch can hide in a region of at least this many points (points)
     #: origin: set with the hidden-branch test (bce5eca); no measurement recorded
     swallow_min: int = 3
+    #: near-tangent branches: a junction whose lines' normal matrix (the sum of ``I - u u^T``
+    #: over its branches, without the anchor's pull) has its smallest eigenvalue under this many
+    #: times the number of branches (unitless; 2 collinear branches and a third at 28 degrees
+    #: give 0.05) is placed where the branches' circles meet along that eigenvector
+    #: (``kernels/nodes._tangent_node``)
+    #: origin: benchmark: kinds model tangent (lines leaving a circle at 0-20 degrees, 0.005-0.03)
+    #: against all junctions of the other kinds and synthetic models, clean (0.25 and more)
+    tangent_weak: float = 0.05
+    #: ... each circle fitted on the branch's last this many spacings, outside the region (h)
+    #: origin: benchmark: kinds tangent clean and density x3, 6 / 8 / 10 / 14 h: 8 h the only one
+    #: placing all 5 tangent junctions within 0.5 h in both
+    tangent_span: float = 8.0
+    #: ... of at least this many points (points)
+    #: origin: set with the tangent placement; no measurement of this value
+    tangent_points: int = 5
+    #: ... only where the noise is at most this many local spacings (unitless): under noise the
+    #: curvature over 8 h is not measurable; the noise estimate of clean samplings is 0.01-0.03 h,
+    #: of noise 0.1h 0.12-0.19 h, of 0.2h and of 0.3h + x3 both about 0.37 h
+    #: origin: benchmark: kinds tangent, curve F1 without / with the placement: span 8 h, noise
+    #: 0.1h 0.55 / 0.27, 0.2h 0.09 / 0.09 (nodes farther off); span 8 h + 60 noise levels: 0.1h
+    #: 0.55 / 0.55, 0.2h 0.09 / 0.45, but 0.3h + x3 0.09 / 0.00 (not told apart from 0.2h)
+    tangent_noise: float = 0.05
+    #: ... the node walks along the weak direction by steps of this many spacings (h)
+    #: origin: a sampling of the profile, not a tuning
+    tangent_step: float = 0.1
+    #: ... at most this many spacings from the lines' node (h)
+    #: origin: set with the tangent placement (the anchor lies up to 5 h from a 0-degree junction
+    #: on the tangent model); no measurement of this value
+    tangent_reach: float = 8.0
+    #: ... Gauss-Newton steps of the offsets normal to the weak direction, per step (count)
+    #: origin: set with the tangent placement; no measurement of this value
+    tangent_iters: int = 3
+    #: ... kept only where the circles meet within this many spacings (root mean square; h):
+    #: they meet within 0.04 h at the tangent model's junctions, a merged pair of junctions
+    #: (ladder) misses by 1.4 h
+    #: origin: benchmark: kinds ladder clean (curve F1 0.519 -> 0.481 without this test)
+    tangent_meet: float = 0.1
 
 
 NODES = Nodes()

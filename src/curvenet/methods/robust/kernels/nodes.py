@@ -12,7 +12,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .linalg import _eig_top, _solve_small
+from .linalg import _eig_sym, _eig_top, _solve_small
+
+#: coefficients of the algebraic form of a circle (or line) in a branch end's frame,
+#: ``y = a (s^2 + y^2) + b s + c`` (:func:`_arc_fit`): also the fewest points that fit it
+ARC_COEFS = 3
 
 
 class JunctionParams(NamedTuple):
@@ -299,6 +303,217 @@ def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no 
     return m
 
 
+def _arc_fit(P, ids, lim, mu, U, cf, C, ev, M3, r3, la):  # pragma: no cover - compiled
+    """Circle (or line) through the end portion of ``ids`` (running towards the end): the
+    points from the last id backwards within arc length ``lim`` (:func:`_end_count`).
+
+    The portion's mean goes into ``mu`` and its principal axes into the columns of ``U``
+    (ascending: ``U[:, d - 1]`` the direction ``s``, ``U[:, d - 2]`` the second ``y``). In that
+    frame the circle is ``y = cf[0] (s^2 + y^2) + cf[1] s + cf[2]`` (an algebraic fit, linear
+    least squares regressing ``y``; a line when ``cf[0]`` is 0, curvature ``2 cf[0]``), out of the
+    plane the offset is 0. Returns the number of points in the portion, or 0 when the fit is
+    singular.
+    """
+    n = ids.shape[0]
+    d = P.shape[1]
+    m = _end_count(P, ids, lim)
+    if m < ARC_COEFS:
+        return 0
+    for c in range(d):
+        acc = 0.0
+        for q in range(n - m, n):
+            acc += P[ids[q], c]
+        mu[c] = acc / m
+    for i in range(d):
+        for j in range(i, d):
+            acc = 0.0
+            for q in range(n - m, n):
+                acc += (P[ids[q], i] - mu[i]) * (P[ids[q], j] - mu[j])
+            C[i, j] = acc
+            C[j, i] = acc
+    _eig_sym(C, U, ev, la)
+    for a in range(ARC_COEFS):
+        r3[a] = 0.0
+        for c in range(ARC_COEFS):
+            M3[a, c] = 0.0
+    for q in range(n - m, n):
+        s = 0.0
+        y = 0.0
+        for c in range(d):
+            t = P[ids[q], c] - mu[c]
+            s += t * U[c, d - 1]
+            y += t * U[c, d - 2]
+        f0 = s * s + y * y
+        M3[0, 0] += f0 * f0
+        M3[0, 1] += f0 * s
+        M3[0, 2] += f0
+        M3[1, 1] += s * s
+        M3[1, 2] += s
+        M3[2, 2] += 1.0
+        r3[0] += f0 * y
+        r3[1] += s * y
+        r3[2] += y
+    M3[1, 0] = M3[0, 1]
+    M3[2, 0] = M3[0, 2]
+    M3[2, 1] = M3[1, 2]
+    if not _solve_small(M3, r3, cf):
+        return 0
+    return m
+
+
+def _arc_resid(x, mu, U, cf, e, J):  # pragma: no cover - compiled
+    """Offset of ``x`` from a circle of :func:`_arc_fit` (``e``, d - 1: the in-plane distance
+    ``g / |grad g|`` of the algebraic form ``g``, then the out-of-plane coordinates) and its
+    Jacobian ``J`` (d - 1, d; the gradient's norm held fixed). Returns ``|e|^2``."""
+    d = x.shape[0]
+    s = 0.0
+    y = 0.0
+    for c in range(d):
+        t = x[c] - mu[c]
+        s += t * U[c, d - 1]
+        y += t * U[c, d - 2]
+    g = cf[0] * (s * s + y * y) + cf[1] * s + cf[2] - y
+    gs = 2.0 * cf[0] * s + cf[1]
+    gy = 2.0 * cf[0] * y - 1.0
+    nn = np.sqrt(gs * gs + gy * gy)
+    e[0] = g / nn
+    f = e[0] * e[0]
+    for c in range(d):
+        J[0, c] = (gs * U[c, d - 1] + gy * U[c, d - 2]) / nn
+    for k in range(d - 2):
+        acc = 0.0
+        for c in range(d):
+            acc += (x[c] - mu[c]) * U[c, k]
+            J[k + 1, c] = U[c, k]
+        e[k + 1] = acc
+        f += acc * acc
+    return f
+
+
+def _arc_profile(x0, w, Q, t, MU, UU, CF, nm, x, e, J, H, g, z, iters):  # pragma: no cover - compiled
+    """The least sum of squared offsets of the point ``x0 + t w + Q y`` from the ``nm`` circles
+    ``MU[k], UU[k], CF[k]`` (:func:`_arc_resid`) over ``y`` (Gauss-Newton, ``iters`` steps from
+    ``y = 0``; ``Q`` (d, d - 1): an orthonormal basis of the directions normal to ``w``). The
+    point goes into ``x``; returns the sum."""
+    d = x0.shape[0]
+    k1 = d - 1
+    for c in range(d):
+        x[c] = x0[c] + t * w[c]
+    for _ in range(iters):
+        for a in range(k1):
+            g[a] = 0.0
+            for b in range(k1):
+                H[a, b] = 0.0
+        for k in range(nm):
+            _arc_resid(x, MU[k], UU[k], CF[k], e, J)
+            for r in range(k1):
+                # row r of J Q, into z
+                for a in range(k1):
+                    acc = 0.0
+                    for c in range(d):
+                        acc += J[r, c] * Q[c, a]
+                    z[a] = acc
+                for a in range(k1):
+                    g[a] -= z[a] * e[r]
+                    for b in range(k1):
+                        H[a, b] += z[a] * z[b]
+        if not _solve_small(H, g, z):
+            break
+        for c in range(d):
+            acc = 0.0
+            for a in range(k1):
+                acc += Q[c, a] * z[a]
+            x[c] += acc
+    f = 0.0
+    for k in range(nm):
+        f += _arc_resid(x, MU[k], UU[k], CF[k], e, J)
+    return f
+
+
+def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - compiled
+    """Where near-tangent branches meet: the node ``x`` of :func:`_junction_nodes` moved along
+    the weak direction of the lines' normal matrix ``A`` (without the anchor's pull; overwritten).
+
+    When the smallest eigenvalue of ``A`` is under ``nd.tangent_weak`` times the number of
+    branches, the lines cannot place the node along its eigenvector ``w`` (the branches are
+    near-tangent there; their straight lines, fitted on chords of curved branches, even cross at
+    the wrong place). Each branch (``flat[off[b]:off[b + 1]]``, not walked into the region) is
+    then fitted by a circle over its last ``nd.tangent_span`` spacings (:func:`_arc_fit`), and
+    the node is where those circles meet: the point ``x + t w + (normal to w)`` whose summed
+    squared offsets from them is least over the normal part, walked downhill in ``t`` from 0 by
+    steps of ``nd.tangent_step hl`` (at most ``nd.tangent_reach hl`` away) to the nearest local
+    minimum. Kept only when the circles meet there within ``nd.tangent_meet hl`` (root mean
+    square) and at least 2 circles were fitted; else ``x`` is left as it is. Returns whether
+    ``x`` moved.
+    """
+    nbr = off.shape[0] - 1
+    d = P.shape[1]
+    if d < 2 or nbr < 2:
+        return False
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    _eig_sym(A, V, ev, la)
+    if not ev[0] < nd.tangent_weak * nbr:
+        return False
+    MU = np.zeros((nbr, d))
+    UU = np.zeros((nbr, d, d))
+    CF = np.zeros((nbr, ARC_COEFS))
+    C = np.zeros((d, d))
+    ev2 = np.zeros(d)
+    M3 = np.zeros((ARC_COEFS, ARC_COEFS))
+    r3 = np.zeros(ARC_COEFS)
+    nm = 0
+    for bi in range(nbr):
+        ids = flat[off[bi]:off[bi + 1]]
+        n = ids.shape[0]
+        if n < nd.tangent_points:
+            continue
+        m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
+        if m >= nd.tangent_points:
+            nm += 1
+    if nm < 2:
+        return False
+    w = np.zeros(d)
+    Q = np.zeros((d, d - 1))
+    for c in range(d):
+        w[c] = V[c, 0]
+        for a in range(d - 1):
+            Q[c, a] = V[c, a + 1]
+    x0 = x.copy()
+    xb = np.zeros(d)
+    xt = np.zeros(d)
+    e = np.zeros(d - 1)
+    J = np.zeros((d - 1, d))
+    H = np.zeros((d - 1, d - 1))
+    g = np.zeros(d - 1)
+    z = np.zeros(d - 1)
+    it = nd.tangent_iters
+    step = nd.tangent_step * hl
+    kmax = int(nd.tangent_reach / nd.tangent_step)
+    fb = _arc_profile(x0, w, Q, 0.0, MU, UU, CF, nm, xb, e, J, H, g, z, it)
+    fm = _arc_profile(x0, w, Q, -step, MU, UU, CF, nm, xt, e, J, H, g, z, it)
+    fp = _arc_profile(x0, w, Q, step, MU, UU, CF, nm, xt, e, J, H, g, z, it)
+    sgn = 0
+    if fm < fb and fm <= fp:
+        sgn = -1
+    elif fp < fb:
+        sgn = 1
+    k = 0
+    while sgn != 0 and k < kmax:
+        ft = _arc_profile(x0, w, Q, (k + 1) * sgn * step, MU, UU, CF, nm, xt, e, J, H, g, z, it)
+        if not ft < fb:
+            break
+        fb = ft
+        k += 1
+        for c in range(d):
+            xb[c] = xt[c]
+    if not fb <= nd.tangent_meet * nd.tangent_meet * nm * hl * hl:
+        return False
+    for c in range(d):
+        x[c] = xb[c]
+    return True
+
+
 def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise,  # pragma: no cover - compiled
                     jp, en, nd, la):
     """Node position of many junctions at once (see ``nodes.junction_positions``).
@@ -344,6 +559,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     A = np.zeros((d, d))
     bb = np.zeros(d)
     x = np.zeros(d)
+    xs = np.zeros(d)
+    A0 = np.zeros((d, d))
     anchor = np.zeros(d)
     for j in range(nj):
         b0 = jb[j]
@@ -430,6 +647,9 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                 anchor[c] = acc / nr if nr > 0 else 0.0
         hl = hj[j]
         for a in range(d):
+            for c in range(d):
+                A0[a, c] = A[a, c]
+        for a in range(d):
             A[a, a] += nd.anchor_pull
             bb[a] += nd.anchor_pull * anchor[a]
         ok = _solve_small(A, bb, x)
@@ -441,6 +661,21 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         if not ok or not np.sqrt(dist2) <= far * hl:
             for c in range(d):
                 x[c] = anchor[c]
+        # near-tangent branches (without noise: their curvature is then measurable): where
+        # their circles meet, when no farther from the anchor than the lines' node may be
+        if noise <= nd.tangent_noise * hl:
+            for c in range(d):
+                xs[c] = x[c]
+            if _tangent_node(P, h, flat, off, x, hl, A0, nd, la):
+                dist2 = 0.0
+                for c in range(d):
+                    if not np.isfinite(x[c]):
+                        dist2 = np.inf
+                    else:
+                        dist2 += (x[c] - anchor[c]) ** 2
+                if not np.sqrt(dist2) <= far * hl:
+                    for c in range(d):
+                        x[c] = xs[c]
         for c in range(d):
             X[j, c] = x[c]
         # a free branch hidden in the region: some region point far from the node, in a
