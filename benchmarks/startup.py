@@ -180,7 +180,7 @@ def writers(n: int, repeat: int, cache: Path, out: Path, exts=()) -> list[tuple]
     if not exts or ".csv" in exts:
         jobs.append((".csv (--labels)", lambda p: atomic_write(p, labels_to_csv(lab))))
     if not exts or "mesh.obj" in exts:
-        from curvenet.surfacing import mesh_to_obj
+        from curvenet.io.mesh import mesh_to_obj
 
         mesh = torus_mesh(n)
         print(f"surface mesh: {len(mesh.vertices):,} vertices, {len(mesh.triangles):,} triangles, "

@@ -62,7 +62,7 @@ def test_network_obj_and_ply_import_in_blender_as_one_mesh_of_edges(tmp_path):
 def test_surface_obj_and_ply_import_in_blender_with_every_triangle(tmp_path):
     pytest.importorskip("triangle")
     from curvenet import surface
-    from curvenet.surfacing import MESH_WRITERS
+    from curvenet.io.mesh import MESH_WRITERS
 
     mesh = surface(synth.model("cube"))
     tri = np.sort(mesh.triangles, axis=1)

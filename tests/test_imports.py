@@ -49,9 +49,8 @@ CORE = (
 #: The outer layers: file formats, pictures, the viewer and the command line.
 OUTER = ("curvenet.io.*", "curvenet.plots.*", "curvenet.viewer", "curvenet.cli.*")
 
-#: Core modules allowed to reach the outer layers, with the reason. (The surface mesh writers,
-#: ``curvenet.surfacing.mesh_io``, are pure "mesh to bytes" functions and import nothing of
-#: ``curvenet.io``; the caller writes the bytes.)
+#: Core modules allowed to reach the outer layers, with the reason. (The surface mesh writers
+#: are in ``curvenet.io.mesh``, with the other writers and their bulk number formatting.)
 CORE_EXCEPTIONS: dict[str, str] = {
     "curvenet": "the public facade: curvenet.save() and curvenet.load() import curvenet.io inside "
                 "the functions, so `import curvenet` stays light (test_import_curvenet_stays_light)",

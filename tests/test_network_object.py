@@ -129,7 +129,7 @@ def test_meshlab_reads_the_network_and_surface_ply(tmp_path):
     assert m.vertex_number() > 0
     assert m.edge_number() == sum(len(c.points) - 1 for c in net.curves)  # every segment a line
     mesh = curvenet.surface(net)
-    from curvenet.surfacing.mesh_io import mesh_to_ply
+    from curvenet.io.mesh import mesh_to_ply
 
     (tmp_path / "mesh.ply").write_bytes(mesh_to_ply(mesh))
     ms.load_new_mesh(str(tmp_path / "mesh.ply"))

@@ -14,7 +14,7 @@ import pytest
 
 from curvenet import Curve, CurveNetwork, InputError
 from curvenet.surfacing import SurfaceMesh, min_area_triangulation, surface
-from curvenet.surfacing.mesh_io import mesh_to_obj, mesh_to_ply
+from curvenet.io.mesh import mesh_to_obj, mesh_to_ply
 from curvenet.surfacing.assemble import _split_shared_chords
 from curvenet.surfacing.cycles import _orient
 from curvenet.surfacing.patches import is_simple_polygon

@@ -116,7 +116,7 @@ def test_surface_ply_opens_in_meshio_trimesh_open3d(tmp_path):
     trimesh = pytest.importorskip("trimesh")
     pytest.importorskip("triangle")
     from curvenet import surface
-    from curvenet.surfacing.mesh_io import mesh_to_ply
+    from curvenet.io.mesh import mesh_to_ply
 
     mesh = surface(_cube_network())
     path = tmp_path / "m.ply"

@@ -31,7 +31,7 @@ def check_outputs(outputs, *, png=None, inputs=()) -> None:
     from ..errors import FormatError
     from ..io import check_output_path, extension
     from ..io import check_outputs as check_all
-    from ..surfacing import MESH_WRITERS
+    from ..io.mesh import MESH_WRITERS
 
     for out in outputs:
         check_output_path(out, inputs=inputs)
@@ -58,7 +58,8 @@ def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=T
     import warnings
 
     from ..io import atomic_write, extension
-    from ..surfacing import MESH_WRITERS, SurfaceCheckWarning, surface
+    from ..io.mesh import MESH_WRITERS
+    from ..surfacing import SurfaceCheckWarning, surface
 
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:

@@ -8,7 +8,6 @@ patches into one :class:`SurfaceMesh` with shared, consistently oriented boundar
 from .assemble import SurfaceMesh, surface
 from .checks import MeshChecks, SurfaceCheckWarning, check_mesh
 from .cycles import CycleSet, find_cycles
-from .mesh_io import MESH_WRITERS, mesh_to_obj, mesh_to_ply
 from .patches import min_area_triangulation, triangulate_patch
 
 __all__ = [
@@ -21,7 +20,4 @@ __all__ = [
     "CycleSet",
     "triangulate_patch",
     "min_area_triangulation",
-    "mesh_to_obj",
-    "mesh_to_ply",
-    "MESH_WRITERS",
 ]

@@ -1,7 +1,8 @@
 """Mesh writers: pure functions from a :class:`SurfaceMesh` to the bytes of a file.
 
 ``MESH_WRITERS`` maps an extension to ``(writer, description)``; the caller writes the bytes
-(atomically, with :func:`curvenet.io.atomic_write`).
+(atomically, with :func:`curvenet.io.atomic_write`). They live with the other writers: their numbers
+go through the same bulk formatting (:mod:`curvenet.io.numbers`).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ def mesh_to_obj(mesh, *, precision: int = 9) -> bytes:
     -------
     bytes
     """
-    from ..io.numbers import g_table_bytes
+    from .numbers import g_table_bytes
 
     V = np.asarray(mesh.vertices, dtype=float).reshape(-1, 3)
     out = [b"# curvenet surface mesh\n",
@@ -52,7 +53,7 @@ def _face_groups(T: np.ndarray, patch: np.ndarray) -> list[bytes]:
     -------
     list of bytes
     """
-    from ..io.numbers import table_groups
+    from .numbers import table_groups
 
     if not len(T):
         return []
