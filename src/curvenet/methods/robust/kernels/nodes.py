@@ -264,6 +264,29 @@ def _extend_into_region(P, h, indptr, indices, flat, off, rs, width, wnoise, en,
     return ext, eoff
 
 
+def _portion_mean(P, ids, m, mu):  # pragma: no cover - compiled
+    """Mean of the last ``m`` points ``P[ids[-m:]]`` into ``mu`` (d,) (zeros when ``m`` is 0)."""
+    n = ids.shape[0]
+    for c in range(P.shape[1]):
+        acc = 0.0
+        for q in range(n - m, n):
+            acc += P[ids[q], c]
+        mu[c] = acc / m if m > 0 else 0.0
+
+
+def _portion_scatter(P, ids, m, mu, C):  # pragma: no cover - compiled
+    """Scatter matrix of the last ``m`` points ``P[ids[-m:]]`` about ``mu`` into ``C`` (d, d)."""
+    n = ids.shape[0]
+    d = P.shape[1]
+    for i in range(d):
+        for j in range(i, d):
+            acc = 0.0
+            for q in range(n - m, n):
+                acc += (P[ids[q], i] - mu[i]) * (P[ids[q], j] - mu[j])
+            C[i, j] = acc
+            C[j, i] = acc
+
+
 def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no cover - compiled
     """Line through the end portion of ``ids`` (running towards the end) over ``span`` h.
 
@@ -282,20 +305,10 @@ def _fit_end(P, h, ids, span, mu, u, C, V, ev, with_dir, en, la):  # pragma: no 
             m = en.min_points
         elif m < n and n < en.min_points:
             m = n
-    for c in range(d):
-        acc = 0.0
-        for q in range(n - m, n):
-            acc += P[ids[q], c]
-        mu[c] = acc / m if m > 0 else 0.0
+    _portion_mean(P, ids, m, mu)
     if not with_dir:
         return m
-    for i in range(d):
-        for j in range(i, d):
-            acc = 0.0
-            for q in range(n - m, n):
-                acc += (P[ids[q], i] - mu[i]) * (P[ids[q], j] - mu[j])
-            C[i, j] = acc
-            C[j, i] = acc
+    _portion_scatter(P, ids, m, mu, C)
     if m >= 2:
         _eig_top(C, V, ev, la)
         for c in range(d):
@@ -319,18 +332,8 @@ def _arc_fit(P, ids, lim, mu, U, cf, C, ev, M3, r3, la):  # pragma: no cover - c
     m = _end_count(P, ids, lim)
     if m < ARC_COEFS:
         return 0
-    for c in range(d):
-        acc = 0.0
-        for q in range(n - m, n):
-            acc += P[ids[q], c]
-        mu[c] = acc / m
-    for i in range(d):
-        for j in range(i, d):
-            acc = 0.0
-            for q in range(n - m, n):
-                acc += (P[ids[q], i] - mu[i]) * (P[ids[q], j] - mu[j])
-            C[i, j] = acc
-            C[j, i] = acc
+    _portion_mean(P, ids, m, mu)
+    _portion_scatter(P, ids, m, mu, C)
     _eig_sym(C, U, ev, la)
     for a in range(ARC_COEFS):
         r3[a] = 0.0
