@@ -21,7 +21,7 @@ from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
 from curvenet.methods.robust.params import RobustParams, Scales
-from curvenet.methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, REPAIRS
+from curvenet.methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS
 from curvenet.methods.robust.topology import Topology
 
 PRM = RobustParams()
@@ -599,10 +599,74 @@ def test_the_hidden_branch_near_miss_sits_at_its_threshold(monkeypatch):
     _assert_untouched(R.join_through_pass_regions, topo)
 
 
+# ------------------------------------------------------------------------------ split_paired_junctions
+#: the noise of the cases below (h): the strip of a line is then max(width, strip_noise * noise)
+PAIR_NOISE = 0.2
+
+
+def _jog(d, noise_free=False):
+    """Two junctions ``d`` apart seen as one region: A at the origin (branches up and left), B at
+    (d, 0) (branches down and right), the region the points along x from -2 to d + 2 and two
+    up and down from each junction; every branch's chain ends 3 h from its junction."""
+    net = _Net()
+    X = np.r_[_line((-2, 0), (d + 2, 0), int(np.ceil(d + 4)) + 1), [[0, 1], [0, 2], [d, -1], [d, -2]]]
+    r = net.region(X)
+    net.chain(_line((0, 15), (0, 3), 13), (-1, r))
+    net.chain(_line((-15, 0), (-3, 0), 13), (-1, r))
+    net.chain(_line((d, -15), (d, -3), 13), (-1, r))
+    net.chain(_line((d + 15, 0), (d + 3, 0), 13), (-1, r))
+    return net.topology(), r
+
+
+def test_split_paired_junctions_parts_a_jog_under_noise():
+    topo, r = _jog(4.0)
+    n_reg = len(topo.regions)
+    assert topo.v[r] == 4
+    _run(R.split_paired_junctions, topo, PAIR_NOISE)
+    nr = n_reg  # the new region
+    assert len(topo.regions) == n_reg + 1 and topo.v[r] == 3 and topo.v[nr] == 3
+    seg = topo.chains[-1]
+    assert topo.alive[-1] and seg.ends == [r, nr]
+    X = topo.P[seg.ids]
+    assert np.allclose(X[:, 1], 0) and sorted(X[:, 0].tolist()) == [1, 2, 3]  # the points between
+    # ordered from r's junction to the new one, and each junction keeps its own two branches
+    near = lambda reg: topo.P[topo.regions[reg]].mean(axis=0)  # noqa: E731
+    assert np.linalg.norm(X[0] - near(r)) < np.linalg.norm(X[-1] - near(r))
+    groups = sorted(sorted(i for i, _ in topo.incident(q) if i < 4) for q in (r, nr))
+    assert groups == [[0, 1], [2, 3]]
+
+
+def test_split_paired_junctions_leaves_noise_free_input():
+    topo, _ = _jog(4.0)
+    _assert_untouched(R.split_paired_junctions, topo)
+
+
+def test_split_paired_junctions_keeps_a_crossing_whole():
+    # four branches through one point: they meet it within the strip
+    net = _Net()
+    r = net.region(_line((-2, 0), (2, 0), 5))
+    net.chain(_line((-15, 0), (-3, 0), 13), (-1, r))
+    net.chain(_line((15, 0.3), (3, 0.3), 13), (-1, r))
+    net.chain(_line((0, 15), (0, 3), 13), (-1, r))
+    net.chain(_line((0.3, -15), (0.3, -3), 13), (-1, r))
+    topo = net.topology()
+    before = _state(topo)
+    _run(R.split_paired_junctions, topo, PAIR_NOISE)
+    assert _state(topo) == before
+
+
+def test_split_paired_junctions_keeps_a_jog_under_the_separation():
+    # the same jog closer than PAIRED.sep spacings: one junction
+    topo, _ = _jog(PAIRED.sep - EPS)
+    before = _state(topo)
+    _run(R.split_paired_junctions, topo, PAIR_NOISE)
+    assert _state(topo) == before
+
+
 # ------------------------------------------------------------------------------ the order
 TESTED = (R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
-          R.merge_close_junctions)
+          R.merge_close_junctions, R.split_paired_junctions)
 
 
 def test_every_repair_in_the_order_has_its_tests_here():

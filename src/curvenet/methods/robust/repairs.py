@@ -17,6 +17,7 @@ from ... import _sigint
 from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, polylen, step_lengths
 from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
+from .paired import split_paired_junctions
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS
 from .topology import Topology
@@ -533,6 +534,7 @@ ORDER = (
     join_through_pass_regions,
     merge_close_junctions,
     absorb_short_loops,  # a short chain between two merged junctions is now a short loop
+    split_paired_junctions,
 )
 
 

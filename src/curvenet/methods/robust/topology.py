@@ -209,6 +209,45 @@ class Topology:
         self._changed()
         return core
 
+    def split_region(self, r: int, ends_b: list[tuple[int, int]], ids_a: np.ndarray, ids_b: np.ndarray,
+                     seg: np.ndarray) -> int:
+        """Region ``r`` becomes two junctions joined by a new chain (two junctions seen as one).
+
+        Parameters
+        ----------
+        r : int
+            The region; it keeps the points ``ids_a`` and the chain ends not in ``ends_b``.
+        ends_b : list of (int, int)
+            The live chain ends ``(chain, side)`` at ``r`` that move to the new region.
+        ids_a, ids_b : ndarray of int64
+            The points of ``r`` and of the new region.
+        seg : (n,) ndarray of int64
+            The points of the new chain, ordered from ``r`` to the new region (n >= 1).
+
+        Returns
+        -------
+        int
+            The new region.
+        """
+        self.regions[r] = np.asarray(ids_a, dtype=np.int64)
+        self.regions.append(np.asarray(ids_b, dtype=np.int64))
+        nr = len(self.regions) - 1
+        ea = self._ends_at
+        moved = set(ends_b)
+        ea[r] = [e for e in ea[r] if e not in moved]
+        ea.append([e for e in ends_b])
+        for i, s in ends_b:
+            self.chains[i].ends[s] = nr
+        self.chains.append(Chain(np.asarray(seg, dtype=np.int64), [r, nr]))
+        self.alive.append(True)
+        jn = len(self.chains) - 1
+        ea[r].append((jn, 0))
+        ea[nr].append((jn, 1))
+        self.v[r] += 1 - len(ends_b)
+        self.v = np.r_[self.v, len(ends_b) + 1]
+        self._changed()
+        return nr
+
     # ------------------------------------------------------------------------------ checks
     def check(self) -> None:
         """Raise :class:`TopologyError` unless the invariants hold.
