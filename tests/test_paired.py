@@ -146,11 +146,65 @@ def test_noise_free_input_is_left_to_the_close_junction_test(monkeypatch):
     calls = []
     from curvenet.methods.robust import paired
 
-    orig = paired.best_pair
-    monkeypatch.setattr(paired, "best_pair", lambda *a: calls.append(1) or orig(*a))
+    orig = paired.best_pairs
+    monkeypatch.setattr(paired, "best_pairs", lambda *a: calls.append(1) or orig(*a))
     pts, _ = synth.sample(_stepped_box(), rng=5)
     reconstruct(pts)
     assert calls == []
     pts, _ = synth.sample(_stepped_box(), noise=0.2, rng=5)
     reconstruct(pts)
     assert calls
+
+
+def test_many_regions_at_once_give_each_region_s_own_answer():
+    # best_pairs on a stack of regions = best_pair region by region (a step, a T pair, a crossing)
+    from curvenet.methods.robust.paired import best_pairs
+
+    a = np.radians(40.0)
+    regions = [
+        _lines([(A, [0, 1, 0]), (A, [0, 0, 1]), (B, [0, -1, 0]), (B, [0, 0, 1])], noise=0.1),
+        _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, [1, 0, 0]), (B, [0, 1, 0])], noise=0.1),
+        _lines([(A, [1, 0, 0]), (A, [-1, 0, 0]), (A, [np.cos(a), np.sin(a), 0]), (A, [-np.cos(a), -np.sin(a), 0])],
+               noise=0.2, seed=3),
+    ]
+    anchors = np.array([(A + B) / 2, (A + B) / 2, A])
+    stack = Lines(*(np.stack([getattr(L, f) for L in regions]) for f in Lines._fields))
+    k, xa, xb = best_pairs(stack, anchors, np.ones(3))
+    for j, L in enumerate(regions):
+        one = best_pair(L, anchors[j], H)
+        assert (one is None) == (k[j] < 0)
+        if one is not None:
+            assert np.allclose(one[1], xa[j]) and np.allclose(one[2], xb[j])
+    assert k.tolist()[2] == -1 and (k[:2] >= 0).all()
+
+
+def test_branch_lines_are_the_end_portions_lines(monkeypatch):
+    # the padded, all-at-once end portions count what chains.end_portion counts, per branch
+    from curvenet.methods.robust.chains import end_portion, fit_line
+    from curvenet.methods.robust.paired import branch_lines
+    from curvenet.methods.robust.params import Scales
+    from curvenet.methods.robust.thresholds import NODES
+
+    rng = np.random.default_rng(1)
+    pts, chains = [], []
+    for k in range(5):  # five branches of different lengths into region 0, the last one dense
+        n = [3, 6, 12, 40, 400][k]  # (its end portion, over 100 points, is past the padding)
+        d = np.array([np.cos(k), np.sin(k), 0.3 * k])
+        X = np.linspace(20, 1, n)[:, None] * d / np.linalg.norm(d) + rng.normal(scale=0.2 * (k < 4), size=(n, 3))
+        chains.append(Chain(np.arange(len(pts), len(pts) + n), [-1, 0]))
+        pts.extend(X.tolist())
+    P = np.array(pts + [[0.0, 0, 0]])
+    topo = Topology(P, chains, [np.array([len(P) - 1])])
+    noise = 0.3
+    h = rng.uniform(0.5, 1.5, len(P))
+    sc = Scales(h=h, hmed=1.0, sigma=noise, noise=noise, clean=False, width=1.0,
+                indptr=np.zeros(len(P) + 1, dtype=np.int64), indices=np.zeros(0, dtype=np.int64), tree=None)
+    inc = topo.incident(0)
+    L, off = branch_lines(topo, sc, [inc])
+    assert off.tolist() == [0, 5]
+    for b, (i, s) in enumerate(inc):
+        ids = topo.end_ids(i, s)
+        E = end_portion(P, h, ids, span=NODES.fit_span + NODES.fit_noise * noise / h[ids[-1]])
+        c, u = fit_line(E)
+        assert np.allclose(L.c[b], c) and np.allclose(L.tip[b], E[0])
+        assert np.isclose(abs(L.u[b] @ u), 1.0)

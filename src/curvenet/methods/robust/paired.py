@@ -21,26 +21,27 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .chains import end_portion, fit_line
+from .chains import end_portion
 from .params import RobustParams, Scales
-from .thresholds import LINKS, NODES, PAIRED, REPAIRS
+from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
-__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "best_pair"]
+__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "best_pair", "best_pairs"]
 
 
 class Lines(NamedTuple):
-    """The fitted lines of a junction's branches.
+    """The fitted lines of branches: m lines (arrays (m, d) and (m,)), or m lines of each of n
+    regions (arrays (n, m, d) and (n, m)).
 
     Attributes
     ----------
-    c : (m, d) ndarray
+    c : (..., m, d) ndarray
         A point of each line (the centroid of the branch's end portion).
-    u : (m, d) ndarray
-        Unit directions.
-    tip : (m, d) ndarray
+    u : (..., m, d) ndarray
+        Unit directions (0 for a branch of a single point).
+    tip : (..., m, d) ndarray
         The branch's last point (nearest the junction).
-    lim : (m,) ndarray
+    lim : (..., m) ndarray
         Strip half-width of each line (absolute units).
     """
 
@@ -50,24 +51,68 @@ class Lines(NamedTuple):
     lim: np.ndarray
 
 
-def branch_lines(topo: Topology, sc: Scales, inc: list[tuple[int, int]]) -> Lines | None:
-    """The lines of the branches ``inc`` (chain, side) at a region, fitted as the node placement
-    fits them (``NODES.fit_span`` spacings, longer under noise); None when a branch has a single
-    point (no direction)."""
+def branch_lines(topo: Topology, sc: Scales, incs: list[list[tuple[int, int]]]) -> tuple[Lines, np.ndarray]:
+    """The lines of the branches at many regions, fitted as the node placement fits them.
+
+    Each branch ``(chain, side)`` of ``incs[j]`` (the ends at region ``j``) gets the line of
+    its end portion (:func:`.chains.end_portion` over ``NODES.fit_span`` spacings, plus
+    ``NODES.fit_noise`` times the noise): the centroid and the principal direction of those
+    points, all branches at once.
+
+    Parameters
+    ----------
+    topo : Topology
+    sc : Scales
+    incs : list of list of (int, int)
+
+    Returns
+    -------
+    lines : Lines
+        Every branch's line, region after region (a branch of a single point has direction 0).
+    off : (len(incs) + 1,) ndarray of int64
+        Region ``j``'s lines are ``off[j]:off[j + 1]``.
+    """
     P, h, noise = topo.P, sc.h, float(sc.noise)
-    cs, us, tips, lims = [], [], [], []
-    for i, s in inc:
-        ids = np.asarray(topo.end_ids(i, s))
-        hl = float(h[ids[-1]])
-        E = end_portion(P, h, ids, span=NODES.fit_span + NODES.fit_noise * noise / hl)
-        cc, u = fit_line(E)
-        if u is None:
-            return None
-        cs.append(cc)
-        us.append(u)
-        tips.append(E[0])
-        lims.append(max(sc.width * hl, LINKS.strip_noise * noise))
-    return Lines(np.array(cs), np.array(us), np.array(tips), np.array(lims))
+    tails = [np.asarray(topo.end_ids(i, s))[::-1] for inc in incs for i, s in inc]  # from the end
+    n_br = len(tails)
+    off = np.r_[0, np.cumsum([len(inc) for inc in incs])].astype(np.int64)
+    hl = np.array([h[t[0]] for t in tails], dtype=np.float64)
+    lim_arc = NODES.fit_span * hl + NODES.fit_noise * noise
+    # the end portions: arc length summed from each end (padded rows, sequential sums: the
+    # counts of chains.end_portion); a portion longer than the padding is found one by one
+    width = min(max((len(t) for t in tails), default=1), PAIRED.tail_points)
+    idx = np.zeros((n_br, width), dtype=np.int64)
+    valid = np.zeros((n_br, width), dtype=bool)
+    for b, t in enumerate(tails):
+        k = min(len(t), width)
+        idx[b, :k] = t[:k]
+        valid[b, :k] = True
+    X = P[idx]  # (n_br, width, d)
+    D = X[:, 1:] - X[:, :-1]
+    D *= D
+    step = np.sqrt(D.sum(axis=2))
+    step[~valid[:, 1:]] = np.inf
+    arc = np.cumsum(step, axis=1)
+    m = 1 + np.sum(arc <= lim_arc[:, None], axis=1)
+    m = np.maximum(m, np.minimum(ENDS.min_points, np.array([len(t) for t in tails])))
+    for b in np.flatnonzero(m >= width).tolist():  # (rare: a portion past the padding)
+        E = end_portion(P, h, tails[b][::-1], span=NODES.fit_span + NODES.fit_noise * noise / hl[b])
+        m[b] = len(E)
+    m = np.minimum(m, np.array([len(t) for t in tails]))
+    big = max(int(m.max()) if n_br else 1, 1)
+    if big > width:
+        idx = np.zeros((n_br, big), dtype=np.int64)
+        for b, t in enumerate(tails):
+            idx[b, :m[b]] = t[:m[b]]
+        X = P[idx]
+    W = (np.arange(X.shape[1])[None, :] < m[:, None]).astype(np.float64)  # (n_br, width)
+    c = (X * W[:, :, None]).sum(axis=1) / m[:, None]
+    Y = (X - c[:, None, :]) * W[:, :, None]
+    C = np.einsum("bki,bkj->bij", Y, Y)
+    _, V = np.linalg.eigh(C)
+    u = V[:, :, -1] * (m > 1)[:, None]
+    lims = np.maximum(sc.width * hl, LINKS.strip_noise * noise)
+    return Lines(c, u, X[:, 0, :].copy(), lims), off
 
 
 def meeting_point(c: np.ndarray, u: np.ndarray, anchor: np.ndarray) -> np.ndarray:
@@ -86,29 +131,19 @@ def meeting_point(c: np.ndarray, u: np.ndarray, anchor: np.ndarray) -> np.ndarra
     (d,) ndarray
         The point minimising the summed squared distances to the lines plus the hold.
     """
-    d = c.shape[1]
-    A = np.zeros((d, d))
-    b = np.zeros(d)
-    for ci, ui in zip(c, u):
-        M = np.eye(d) - np.outer(ui, ui)
-        A += M
-        b += M @ ci
-    w = PAIRED.hold * len(c)
-    A += w * np.eye(d)
-    b += w * anchor
-    return np.linalg.solve(A, b)
+    L = Lines(c[None], u[None], c[None], np.zeros((1, len(c))))
+    return _group_points(L, np.ones((1, len(c))), np.asarray(anchor, dtype=np.float64)[None])[0]
 
 
-def _meets(L: Lines, sel: np.ndarray, x: np.ndarray) -> bool:
-    """True when every line ``sel`` of ``L`` meets point ``x`` (see the module's note)."""
-    for k in sel.tolist():
-        r = x - L.c[k]
-        along = float(r @ L.u[k])
-        d = float(np.sqrt(max(float(r @ r) - along * along, 0.0)))
-        lim = max(L.lim[k], REPAIRS.merge_tan * float(np.linalg.norm(x - L.tip[k])))
-        if d > lim or float((L.tip[k] - L.c[k]) @ L.u[k]) * along < 0:
-            return False
-    return True
+def _meets_all(L: Lines, x: np.ndarray) -> np.ndarray:
+    """Per line of ``L``: whether it meets point ``x[k]`` (one point per line; see the module's
+    note)."""
+    r = x - L.c
+    along = np.einsum("ij,ij->i", r, L.u)
+    dist = np.sqrt(np.maximum(np.einsum("ij,ij->i", r, r) - along * along, 0.0))
+    lim = np.maximum(L.lim, REPAIRS.merge_tan * np.linalg.norm(x - L.tip, axis=1))
+    ahead = np.einsum("ij,ij->i", L.tip - L.c, L.u) * along >= 0
+    return (dist <= lim) & ahead
 
 
 def best_pair(L: Lines, anchor: np.ndarray, h: float):
@@ -137,50 +172,127 @@ def best_pair(L: Lines, anchor: np.ndarray, h: float):
     (mask, xa, xb) or None
         ``mask`` (m,) bool, True for the lines of the second group; the two points.
     """
-    m = len(L.c)
-    every = np.arange(m)
-    x1 = meeting_point(L.c, L.u, anchor)
-    if _meets(L, every, x1):
+    found = best_pairs(Lines(L.c[None], L.u[None], L.tip[None], L.lim[None]), anchor[None], np.array([h]))
+    k, xa, xb = found[0][0], found[1][0], found[2][0]
+    if k < 0:
         return None
-    cost1 = _cost(L, every, x1)
-    best, best_cost = None, np.inf
+    return _splits(len(L.c))[k].copy(), xa, xb
+
+
+def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
+    """:func:`best_pair` of many regions of ``m`` lines each, at once.
+
+    Parameters
+    ----------
+    L : Lines
+        Arrays of shape (R, m, d) (``lim``: (R, m)): the lines of R regions.
+    anchor : (R, d) ndarray
+    h : (R,) ndarray
+
+    Returns
+    -------
+    split : (R,) ndarray of int64
+        The row of :func:`_splits` chosen per region, -1 where none.
+    xa, xb : (R, d) ndarray
+        Its two points (the second group's is ``xb``).
+    """
+    R, m, d = L.c.shape
+    flat = Lines(L.c.reshape(-1, d), L.u.reshape(-1, d), L.tip.reshape(-1, d), L.lim.reshape(-1))
+    one = np.ones((R, m))
+    x1 = _group_points(L, one, anchor)
+    meets1 = _meets_all(flat, np.repeat(x1, m, axis=0)).reshape(R, m).all(axis=1)
+    cost1 = _costs(L, np.broadcast_to(x1[:, None, :], L.c.shape))
+    B = _splits(m)  # (S, m): the second group of every split
+    S = len(B)
+    if S == 0:
+        return np.full(R, -1, dtype=np.int64), np.zeros((R, d)), np.zeros((R, d))
+    # every (region, split) pair: arrays of shape (R * S, ...)
+    Lr = Lines(np.repeat(L.c, S, axis=0), np.repeat(L.u, S, axis=0), np.repeat(L.tip, S, axis=0),
+               np.repeat(L.lim, S, axis=0))
+    Wb = np.tile(B.astype(np.float64), (R, 1))
+    Wa = 1.0 - Wb
+    an = np.repeat(anchor, S, axis=0)
+    xa = _group_points(Lr, Wa, an)
+    xb = _group_points(Lr, Wb, an)
+    for _ in range(PAIRED.rounds):
+        e = xb - xa
+        ne = np.linalg.norm(e, axis=1)
+        go = ne > 0
+        e = np.where(go[:, None], e / np.where(go, ne, 1.0)[:, None], 0.0)
+        xa = np.where(go[:, None], _group_points(Lr, Wa, an, xb, e), xa)
+        xb = np.where(go[:, None], _group_points(Lr, Wb, an, xa, e), xb)
+    good = np.linalg.norm(xb - xa, axis=1) > PAIRED.sep * np.repeat(h, S)
+    Bb = Wb > 0.5
+    own = np.where(Bb[:, :, None], xb[:, None, :], xa[:, None, :])  # (R * S, m, d)
+    other = np.where(Bb[:, :, None], xa[:, None, :], xb[:, None, :])
+    fl = Lines(Lr.c.reshape(-1, d), Lr.u.reshape(-1, d), Lr.tip.reshape(-1, d), Lr.lim.reshape(-1))
+    good &= _meets_all(fl, own.reshape(-1, d)).reshape(R * S, m).all(axis=1)
+    # every branch ends nearer its own junction than the other one
+    good &= (np.linalg.norm(Lr.tip - own, axis=2) < np.linalg.norm(Lr.tip - other, axis=2)).all(axis=1)
+    cost = _costs(Lr, own)
+    good &= cost <= PAIRED.gain * np.repeat(cost1, S)
+    good &= ~np.repeat(meets1, S)
+    cost = np.where(good, cost, np.inf).reshape(R, S)
+    k = np.argmin(cost, axis=1)  # the least cost (ties: the first split)
+    ok = np.isfinite(cost[np.arange(R), k])
+    pick = np.arange(R) * S + k
+    return np.where(ok, k, -1), xa[pick], xb[pick]
+
+
+def _costs(L: Lines, x: np.ndarray) -> np.ndarray:
+    """Summed squared distances of the points ``x`` (n, m, d) to the lines ``L`` (n, m, d), per
+    row: (n,)."""
+    r = x - L.c
+    along = np.einsum("nmi,nmi->nm", r, L.u)
+    return (np.einsum("nmi,nmi->nm", r, r) - along * along).sum(axis=1)
+
+
+def _splits(m: int) -> np.ndarray:
+    """Every split of ``m`` lines into two groups of ``PAIRED.min_group`` or more, each once:
+    (n_split, m) bool, True for the second group (the smaller one; with line 0 when the two are
+    of one size), in the order of :func:`itertools.combinations` by growing size."""
+    out = []
     for k in range(PAIRED.min_group, m // 2 + 1):
         for grp in itertools.combinations(range(m), k):
-            if 2 * k == m and 0 not in grp:  # each even split once
+            if 2 * k == m and 0 not in grp:
                 continue
-            mask = np.zeros(m, dtype=bool)
-            mask[list(grp)] = True
-            a, b = every[~mask], every[mask]
-            xa = meeting_point(L.c[a], L.u[a], anchor)
-            xb = meeting_point(L.c[b], L.u[b], anchor)
-            for _ in range(PAIRED.rounds):
-                e = xb - xa
-                ne = float(np.linalg.norm(e))
-                if ne == 0:
-                    break
-                e = e / ne
-                xa = meeting_point(np.r_[L.c[a], xb[None]], np.r_[L.u[a], e[None]], anchor)
-                xb = meeting_point(np.r_[L.c[b], xa[None]], np.r_[L.u[b], e[None]], anchor)
-            if not float(np.linalg.norm(xb - xa)) > PAIRED.sep * h:
-                continue
-            if not (_meets(L, a, xa) and _meets(L, b, xb)):
-                continue
-            # every branch ends nearer its own junction than the other one
-            da = np.linalg.norm(L.tip - xa, axis=1)
-            db = np.linalg.norm(L.tip - xb, axis=1)
-            if not (np.all(da[a] < db[a]) and np.all(db[b] < da[b])):
-                continue
-            cost = _cost(L, a, xa) + _cost(L, b, xb)
-            if cost < best_cost and cost <= PAIRED.gain * cost1:
-                best, best_cost = (mask, xa, xb), cost
-    return best
+            row = np.zeros(m, dtype=bool)
+            row[list(grp)] = True
+            out.append(row)
+    return np.array(out, dtype=bool).reshape(-1, m)
 
 
-def _cost(L: Lines, sel: np.ndarray, x: np.ndarray) -> float:
-    """Summed squared distances of point ``x`` to the lines ``sel``."""
-    r = x - L.c[sel]
-    along = np.einsum("ij,ij->i", r, L.u[sel])
-    return float(np.sum(np.einsum("ij,ij->i", r, r) - along * along))
+def _group_points(L: Lines, W: np.ndarray, anchor: np.ndarray, xo: np.ndarray | None = None,
+                  e: np.ndarray | None = None) -> np.ndarray:
+    """:func:`meeting_point` of a group of lines per row, many rows at once.
+
+    Parameters
+    ----------
+    L : Lines
+        Arrays of shape (n, m, d): m lines per row.
+    W : (n, m) ndarray of float
+        1 for the lines of each row's group, 0 for the others.
+    anchor : (n, d) ndarray
+    xo, e : (n, d) ndarray, optional
+        One more line per row: through ``xo`` along ``e`` (the segment to the other point).
+
+    Returns
+    -------
+    (n, d) ndarray
+    """
+    d = L.c.shape[2]
+    k = W.sum(axis=1)
+    uc = np.einsum("nki,nki->nk", L.u, L.c)
+    UU = np.einsum("nk,nki,nkj->nij", W, L.u, L.u)
+    b = np.einsum("nk,nki->ni", W, L.c) - np.einsum("nk,nki->ni", W * uc, L.u)
+    if xo is not None:
+        k = k + 1
+        UU = UU + np.einsum("ni,nj->nij", e, e)
+        b = b + xo - e * np.einsum("ni,ni->n", e, xo)[:, None]
+    w = PAIRED.hold * k
+    A = (k + w)[:, None, None] * np.eye(d) - UU
+    b = b + w[:, None] * anchor
+    return np.linalg.solve(A, b[:, :, None])[:, :, 0]
 
 
 def _segment(P: np.ndarray, rid: np.ndarray, xa: np.ndarray, xb: np.ndarray, lim: float, gap: float):
@@ -217,23 +329,65 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     if sc.clean:
         return
     P, h = topo.P, sc.h
+    cand, incs = [], []
     for r in np.flatnonzero(topo.v >= PAIRED.min_valence).tolist():
         inc = topo.incident(r)
+        if len(topo.regions[r]) and len({i for i, _ in inc}) == len(inc):
+            cand.append(r)
+            incs.append(inc)
+    if not cand:
+        return
+    L, off = branch_lines(topo, sc, incs)
+    nl = np.diff(off)
+    single = np.logical_or.reduceat(~(np.linalg.norm(L.u, axis=1) > 0), off[:-1])  # a one-point branch
+    anchors, hr = _region_stats(P, h, [topo.regions[r] for r in cand])
+    found: dict[int, tuple] = {}
+    d = P.shape[1]
+    for m in np.unique(nl).tolist():  # the regions of m lines at once
+        js = np.flatnonzero((nl == m) & ~single)
+        if not len(js):
+            continue
+        rows = off[js][:, None] + np.arange(m)
+        Lm = Lines(L.c[rows], L.u[rows], L.tip[rows], L.lim[rows])
+        k, xa, xb = best_pairs(Lm, anchors[js], hr[js])
+        B = _splits(m)
+        for q in np.flatnonzero(k >= 0).tolist():
+            found[int(js[q])] = (B[k[q]], xa[q], xb[q], float(np.max(L.lim[rows[q]])))
+    del d
+    for j in sorted(found):
+        r, inc = cand[j], incs[j]
+        mask, xa, xb, lim = found[j]
         rid = topo.regions[r]
-        if len(rid) == 0 or len({i for i, _ in inc}) < len(inc):
-            continue
-        L = branch_lines(topo, sc, inc)
-        if L is None:
-            continue
-        hr = float(np.median(h[rid]))
-        pair = best_pair(L, P[rid].mean(axis=0), hr)
-        if pair is None:
-            continue
-        mask, xa, xb = pair
-        seg, t = _segment(P, rid, xa, xb, float(np.max(L.lim)), prm.link * hr)
+        seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
         if seg is None:
             continue
         rest = ~np.isin(rid, seg)
         near_b = t > 0.5 * float(np.linalg.norm(xb - xa))
-        topo.split_region(r, [e for e, m in zip(inc, mask.tolist()) if m], rid[rest & ~near_b],
+        topo.split_region(r, [e for e, mk in zip(inc, mask.tolist()) if mk], rid[rest & ~near_b],
                           rid[rest & near_b], seg)
+
+
+def _region_stats(P: np.ndarray, h: np.ndarray, rids: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Centroid and median spacing (as ``np.median``) of every region's points, all at once.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+    rids : list of (n_j,) ndarray of int64
+        Non-empty point lists.
+
+    Returns
+    -------
+    centroid : (len(rids), d) ndarray
+    hmed : (len(rids),) ndarray
+    """
+    n = np.array([len(r) for r in rids], dtype=np.int64)
+    flat = np.concatenate(rids)
+    start = np.r_[0, np.cumsum(n)[:-1]]
+    cen = np.add.reduceat(P[flat], start, axis=0) / n[:, None]
+    grp = np.repeat(np.arange(len(rids)), n)
+    hv = h[flat]
+    hv = hv[np.lexsort((hv, grp))]
+    lo, hi = start + (n - 1) // 2, start + n // 2
+    return cen, (hv[lo] + hv[hi]) / 2

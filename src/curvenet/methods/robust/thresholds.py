@@ -600,6 +600,10 @@ class Paired(NamedTuple):
     #: crossings under noise, where every such split lost curves)
     #: origin: measured with the split (issue 25) on those runs
     gain: float = 0.15
+    #: the branches' end portions are measured on their last this many points at once (a longer
+    #: portion, rare, is measured alone): memory and speed only, not a result
+    #: origin: a padding width (end portions under noise 0.3h hold about 10 points)
+    tail_points: int = 32
 
 
 PAIRED = Paired()
