@@ -118,18 +118,86 @@ def _near_pairs(pa, ra, pb, rb):
     return np.concatenate(out_i), np.concatenate(out_j)
 
 
-def _pairs_touching(pa, ra, ga, pb, rb, gb, only):
-    """:func:`_near_pairs` restricted to pairs with a side in the groups ``only`` (all if None)."""
-    if only is None:
-        return _near_pairs(pa, ra, pb, rb)
-    oa, ob = np.isin(ga, list(only)), np.isin(gb, list(only))
-    ia = np.flatnonzero(oa)
-    i1, j1 = _near_pairs(pa[ia], ra[ia], pb, rb)
-    i1 = ia[i1]
-    ib = np.flatnonzero(ob)
-    rest = np.flatnonzero(~oa)
-    i2, j2 = _near_pairs(pa[rest], ra[rest], pb[ib], rb[ib])
-    return np.concatenate([i1, rest[i2]]), np.concatenate([j1, ib[j2]])
+def _levels(r, rmin):
+    """Size level of each ball: ``floor(log_SIZE_STEP(r / rmin))`` (radii below ``rmin`` count as it)."""
+    return np.floor(np.log(np.maximum(r, rmin) / rmin) / np.log(SIZE_STEP)).astype(np.int64)
+
+
+def _boxes(p, r, key):
+    """Sorted unique keys, the members of each and their bounding box grown by the largest radius.
+
+    Returns ``keys (g,)``, ``members`` (list of index arrays), ``lo (g, 3)``, ``hi (g, 3)`` and
+    ``rmax (g,)``.
+    """
+    order = np.argsort(key, kind="stable")
+    keys, start = np.unique(key[order], return_index=True)
+    members = np.split(order, start[1:])
+    rmax = np.maximum.reduceat(r[order], start)
+    lo = np.minimum.reduceat(p[order], start, axis=0) - rmax[:, None]
+    hi = np.maximum.reduceat(p[order], start, axis=0) + rmax[:, None]
+    return keys, members, lo, hi, rmax
+
+
+def _pairs_touching(pa, ra, ga, pb, rb, gb, only, within=None):
+    """Index pairs ``(i, j)`` of balls that meet, ``ga[i] != gb[j]`` or in the same group.
+
+    Parameters
+    ----------
+    pa : (n, 3) ndarray
+    ra : (n,) ndarray
+    ga : (n,) ndarray of int
+        Centres, radii and group (patch) of the first balls.
+    pb, rb, gb
+        The same for the second balls.
+    only : set of int or None
+        Keep only the pairs with a side in these groups (all if ``None``).
+    within : set of int or None
+        Groups whose balls are also paired with balls of their own group (all if ``None``).
+
+    Returns
+    -------
+    i, j : (k,) ndarray of int
+        The pairs: ``|pa[i] - pb[j]| <= ra[i] + rb[j]`` (the k-d tree's distance, as in
+        :func:`_near_pairs`), in no particular order.
+
+    Notes
+    -----
+    The balls are split by group and by size level (factors of :data:`SIZE_STEP`, as in
+    :func:`_near_pairs`); two such cells are searched against each other only when their
+    bounding boxes, grown by their largest radius, meet. Pairs inside one group (most of the
+    near pairs of a mesh: neighbouring triangles of one patch) are never formed unless the
+    group is in ``within``.
+    """
+    from scipy.spatial import cKDTree
+
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(pa) or not len(pb):
+        return empty, empty
+    rmin = max(float(min(ra.min(), rb.min())), 1e-12 * float(max(ra.max(), rb.max())), 1e-300)
+    la, lb = _levels(ra, rmin), _levels(rb, rmin)
+    nl = int(max(la.max(), lb.max())) + 1
+    ka, ma, loa, hia, rxa = _boxes(pa, ra, ga.astype(np.int64) * nl + la)
+    kb, mb, lob, hib, rxb = _boxes(pb, rb, gb.astype(np.int64) * nl + lb)
+    tol = 1e-9 * float(max(np.abs(hia).max(), np.abs(hib).max(), 1e-300))
+    meet = ((loa[:, None, :] <= hib[None, :, :] + tol) & (lob[None, :, :] <= hia[:, None, :] + tol)).all(axis=2)
+    xa, xb = ka // nl, kb // nl
+    if within is not None:
+        meet &= (xa[:, None] != xb[None, :]) | np.isin(xa, list(within))[:, None]
+    if only is not None:
+        meet &= np.isin(xa, list(only))[:, None] | np.isin(xb, list(only))[None, :]
+    ta, tb = {}, {}
+    out_i, out_j = [empty], [empty]
+    for u, v in zip(*np.nonzero(meet)):
+        if u not in ta:
+            ta[u] = cKDTree(pa[ma[u]])
+        if v not in tb:
+            tb[v] = cKDTree(pb[mb[v]])
+        m = ta[u].sparse_distance_matrix(tb[v], float(rxa[u] + rxb[v]), output_type="ndarray")
+        i, j = ma[u][m["i"]], mb[v][m["j"]]
+        keep = m["v"] <= ra[i] + rb[j]
+        out_i.append(i[keep])
+        out_j.append(j[keep])
+    return np.concatenate(out_i), np.concatenate(out_j)
 
 
 def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray, *, only=None, folds=None) -> tuple[set, set]:
@@ -178,11 +246,7 @@ def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray, *, only=None, 
     er = 0.5 * np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1)
     tp = V[T].mean(axis=1)
     tr = np.linalg.norm(V[T] - tp[:, None, :], axis=2).max(axis=1)
-    i, j = _pairs_touching(ep, er, EP, tp, tr, P, only)
-    same = EP[i] == P[j]
-    if folds is not None:
-        keep = ~same | np.isin(EP[i], list(folds))
-        i, j = i[keep], j[keep]
+    i, j = _pairs_touching(ep, er, EP, tp, tr, P, only, within=folds)
     pairs, folded = set(), set()
     for lo in range(0, len(i), _CHUNK):
         a, b = i[lo:lo + _CHUNK], j[lo:lo + _CHUNK]
@@ -245,7 +309,8 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
     if not len(idx):
         return [], 0
     tr = np.linalg.norm(V[T] - cen[:, None, :], axis=2).max(axis=1)
-    i, j = _pairs_touching(cen[idx], np.full(len(idx), float(distance)), P[idx], cen, tr, P, only)
+    i, j = _pairs_touching(cen[idx], np.full(len(idx), float(distance)), P[idx], cen, tr, P, only,
+                           within=set(folds))
     i = idx[i]
     sel = (P[i] != P[j]) | (np.isin(P[i], list(folds)) & (i != j)
                             & ~(T[i][:, :, None] == T[j][:, None, :]).any(axis=(1, 2)))

@@ -243,15 +243,17 @@ def _extend(L, M, xb: np.ndarray, nb: int, laplacian: float = 0.0) -> np.ndarray
     return np.asarray(x).reshape(-1, xb.shape[1])
 
 
-def _harmonic_field(Vd, T, values, known):
+def _harmonic_field(Vd, T, values, known, L=None):
     """Harmonic interpolation over the domain mesh of values given at some boundary points.
 
     The first ``len(values)`` vertices carry ``values`` where ``known``; every other vertex is
-    free (natural boundary condition on the free boundary points). Returns (N,) values.
+    free (natural boundary condition on the free boundary points). ``L``: the clipped cotangent
+    Laplacian of ``(Vd, T)`` if already computed. Returns (N,) values.
     """
     from scipy.sparse.linalg import spsolve
 
-    L, _ = cotan_laplacian(Vd, T)
+    if L is None:
+        L, _ = cotan_laplacian(Vd, T)
     N = len(Vd)
     fixed = np.zeros(N, dtype=bool)
     fixed[: len(values)] = known
@@ -259,8 +261,9 @@ def _harmonic_field(Vd, T, values, known):
     out[: len(values)][known] = values[known]
     free = np.flatnonzero(~fixed)
     if len(free):
-        Lff = L[free][:, free].tocsc()
-        rhs = -(L[free][:, np.flatnonzero(fixed)] @ out[fixed])
+        Lf = L[free]
+        Lff = Lf[:, free].tocsc()
+        rhs = -(Lf[:, np.flatnonzero(fixed)] @ out[fixed])
         out[free] = spsolve(Lff, rhs)
     return out
 
@@ -274,15 +277,15 @@ def _coons_field(Vd, T, values, sides):
     is carried straight across. Returns (N,) values, or ``None`` if the coordinates degenerate.
     """
     s0, s1, s2, s3 = sides
-    N = len(Vd)
     nb = len(values)
+    L, _ = cotan_laplacian(Vd, T)
 
     def coord(zero, one):
         vals = np.zeros(nb)
         known = np.zeros(nb, dtype=bool)
         vals[one], known[one] = 1.0, True
         vals[zero], known[zero] = 0.0, True
-        return _harmonic_field(Vd, T, vals, known)
+        return _harmonic_field(Vd, T, vals, known, L)
 
     u, v = coord(s0, s2), coord(s3, s1)
     if not (np.isfinite(u).all() and np.isfinite(v).all()):
