@@ -37,9 +37,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .patches import min_area_triangulation
+from .patches import min_area_triangulations
 
-__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling"]
+__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling", "MAT_BATCH"]
+
+#: Candidate polygons of one size whose minimal-area triangulations are solved together (bounds
+#: the memory: a batch of 64-point polygons holds about ``MAT_BATCH`` x 42,000 triangle areas).
+MAT_BATCH = 64
 
 
 @dataclass
@@ -355,9 +359,8 @@ def candidate_cycles(
     cands = [seen[k] for k in sorted(seen)]
     cands += [[2 * c] for c in g.loops]
     per_curve = {}
-    costs = np.zeros(len(cands))
-    inward = []  # per candidate: {curve: mean inward unit vector}
-    for k, cyc in enumerate(cands):
+    polys, owners = [], []
+    for cyc in cands:
         kc = max(2, min(8, coarse_points // len(cyc) + 1))
         poly, owner = [], []
         for d in cyc:
@@ -370,15 +373,22 @@ def candidate_cycles(
             pts = per_curve[key] if d % 2 == 0 else per_curve[key][::-1]
             poly.append(pts[:-1])
             owner += [d // 2] * (len(pts) - 1)
-        poly = np.vstack(poly)
-        owner = np.array(owner)
-        if len(poly) < 3:
-            costs[k] = 0.0
-            inward.append({})
-            continue
-        area, tris = min_area_triangulation(poly)
-        costs[k] = area
-        inward.append(_inward_directions(poly, tris, owner))
+        polys.append(np.vstack(poly))
+        owners.append(np.array(owner))
+    # minimal-area triangulations, solved together for the polygons of each size
+    costs = np.zeros(len(cands))
+    tris = [None] * len(cands)
+    by_size = {}
+    for k, poly in enumerate(polys):
+        if len(poly) >= 3:
+            by_size.setdefault(len(poly), []).append(k)
+    for ks in by_size.values():
+        for lo in range(0, len(ks), MAT_BATCH):
+            part = ks[lo:lo + MAT_BATCH]
+            areas, ts = min_area_triangulations(np.stack([polys[k] for k in part]))
+            for k, a, t in zip(part, areas, ts):
+                costs[k], tris[k] = a, t
+    inward = [{} if tris[k] is None else _inward_directions(polys[k], tris[k], owners[k]) for k in range(len(cands))]
     return Candidates(cands, costs, inward, len(edges))
 
 

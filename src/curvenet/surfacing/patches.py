@@ -18,12 +18,14 @@ A minimal-area triangulation of the polygon (dynamic program of Barequet and Sha
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..errors import MethodError, require
 from .fairing import boundary_laplacian
 
-__all__ = ["min_area_triangulation", "triangulate_patch", "is_simple_polygon", "cotan_laplacian",
+__all__ = ["min_area_triangulation", "min_area_triangulations", "triangulate_patch", "is_simple_polygon", "cotan_laplacian",
            "FLAT_CURVATURE", "FLAT_HEIGHT"]
 
 #: A patch's boundary curves count as about planar (no curvature of their own to fair by, so the
@@ -36,6 +38,10 @@ FLAT_CURVATURE = 0.02
 #: reconstructed sphere model: curvature x size 0.024, height span 0.002 of the size), its
 #: heights are not.
 FLAT_HEIGHT = 0.01
+
+#: Polygon sizes whose index tables the minimal-area triangulation keeps (:func:`_gap_table`;
+#: the candidate cycles are scored on coarse polygons of at most a few sizes each).
+MAT_TABLES = 128
 
 
 def _cross(u, v):
@@ -52,6 +58,26 @@ def _cross(u, v):
 
 def _tri_area(a, b, c):
     return 0.5 * np.sqrt((_cross(b - a, c - a) ** 2).sum(axis=-1))
+
+
+@lru_cache(maxsize=MAT_TABLES)
+def _gap_table(n: int):
+    """Index triples ``(i, k, j)``, ``i < k < j = i + gap``, of a polygon of ``n`` points, by gap.
+
+    Returns ``I, K, J`` (each ``(n (n - 1) (n - 2) / 6,)`` int arrays, ordered by gap, then ``i``,
+    then ``k``), the start of each gap's block (``(n + 1,)``, indexed by gap from 2 on) and, per gap, the
+    flat indices of ``W[i, k]`` and ``W[k, j]`` in an ``(n, n)`` table.
+    """
+    Is, Ks, Js, start = [], [], [], np.zeros(n + 1, dtype=np.int64)
+    for gap in range(2, n):
+        i = np.repeat(np.arange(n - gap), gap - 1)
+        k = i + np.tile(np.arange(1, gap), n - gap)
+        Is.append(i)
+        Ks.append(k)
+        Js.append(i + gap)
+        start[gap + 1] = start[gap] + len(i)
+    I, K, J = (np.concatenate(x) if x else np.zeros(0, dtype=np.int64) for x in (Is, Ks, Js))
+    return I, K, J, start, I * n + K, K * n + J
 
 
 def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
@@ -71,25 +97,59 @@ def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
 
     Notes
     -----
-    The dynamic program ``W[i, j] = min_k W[i, k] + W[k, j] + area(i, k, j)`` of Barequet and
-    Sharir (1995) / Liepa (2003), vectorised over ``(i, k)`` for each gap ``j - i``:
-    :math:`O(n^3)` time, :math:`O(n^2)` memory.
+    :func:`min_area_triangulations` on one polygon.
     """
     p = np.asarray(poly, dtype=float)
-    n = len(p)
-    if n < 3:
+    if len(p) < 3:
         return 0.0, np.zeros((0, 3), dtype=np.int64)
-    W = np.zeros((n, n))
-    arg = np.zeros((n, n), dtype=np.int64)
+    areas, tris = min_area_triangulations(p[None])
+    return float(areas[0]), tris[0]
+
+
+def min_area_triangulations(polys: np.ndarray) -> tuple[np.ndarray, list]:
+    """Minimal-area triangulations of polygons of the same size, solved together.
+
+    Parameters
+    ----------
+    polys : (B, n, 3) ndarray
+        ``B`` closed polygons of ``n >= 3`` points each, not repeating their first point.
+
+    Returns
+    -------
+    areas : (B,) ndarray
+        Total area of each triangulation.
+    triangles : list of (n - 2, 3) ndarray of int
+        Vertex indices of each, oriented like its polygon.
+
+    Notes
+    -----
+    The dynamic program ``W[i, j] = min_k W[i, k] + W[k, j] + area(i, k, j)`` of Barequet and
+    Sharir (1995) / Liepa (2003), vectorised over the polygons and ``(i, k)`` for each gap
+    ``j - i``, with the areas of all triangles computed at once beforehand (index tables cached
+    per ``n``, :func:`_gap_table`): :math:`O(B n^3)` time and memory. Each polygon's result is
+    the one it gets alone (the same floating-point operations; ties go to the smallest ``k``).
+    """
+    p = np.asarray(polys, dtype=float)
+    B, n = p.shape[:2]
+    I, K, J, start, IK, KJ = _gap_table(n)
+    area = _tri_area(p[:, I], p[:, K], p[:, J])
+    W = np.zeros((B, n * n))
+    arg = np.zeros((B, n * n), dtype=np.int64)
     for gap in range(2, n):
-        i = np.arange(n - gap)[:, None]
-        k = i + np.arange(1, gap)[None, :]
-        j = i + gap
-        vals = W[i, k] + W[k, j] + _tri_area(p[i], p[k], p[j])
-        best = np.argmin(vals, axis=1)
-        r = np.arange(n - gap)
-        W[r, r + gap] = vals[r, best]
-        arg[r, r + gap] = k[r, best]
+        m = n - gap
+        lo, hi = start[gap], start[gap] + m * (gap - 1)
+        vals = (W[:, IK[lo:hi]] + W[:, KJ[lo:hi]] + area[:, lo:hi]).reshape(B, m, gap - 1)
+        best = np.argmin(vals, axis=2)[..., None]
+        cell = np.arange(m) * (n + 1) + gap  # flat index of (i, i + gap)
+        W[:, cell] = np.take_along_axis(vals, best, axis=2)[..., 0]
+        arg[:, cell] = np.take_along_axis(K[lo:hi].reshape(1, m, gap - 1), best, axis=2)[..., 0]
+    arg = arg.reshape(B, n, n)
+    return W[:, n - 1].copy(), [_mat_triangles(a) for a in arg]
+
+
+def _mat_triangles(arg: np.ndarray) -> np.ndarray:
+    """Triangles ``(i, k, j)`` of a minimal-area triangulation from its table of best ``k``."""
+    n = len(arg)
     tris = []
     stack = [(0, n - 1)]
     while stack:
@@ -100,7 +160,7 @@ def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
         tris.append((i, k, j))
         stack.append((i, k))
         stack.append((k, j))
-    return float(W[0, n - 1]), np.array(tris, dtype=np.int64)
+    return np.array(tris, dtype=np.int64)
 
 
 def is_simple_polygon(q: np.ndarray) -> bool:
