@@ -273,14 +273,16 @@ def _corner_cycles(g: _Graph) -> list[list[int]]:
     rows = np.array([k[0] for k in best], dtype=np.int64)
     cols = np.array([k[1] for k in best], dtype=np.int64)
     wts = np.array([max(g.lengths[d // 2], 1e-300) for d in best.values()])
+    full = csr_matrix((wts, (rows, cols)), shape=(m, m))
+    full.sort_indices()
+    row_of_entry = np.repeat(np.arange(m), np.diff(full.indptr))
     cycles = []
     for v in nodes:
         darts = g.out[v]
         if len(darts) < 2:
             continue
         iv = idx[v]
-        mask = (rows != iv) & (cols != iv)
-        graph = csr_matrix((wts[mask], (rows[mask], cols[mask])), shape=(m, m))
+        graph = _without_node(full, row_of_entry, iv)
         heads = sorted({idx[g.head(d)] for d in darts})
         dist, pred = dijkstra(graph, directed=True, indices=heads, return_predecessors=True)
         row_of = {h: r for r, h in enumerate(heads)}
@@ -302,6 +304,26 @@ def _corner_cycles(g: _Graph) -> list[list[int]]:
                     w = p
                 cycles.append([d1] + path[::-1] + [d2 ^ 1])
     return cycles
+
+
+def _without_node(full, row_of_entry: np.ndarray, iv: int):
+    """The graph ``full`` (CSR, sorted indices) less the arcs into and out of node ``iv``.
+
+    The same matrix as building the CSR again from the remaining arcs (same ``indptr``,
+    ``indices`` and ``data``), without the conversion from coordinates.
+
+    Parameters
+    ----------
+    full : (m, m) scipy.sparse.csr_matrix
+    row_of_entry : (nnz,) ndarray of int
+        Row of each stored entry of ``full``.
+    iv : int
+    """
+    from scipy.sparse import csr_matrix
+
+    keep = (row_of_entry != iv) & (full.indices != iv)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(row_of_entry[keep], minlength=full.shape[0]))])
+    return csr_matrix((full.data[keep], full.indices[keep], indptr), shape=full.shape)
 
 
 def _canonical(cycle: list[int]) -> tuple:
