@@ -89,3 +89,41 @@ def test_batched_triangulations_equal_single_ones():
         assert a == a1 and np.array_equal(t, t1)  # bit for bit, alone or in a batch
         assert a == pytest.approx(_reference_mat(p), rel=1e-12)
         assert len(t) == 10 and len({tuple(sorted(x)) for x in t.tolist()}) == 10
+
+
+def _brute_overlaps(V, T, P, distance, folds):
+    """Every (triangle centroid, other triangle) pair tested, no broad phase."""
+    cen = V[T].mean(axis=1)
+    t, j = (x.ravel() for x in np.meshgrid(np.arange(len(T)), np.arange(len(T)), indexing="ij"))
+    shared = (T[t][:, :, None] == T[j][:, None, :]).any(axis=(1, 2))
+    ok = (P[t] != P[j]) | (np.isin(P[t], list(folds)) & ~shared)
+    a, b, c = V[T[j, 0]], V[T[j, 1]], V[T[j, 2]]
+    n = np.cross(b - a, c - a)
+    nn = np.linalg.norm(n, axis=1)
+    x = cen[t]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok &= (nn > 0) & (np.abs(np.einsum("ij,ij->i", x - a, n)) / nn < distance)
+    for p, q in ((a, b), (b, c), (c, a)):
+        ok &= np.einsum("ij,ij->i", np.cross(q - p, x - p), n) >= 0
+    seen = set(zip(t[ok].tolist(), P[j[ok]].tolist()))
+    count = {}
+    for tt, q in seen:
+        key = (min(int(P[tt]), q), max(int(P[tt]), q))
+        count[key] = count.get(key, 0) + 1
+    return sorted(count), len({tt for tt, _ in seen})
+
+
+@pytest.mark.parametrize("folds", [(), (0,), (0, 1, 2)])
+def test_overlapping_patches_is_brute_force(folds):
+    from curvenet.surfacing.crossings import overlapping_patches
+
+    rng = np.random.default_rng(11)
+    # three patches of small triangles (about 0.02 across) scattered in a slab 0.05 thick: many
+    # lie over each other within the distance 0.03, off their planes by more than their size
+    base = rng.random((300, 3)) * [0.2, 0.2, 0.05]
+    V = np.repeat(base, 3, axis=0) + rng.normal(scale=0.02, size=(900, 3)) * [1.0, 1.0, 0.05]
+    T = np.arange(900).reshape(300, 3)
+    P = rng.integers(0, 3, 300)
+    got = overlapping_patches(V, T, P, np.zeros((0, 3)), distance=0.03, margin=0.0, folds=set(folds))
+    want = _brute_overlaps(V, T, P, 0.03, set(folds))
+    assert want[1] > 0 and got == want

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["crossing_patches", "overlapping_patches", "curve_samples", "PIERCE_EPS", "SIZE_STEP"]
+__all__ = ["crossing_patches", "overlapping_patches", "curve_samples", "PIERCE_EPS", "SIZE_STEP", "REACH_SLACK"]
 
 #: Barycentric and segment-parameter margin of the piercing test: contacts closer than this to
 #: an edge or an end (in relative units) are not crossings (shared curve points touch exactly).
@@ -19,8 +19,23 @@ PIERCE_EPS = 1e-9
 #: Size ratio between the groups of elements searched together in the broad phase.
 SIZE_STEP = 2.0
 
+#: Relative margin added to the reach of the overlap test's broad phase (a bound, so rounding
+#: must not make it drop a pair that the exact test would keep).
+REACH_SLACK = 1e-9
+
+#: Fraction of the balls, at each end of the sizes, put together in one size level of the broad
+#: phase of :func:`_pairs_touching` (the smallest with the next level up, the largest in one
+#: level of their own): without it, slivers and a few large triangles make many small cells.
+LEVEL_TAIL = 0.02
+
 #: Pairs tested per vectorised block (bounds the memory of the test).
 _CHUNK = 200_000
+
+
+def _cross(u, v):
+    """Cross product of paired rows, ``(k, 3)``: the same arithmetic as ``np.cross``, faster."""
+    return np.column_stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+                            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]])
 
 
 def _pierce(p0, p1, a, b, c):
@@ -29,14 +44,14 @@ def _pierce(p0, p1, a, b, c):
     Segments parallel to their triangle are tested in its plane (:func:`_coplanar_cross`).
     """
     e1, e2, d = b - a, c - a, p1 - p0
-    pv = np.cross(d, e2)
+    pv = _cross(d, e2)
     det = np.einsum("ij,ij->i", e1, pv)
     scale = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1) * np.linalg.norm(d, axis=1)
     ok = np.abs(det) > 1e-12 * np.maximum(scale, 1e-300)
     det = np.where(ok, det, 1.0)
     s = p0 - a
     u = np.einsum("ij,ij->i", s, pv) / det
-    q = np.cross(s, e1)
+    q = _cross(s, e1)
     v = np.einsum("ij,ij->i", d, q) / det
     t = np.einsum("ij,ij->i", e2, q) / det
     e = PIERCE_EPS
@@ -175,6 +190,9 @@ def _pairs_touching(pa, ra, ga, pb, rb, gb, only, within=None):
         return empty, empty
     rmin = max(float(min(ra.min(), rb.min())), 1e-12 * float(max(ra.max(), rb.max())), 1e-300)
     la, lb = _levels(ra, rmin), _levels(rb, rmin)
+    # the few smallest and largest balls join the nearest well-filled level (fewer, fuller cells)
+    lo, hi = np.quantile(np.concatenate([la, lb]), [LEVEL_TAIL, 1.0 - LEVEL_TAIL], method="nearest")
+    la, lb = np.clip(la, lo, hi + 1), np.clip(lb, lo, hi + 1)
     nl = int(max(la.max(), lb.max())) + 1
     ka, ma, loa, hia, rxa = _boxes(pa, ra, ga.astype(np.int64) * nl + la)
     kb, mb, lob, hib, rxb = _boxes(pb, rb, gb.astype(np.int64) * nl + lb)
@@ -309,24 +327,29 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
     if not len(idx):
         return [], 0
     tr = np.linalg.norm(V[T] - cen[:, None, :], axis=2).max(axis=1)
-    i, j = _pairs_touching(cen[idx], np.full(len(idx), float(distance)), P[idx], cen, tr, P, only,
-                           within=set(folds))
+    # a centroid lying on triangle j is within `distance` of its plane and projects inside it,
+    # within tr[j] of its centroid: no farther than sqrt(distance^2 + tr^2) from that centroid
+    reach = np.sqrt(float(distance) ** 2 + tr**2) * (1.0 + REACH_SLACK)
+    i, j = _pairs_touching(cen[idx], np.zeros(len(idx)), P[idx], cen, reach, P, only, within=set(folds))
     i = idx[i]
-    sel = (P[i] != P[j]) | (np.isin(P[i], list(folds)) & (i != j)
-                            & ~(T[i][:, :, None] == T[j][:, None, :]).any(axis=(1, 2)))
-    i, j = i[sel], j[sel]
+    # the tests below are per pair: each filters the pairs left by the one before (cheapest
+    # first), which gives the pairs all of them pass at once
+    other = P[i] != P[j]  # else a fold candidate: same patch, another triangle, no shared vertex
+    keep = other | (np.isin(P[i], list(folds)) & (i != j))
+    i, j, other = i[keep], j[keep], other[keep]
     a, b, c = V[T[j, 0]], V[T[j, 1]], V[T[j, 2]]
-    n = np.cross(b - a, c - a)
+    n = _cross(b - a, c - a)
     nn = np.linalg.norm(n, axis=1)
     ok = nn > 0
-    i, j, a, b, c, n, nn = i[ok], j[ok], a[ok], b[ok], c[ok], n[ok], nn[ok]
+    i, j, other, a, b, c, n, nn = i[ok], j[ok], other[ok], a[ok], b[ok], c[ok], n[ok], nn[ok]
     x = cen[i]
-    dist = np.abs(np.einsum("ij,ij->i", x - a, n)) / nn
+    near = np.abs(np.einsum("ij,ij->i", x - a, n)) / nn < distance
+    i, j, other, a, b, c, n, x = i[near], j[near], other[near], a[near], b[near], c[near], n[near], x[near]
     # barycentric signs of the projection: inside when the three sub-areas agree with n
-    s1 = np.einsum("ij,ij->i", np.cross(b - a, x - a), n)
-    s2 = np.einsum("ij,ij->i", np.cross(c - b, x - b), n)
-    s3 = np.einsum("ij,ij->i", np.cross(a - c, x - c), n)
-    hit = (dist < distance) & (s1 >= 0) & (s2 >= 0) & (s3 >= 0)
+    inside = ((np.einsum("ij,ij->i", _cross(b - a, x - a), n) >= 0) & (np.einsum("ij,ij->i", _cross(c - b, x - b), n) >= 0)
+              & (np.einsum("ij,ij->i", _cross(a - c, x - c), n) >= 0))
+    i, j, other = i[inside], j[inside], other[inside]
+    hit = other | ~(T[i][:, :, None] == T[j][:, None, :]).any(axis=(1, 2))
     count = {}
     seen = set()
     for t, q in zip(i[hit].tolist(), P[j[hit]].tolist()):
@@ -363,7 +386,13 @@ def curve_samples(V, curve_vertices, step: float) -> np.ndarray:
             continue
         seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
         k = np.ceil(seg / step).astype(np.int64)
-        for i in np.flatnonzero(k > 1):
-            t = np.arange(1, k[i])[:, None] / k[i]
-            out.append(p[i] + t * (p[i + 1] - p[i]))
+        long = np.flatnonzero(k > 1)
+        if not len(long):
+            continue
+        # the points i + t (i + 1) of every long segment i, t = 1/k .. (k-1)/k, in order
+        i = np.repeat(long, k[long] - 1)
+        first = np.cumsum(k[long] - 1) - (k[long] - 1)
+        num = np.arange(len(i)) - np.repeat(first, k[long] - 1) + 1
+        t = (num / k[i])[:, None]
+        out.append(p[i] + t * (p[i + 1] - p[i]))
     return np.vstack(out)
