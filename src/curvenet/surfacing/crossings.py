@@ -177,17 +177,29 @@ def _pairs_touching(pa, ra, ga, pb, rb, gb, only, within=None):
 
     Notes
     -----
-    The balls are split by group and by size level (factors of :data:`SIZE_STEP`, as in
-    :func:`_near_pairs`); two such cells are searched against each other only when their
-    bounding boxes, grown by their largest radius, meet. Pairs inside one group (most of the
-    near pairs of a mesh: neighbouring triangles of one patch) are never formed unless the
-    group is in ``within``.
+    With ``only`` (a few new patches), the balls of those groups are searched against all
+    others by size level (:func:`_near_pairs`) and the pairs inside one group dropped after.
+    Without, the balls are split by group and by size level (factors of :data:`SIZE_STEP`);
+    two such cells are searched against each other only when their bounding boxes, grown by
+    their largest radius, meet, so that the pairs inside one group (most of the near pairs of
+    a mesh: neighbouring triangles of one patch) are never formed unless the group is in
+    ``within``.
     """
     from scipy.spatial import cKDTree
 
     empty = np.zeros(0, dtype=np.int64)
     if not len(pa) or not len(pb):
         return empty, empty
+    if only is not None:
+        oa, ob = np.isin(ga, list(only)), np.isin(gb, list(only))
+        ia, ib, rest = np.flatnonzero(oa), np.flatnonzero(ob), np.flatnonzero(~oa)
+        i1, j1 = _near_pairs(pa[ia], ra[ia], pb, rb)
+        i2, j2 = _near_pairs(pa[rest], ra[rest], pb[ib], rb[ib])
+        i, j = np.concatenate([ia[i1], rest[i2]]), np.concatenate([j1, ib[j2]])
+        if within is not None:
+            keep = (ga[i] != gb[j]) | np.isin(ga[i], list(within))
+            i, j = i[keep], j[keep]
+        return i, j
     rmin = max(float(min(ra.min(), rb.min())), 1e-12 * float(max(ra.max(), rb.max())), 1e-300)
     la, lb = _levels(ra, rmin), _levels(rb, rmin)
     # the few smallest and largest balls join the nearest well-filled level (fewer, fuller cells)
@@ -201,8 +213,6 @@ def _pairs_touching(pa, ra, ga, pb, rb, gb, only, within=None):
     xa, xb = ka // nl, kb // nl
     if within is not None:
         meet &= (xa[:, None] != xb[None, :]) | np.isin(xa, list(within))[:, None]
-    if only is not None:
-        meet &= np.isin(xa, list(only))[:, None] | np.isin(xb, list(only))[None, :]
     ta, tb = {}, {}
     out_i, out_j = [empty], [empty]
     for u, v in zip(*np.nonzero(meet)):
