@@ -127,3 +127,25 @@ def test_overlapping_patches_is_brute_force(folds):
     got = overlapping_patches(V, T, P, np.zeros((0, 3)), distance=0.03, margin=0.0, folds=set(folds))
     want = _brute_overlaps(V, T, P, 0.03, set(folds))
     assert want[1] > 0 and got == want
+
+
+@pytest.mark.parametrize("clip", [True, False])
+def test_laplacian_from_shared_weights_is_cotan_laplacian(clip):
+    from scipy.sparse import coo_matrix
+
+    from curvenet.surfacing.patches import _cotan_weights, _laplacian, cotan_laplacian
+
+    triangle = pytest.importorskip("triangle")
+    rng = np.random.default_rng(5)
+    V = rng.random((60, 2))
+    T = np.asarray(triangle.triangulate({"vertices": V}, "Q")["triangles"], dtype=np.int64)
+    L, M = cotan_laplacian(V, T, clip=clip)
+    Wm, M2 = _cotan_weights(V, T)
+    L2 = _laplacian(Wm, clip)
+    assert np.array_equal(M, M2) and (L != L2).nnz == 0
+    assert (_laplacian(Wm, not clip) != L).nnz > 0  # hull edges opposite obtuse angles: clipping matters
+    # the lumped mass is a third of the incident triangle areas, summed
+    u, w = V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]
+    area = 0.5 * np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
+    assert M == pytest.approx(coo_matrix((np.repeat(area / 3, 3), (T.ravel(), np.zeros(3 * len(T), int))), shape=(60, 1)).toarray().ravel())
+    assert np.allclose(L @ np.ones(60), 0.0)

@@ -252,6 +252,12 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
     M : (n,) ndarray
         Vertex areas.
     """
+    Wm, M = _cotan_weights(V, T)
+    return _laplacian(Wm, clip), M
+
+
+def _cotan_weights(V: np.ndarray, T: np.ndarray):
+    """Summed cotangent edge weights ``(n, n)`` (CSR, symmetric) and the vertex areas ``(n,)``."""
     from scipy.sparse import coo_matrix
 
     if V.shape[1] == 2:
@@ -263,7 +269,7 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
         # weight of edge (b, c) from the angle at a
         u = V[T[:, b]] - V[T[:, a]]
         v = V[T[:, c]] - V[T[:, a]]
-        cr = np.linalg.norm(np.cross(u, v), axis=1)
+        cr = np.linalg.norm(_cross(u, v), axis=1)
         cot = np.einsum("ij,ij->i", u, v) / np.maximum(cr, 1e-300)
         I.append(T[:, b])
         J.append(T[:, c])
@@ -273,17 +279,22 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
     W = np.concatenate(ws)
     Wm = coo_matrix((np.concatenate([W, W]), (np.concatenate([I, J]), np.concatenate([J, I]))), shape=(n, n)).tocsr()
     Wm.sum_duplicates()
+    area = _tri_area(V[T[:, 0]], V[T[:, 1]], V[T[:, 2]])
+    # the same sums, in the same order, as np.add.at(M, T.ravel(), np.repeat(area / 3, 3))
+    M = np.bincount(T.ravel(), weights=np.repeat(area / 3.0, 3), minlength=n)
+    return Wm, M
+
+
+def _laplacian(Wm, clip: bool):
+    """``diag(row sums) - W`` of summed edge weights (negative weights set to 0 with ``clip``)."""
+    from scipy.sparse import diags
+
+    Wm = Wm.copy()
     if clip:
         Wm.data = np.maximum(Wm.data, 0.0)
     Wm.eliminate_zeros()
     d = np.asarray(Wm.sum(axis=1)).ravel()
-    from scipy.sparse import diags
-
-    L = (diags(d) - Wm).tocsr()
-    area = _tri_area(V[T[:, 0]], V[T[:, 1]], V[T[:, 2]])
-    M = np.zeros(n)
-    np.add.at(M, T.ravel(), np.repeat(area / 3.0, 3))
-    return L, M
+    return (diags(d) - Wm).tocsr()
 
 
 def _extend(L, M, xb: np.ndarray, nb: int, laplacian: float = 0.0) -> np.ndarray:
@@ -328,17 +339,19 @@ def _harmonic_field(Vd, T, values, known, L=None):
     return out
 
 
-def _coons_field(Vd, T, values, sides):
+def _coons_field(Vd, T, values, sides, L=None):
     """Transfinite (Coons) interpolation over a four-sided domain of values given on its sides.
 
     ``u`` and ``v`` are harmonic coordinates (``u`` 0 on side 0 and 1 on side 2, ``v`` 0 on side 3
     and 1 on side 1, free elsewhere); each side's values are interpolated along its coordinate and
     blended bilinearly: a value that varies along two opposite sides alone (a cylinder's arcs)
-    is carried straight across. Returns (N,) values, or ``None`` if the coordinates degenerate.
+    is carried straight across. ``L``: the clipped cotangent Laplacian of ``(Vd, T)`` if already
+    computed. Returns (N,) values, or ``None`` if the coordinates degenerate.
     """
     s0, s1, s2, s3 = sides
     nb = len(values)
-    L, _ = cotan_laplacian(Vd, T)
+    if L is None:
+        L, _ = cotan_laplacian(Vd, T)
 
     def coord(zero, one):
         vals = np.zeros(nb)
@@ -564,7 +577,8 @@ def triangulate_patch(
         # a height field over the best-fit plane: the tangential layout is the domain mesh
         # itself (its quality is kept); only the heights are extended from the boundary
         c, vt = frame
-        L, M = cotan_laplacian(Vd, T, clip=False)
+        Wm, M = _cotan_weights(Vd, T)  # one pass for the plain and the clipped Laplacian
+        L, Lc = _laplacian(Wm, clip=False), None
         hb = (poly - c) @ vt[2]
         H = _mean_normal_curvature(poly, vt[2], corners, n0) if fair else 0.0
         size = float(np.ptp(q[:n0], axis=0).max())
@@ -578,15 +592,15 @@ def triangulate_patch(
         if bl is not None:
             values, known, sides = bl
             f = None
+            Lc = _laplacian(Wm, clip=True)
             if len(sides) == 4 and all(known[sd].all() for sd in sides):
-                f = _coons_field(Vd, T, values, sides)
+                f = _coons_field(Vd, T, values, sides, Lc)
             if f is None:
-                f = _harmonic_field(Vd, T, values, known)
+                f = _harmonic_field(Vd, T, values, known, Lc)
             lap = f[n:, None]
         hi = _extend(L, M, hb[:, None], n, lap)[:, 0]
         if not np.isfinite(hi).all():
-            L, M = cotan_laplacian(Vd, T)
-            hi = _extend(L, M, hb[:, None], n)[:, 0]
+            hi = _extend(_laplacian(Wm, clip=True) if Lc is None else Lc, M, hb[:, None], n)[:, 0]
         X = c + Vd[n:] @ vt[:2] + hi[:, None] * vt[2]
         return X, T, kind
     # circle domain: harmonic extension of the 3D boundary (clipped weights: maximum principle)
