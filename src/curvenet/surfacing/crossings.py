@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["crossing_patches", "overlapping_patches", "curve_samples", "PIERCE_EPS", "SIZE_STEP", "REACH_SLACK"]
+__all__ = ["crossing_patches", "overlapping_patches", "curve_samples", "PIERCE_EPS", "SIZE_STEP", "REACH_SLACK", "LEVEL_TAIL"]
 
 #: Barycentric and segment-parameter margin of the piercing test: contacts closer than this to
 #: an edge or an end (in relative units) are not crossings (shared curve points touch exactly).
@@ -19,8 +19,9 @@ PIERCE_EPS = 1e-9
 #: Size ratio between the groups of elements searched together in the broad phase.
 SIZE_STEP = 2.0
 
-#: Relative margin added to the reach of the overlap test's broad phase (a bound, so rounding
-#: must not make it drop a pair that the exact test would keep).
+#: Relative margin added to the bounds of the broad phases (the reach of the overlap test, the
+#: grown boxes of the cells of :func:`_pairs_touching`): a bound must not drop, by rounding, a
+#: pair that the exact test would keep.
 REACH_SLACK = 1e-9
 
 #: Fraction of the balls, at each end of the sizes, put together in one size level of the broad
@@ -208,7 +209,7 @@ def _pairs_touching(pa, ra, ga, pb, rb, gb, only, within=None):
     nl = int(max(la.max(), lb.max())) + 1
     ka, ma, loa, hia, rxa = _boxes(pa, ra, ga.astype(np.int64) * nl + la)
     kb, mb, lob, hib, rxb = _boxes(pb, rb, gb.astype(np.int64) * nl + lb)
-    tol = 1e-9 * float(max(np.abs(hia).max(), np.abs(hib).max(), 1e-300))
+    tol = REACH_SLACK * float(max(np.abs(hia).max(), np.abs(hib).max(), 1e-300))
     meet = ((loa[:, None, :] <= hib[None, :, :] + tol) & (lob[None, :, :] <= hia[:, None, :] + tol)).all(axis=2)
     xa, xb = ka // nl, kb // nl
     if within is not None:

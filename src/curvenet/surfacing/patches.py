@@ -26,7 +26,7 @@ from ..errors import MethodError, require
 from .fairing import boundary_laplacian
 
 __all__ = ["min_area_triangulation", "min_area_triangulations", "triangulate_patch", "is_simple_polygon", "cotan_laplacian",
-           "FLAT_CURVATURE", "FLAT_HEIGHT"]
+           "FLAT_CURVATURE", "FLAT_HEIGHT", "MAT_TABLES"]
 
 #: A patch's boundary curves count as about planar (no curvature of their own to fair by, so the
 #: slopes of the curves continuing into the patch give its curvature) when their mean normal
