@@ -526,10 +526,14 @@ class _PatchCache:
             self.curve_keys = np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
         e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
         key = e[:, 0] * nv + e[:, 1]
-        pk = np.unique(np.column_stack([key, np.tile(P, 3)]), axis=0)
-        pk = pk[~np.isin(pk[:, 0], self.curve_keys)]
-        dup = np.flatnonzero(pk[1:, 0] == pk[:-1, 0])
-        return {(int(min(pk[i, 1], pk[i + 1, 1])), int(max(pk[i, 1], pk[i + 1, 1]))) for i in dup}
+        keys, kid = np.unique(key, return_inverse=True)
+        inner = ~np.isin(keys, self.curve_keys)
+        npatch = int(P.max()) + 1
+        kp = np.unique(kid.ravel() * npatch + np.tile(P, 3))  # (edge, patch), each once, sorted
+        kp = kp[inner[kp // npatch]]
+        edge, patch = kp // npatch, kp % npatch
+        dup = np.flatnonzero(edge[1:] == edge[:-1])
+        return {(int(min(patch[i], patch[i + 1])), int(max(patch[i], patch[i + 1]))) for i in dup}
 
 
 def _drop_conflicting(cs, cand, conflicts, banned):
@@ -544,6 +548,36 @@ def _drop_conflicting(cs, cand, conflicts, banned):
                     [cs.costs[i] for i in pos], [cs.index[i] for i in pos])
 
 
+def _edge_keys(T: np.ndarray, nv: int):
+    """Unique undirected edges of a triangle list, as ``np.unique(e, axis=0)`` gives them.
+
+    Parameters
+    ----------
+    T : (t, 3) ndarray of int
+    nv : int
+        More than the largest vertex id.
+
+    Returns
+    -------
+    u : (E, 2) ndarray of int
+        Unique edges (each sorted), in lexicographic order.
+    inv : (3 t,) ndarray of int
+        Edge of each (side, triangle) slot, sides ``(0, 1)``, ``(1, 2)``, ``(2, 0)`` of all
+        triangles in turn.
+    cnt : (E,) ndarray of int
+        Slots per edge.
+
+    Notes
+    -----
+    One sort of the integer keys ``a * nv + b`` (the same order as the rows ``(a, b)``), in
+    place of ``np.unique(..., axis=0)``, which sorts rows as structured records.
+    """
+    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+    _, first, inv, cnt = np.unique(e[:, 0] * np.int64(nv) + e[:, 1], return_index=True, return_inverse=True,
+                                   return_counts=True)
+    return e[first], inv.ravel(), cnt
+
+
 def _orient_outward(V, T, P, cycles, directions):
     """Flip each closed connected component with negative signed volume (in place)."""
     if not len(T):
@@ -552,10 +586,8 @@ def _orient_outward(V, T, P, cycles, directions):
     from scipy.sparse.csgraph import connected_components
 
     nt = len(T)
-    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
     f = np.tile(np.arange(nt), 3)
-    u, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
+    _, inv, cnt = _edge_keys(T, len(V))
     order = np.argsort(inv, kind="stable")
     si, sf = inv[order], f[order]
     same = si[1:] == si[:-1]
@@ -653,9 +685,7 @@ def _split_shared_chords(V, T, P, max_rounds: int = 5):
     """
     count = 0
     for _ in range(max_rounds):
-        e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-        u, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
-        inv = inv.ravel()
+        u, inv, cnt = _edge_keys(T, len(V))
         bad = np.flatnonzero(cnt > 2)
         if not len(bad):
             break

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["crossing_patches", "overlapping_patches", "curve_samples", "PIERCE_EPS", "SIZE_STEP"]
+__all__ = ["crossing_patches", "overlapping_patches", "curve_samples", "PIERCE_EPS", "SIZE_STEP", "REACH_SLACK", "LEVEL_TAIL"]
 
 #: Barycentric and segment-parameter margin of the piercing test: contacts closer than this to
 #: an edge or an end (in relative units) are not crossings (shared curve points touch exactly).
@@ -19,8 +19,24 @@ PIERCE_EPS = 1e-9
 #: Size ratio between the groups of elements searched together in the broad phase.
 SIZE_STEP = 2.0
 
+#: Relative margin added to the bounds of the broad phases (the reach of the overlap test, the
+#: grown boxes of the cells of :func:`_pairs_touching`): a bound must not drop, by rounding, a
+#: pair that the exact test would keep.
+REACH_SLACK = 1e-9
+
+#: Fraction of the balls, at each end of the sizes, put together in one size level of the broad
+#: phase of :func:`_pairs_touching` (the smallest with the next level up, the largest in one
+#: level of their own): without it, slivers and a few large triangles make many small cells.
+LEVEL_TAIL = 0.02
+
 #: Pairs tested per vectorised block (bounds the memory of the test).
 _CHUNK = 200_000
+
+
+def _cross(u, v):
+    """Cross product of paired rows, ``(k, 3)``: the same arithmetic as ``np.cross``, faster."""
+    return np.column_stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+                            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]])
 
 
 def _pierce(p0, p1, a, b, c):
@@ -29,14 +45,14 @@ def _pierce(p0, p1, a, b, c):
     Segments parallel to their triangle are tested in its plane (:func:`_coplanar_cross`).
     """
     e1, e2, d = b - a, c - a, p1 - p0
-    pv = np.cross(d, e2)
+    pv = _cross(d, e2)
     det = np.einsum("ij,ij->i", e1, pv)
     scale = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1) * np.linalg.norm(d, axis=1)
     ok = np.abs(det) > 1e-12 * np.maximum(scale, 1e-300)
     det = np.where(ok, det, 1.0)
     s = p0 - a
     u = np.einsum("ij,ij->i", s, pv) / det
-    q = np.cross(s, e1)
+    q = _cross(s, e1)
     v = np.einsum("ij,ij->i", d, q) / det
     t = np.einsum("ij,ij->i", e2, q) / det
     e = PIERCE_EPS
@@ -118,18 +134,99 @@ def _near_pairs(pa, ra, pb, rb):
     return np.concatenate(out_i), np.concatenate(out_j)
 
 
-def _pairs_touching(pa, ra, ga, pb, rb, gb, only):
-    """:func:`_near_pairs` restricted to pairs with a side in the groups ``only`` (all if None)."""
-    if only is None:
-        return _near_pairs(pa, ra, pb, rb)
-    oa, ob = np.isin(ga, list(only)), np.isin(gb, list(only))
-    ia = np.flatnonzero(oa)
-    i1, j1 = _near_pairs(pa[ia], ra[ia], pb, rb)
-    i1 = ia[i1]
-    ib = np.flatnonzero(ob)
-    rest = np.flatnonzero(~oa)
-    i2, j2 = _near_pairs(pa[rest], ra[rest], pb[ib], rb[ib])
-    return np.concatenate([i1, rest[i2]]), np.concatenate([j1, ib[j2]])
+def _levels(r, rmin):
+    """Size level of each ball: ``floor(log_SIZE_STEP(r / rmin))`` (radii below ``rmin`` count as it)."""
+    return np.floor(np.log(np.maximum(r, rmin) / rmin) / np.log(SIZE_STEP)).astype(np.int64)
+
+
+def _boxes(p, r, key):
+    """Sorted unique keys, the members of each and their bounding box grown by the largest radius.
+
+    Returns ``keys (g,)``, ``members`` (list of index arrays), ``lo (g, 3)``, ``hi (g, 3)`` and
+    ``rmax (g,)``.
+    """
+    order = np.argsort(key, kind="stable")
+    keys, start = np.unique(key[order], return_index=True)
+    members = np.split(order, start[1:])
+    rmax = np.maximum.reduceat(r[order], start)
+    lo = np.minimum.reduceat(p[order], start, axis=0) - rmax[:, None]
+    hi = np.maximum.reduceat(p[order], start, axis=0) + rmax[:, None]
+    return keys, members, lo, hi, rmax
+
+
+def _pairs_touching(pa, ra, ga, pb, rb, gb, only, within=None):
+    """Index pairs ``(i, j)`` of balls that meet, ``ga[i] != gb[j]`` or in the same group.
+
+    Parameters
+    ----------
+    pa : (n, 3) ndarray
+    ra : (n,) ndarray
+    ga : (n,) ndarray of int
+        Centres, radii and group (patch) of the first balls.
+    pb, rb, gb
+        The same for the second balls.
+    only : set of int or None
+        Keep only the pairs with a side in these groups (all if ``None``).
+    within : set of int or None
+        Groups whose balls are also paired with balls of their own group (all if ``None``).
+
+    Returns
+    -------
+    i, j : (k,) ndarray of int
+        The pairs: ``|pa[i] - pb[j]| <= ra[i] + rb[j]`` (the k-d tree's distance, as in
+        :func:`_near_pairs`), in no particular order.
+
+    Notes
+    -----
+    With ``only`` (a few new patches), the balls of those groups are searched against all
+    others by size level (:func:`_near_pairs`) and the pairs inside one group dropped after.
+    Without, the balls are split by group and by size level (factors of :data:`SIZE_STEP`);
+    two such cells are searched against each other only when their bounding boxes, grown by
+    their largest radius, meet, so that the pairs inside one group (most of the near pairs of
+    a mesh: neighbouring triangles of one patch) are never formed unless the group is in
+    ``within``.
+    """
+    from scipy.spatial import cKDTree
+
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(pa) or not len(pb):
+        return empty, empty
+    if only is not None:
+        oa, ob = np.isin(ga, list(only)), np.isin(gb, list(only))
+        ia, ib, rest = np.flatnonzero(oa), np.flatnonzero(ob), np.flatnonzero(~oa)
+        i1, j1 = _near_pairs(pa[ia], ra[ia], pb, rb)
+        i2, j2 = _near_pairs(pa[rest], ra[rest], pb[ib], rb[ib])
+        i, j = np.concatenate([ia[i1], rest[i2]]), np.concatenate([j1, ib[j2]])
+        if within is not None:
+            keep = (ga[i] != gb[j]) | np.isin(ga[i], list(within))
+            i, j = i[keep], j[keep]
+        return i, j
+    rmin = max(float(min(ra.min(), rb.min())), 1e-12 * float(max(ra.max(), rb.max())), 1e-300)
+    la, lb = _levels(ra, rmin), _levels(rb, rmin)
+    # the few smallest and largest balls join the nearest well-filled level (fewer, fuller cells)
+    lo, hi = np.quantile(np.concatenate([la, lb]), [LEVEL_TAIL, 1.0 - LEVEL_TAIL], method="nearest")
+    la, lb = np.clip(la, lo, hi + 1), np.clip(lb, lo, hi + 1)
+    nl = int(max(la.max(), lb.max())) + 1
+    ka, ma, loa, hia, rxa = _boxes(pa, ra, ga.astype(np.int64) * nl + la)
+    kb, mb, lob, hib, rxb = _boxes(pb, rb, gb.astype(np.int64) * nl + lb)
+    tol = REACH_SLACK * float(max(np.abs(hia).max(), np.abs(hib).max(), 1e-300))
+    meet = ((loa[:, None, :] <= hib[None, :, :] + tol) & (lob[None, :, :] <= hia[:, None, :] + tol)).all(axis=2)
+    xa, xb = ka // nl, kb // nl
+    if within is not None:
+        meet &= (xa[:, None] != xb[None, :]) | np.isin(xa, list(within))[:, None]
+    ta, tb = {}, {}
+    out_i, out_j = [empty], [empty]
+    for u, v in zip(*np.nonzero(meet)):
+        if u not in ta:
+            ta[u] = cKDTree(pa[ma[u]])
+        if v not in tb:
+            tb[v] = cKDTree(pb[mb[v]])
+        m = ta[u].sparse_distance_matrix(tb[v], float(rxa[u] + rxb[v]), output_type="ndarray")
+        i, j = ma[u][m["i"]], mb[v][m["j"]]
+        keep = m["v"] <= ra[i] + rb[j]
+        out_i.append(i[keep])
+        out_j.append(j[keep])
+    return np.concatenate(out_i), np.concatenate(out_j)
 
 
 def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray, *, only=None, folds=None) -> tuple[set, set]:
@@ -178,11 +275,7 @@ def crossing_patches(V: np.ndarray, T: np.ndarray, P: np.ndarray, *, only=None, 
     er = 0.5 * np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1)
     tp = V[T].mean(axis=1)
     tr = np.linalg.norm(V[T] - tp[:, None, :], axis=2).max(axis=1)
-    i, j = _pairs_touching(ep, er, EP, tp, tr, P, only)
-    same = EP[i] == P[j]
-    if folds is not None:
-        keep = ~same | np.isin(EP[i], list(folds))
-        i, j = i[keep], j[keep]
+    i, j = _pairs_touching(ep, er, EP, tp, tr, P, only, within=folds)
     pairs, folded = set(), set()
     for lo in range(0, len(i), _CHUNK):
         a, b = i[lo:lo + _CHUNK], j[lo:lo + _CHUNK]
@@ -245,23 +338,29 @@ def overlapping_patches(V, T, P, curve_points, *, distance: float, margin: float
     if not len(idx):
         return [], 0
     tr = np.linalg.norm(V[T] - cen[:, None, :], axis=2).max(axis=1)
-    i, j = _pairs_touching(cen[idx], np.full(len(idx), float(distance)), P[idx], cen, tr, P, only)
+    # a centroid lying on triangle j is within `distance` of its plane and projects inside it,
+    # within tr[j] of its centroid: no farther than sqrt(distance^2 + tr^2) from that centroid
+    reach = np.sqrt(float(distance) ** 2 + tr**2) * (1.0 + REACH_SLACK)
+    i, j = _pairs_touching(cen[idx], np.zeros(len(idx)), P[idx], cen, reach, P, only, within=set(folds))
     i = idx[i]
-    sel = (P[i] != P[j]) | (np.isin(P[i], list(folds)) & (i != j)
-                            & ~(T[i][:, :, None] == T[j][:, None, :]).any(axis=(1, 2)))
-    i, j = i[sel], j[sel]
+    # the tests below are per pair: each filters the pairs left by the one before (cheapest
+    # first), which gives the pairs all of them pass at once
+    other = P[i] != P[j]  # else a fold candidate: same patch, another triangle, no shared vertex
+    keep = other | (np.isin(P[i], list(folds)) & (i != j))
+    i, j, other = i[keep], j[keep], other[keep]
     a, b, c = V[T[j, 0]], V[T[j, 1]], V[T[j, 2]]
-    n = np.cross(b - a, c - a)
+    n = _cross(b - a, c - a)
     nn = np.linalg.norm(n, axis=1)
     ok = nn > 0
-    i, j, a, b, c, n, nn = i[ok], j[ok], a[ok], b[ok], c[ok], n[ok], nn[ok]
+    i, j, other, a, b, c, n, nn = i[ok], j[ok], other[ok], a[ok], b[ok], c[ok], n[ok], nn[ok]
     x = cen[i]
-    dist = np.abs(np.einsum("ij,ij->i", x - a, n)) / nn
+    near = np.abs(np.einsum("ij,ij->i", x - a, n)) / nn < distance
+    i, j, other, a, b, c, n, x = i[near], j[near], other[near], a[near], b[near], c[near], n[near], x[near]
     # barycentric signs of the projection: inside when the three sub-areas agree with n
-    s1 = np.einsum("ij,ij->i", np.cross(b - a, x - a), n)
-    s2 = np.einsum("ij,ij->i", np.cross(c - b, x - b), n)
-    s3 = np.einsum("ij,ij->i", np.cross(a - c, x - c), n)
-    hit = (dist < distance) & (s1 >= 0) & (s2 >= 0) & (s3 >= 0)
+    inside = ((np.einsum("ij,ij->i", _cross(b - a, x - a), n) >= 0) & (np.einsum("ij,ij->i", _cross(c - b, x - b), n) >= 0)
+              & (np.einsum("ij,ij->i", _cross(a - c, x - c), n) >= 0))
+    i, j, other = i[inside], j[inside], other[inside]
+    hit = other | ~(T[i][:, :, None] == T[j][:, None, :]).any(axis=(1, 2))
     count = {}
     seen = set()
     for t, q in zip(i[hit].tolist(), P[j[hit]].tolist()):
@@ -298,7 +397,13 @@ def curve_samples(V, curve_vertices, step: float) -> np.ndarray:
             continue
         seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
         k = np.ceil(seg / step).astype(np.int64)
-        for i in np.flatnonzero(k > 1):
-            t = np.arange(1, k[i])[:, None] / k[i]
-            out.append(p[i] + t * (p[i + 1] - p[i]))
+        long = np.flatnonzero(k > 1)
+        if not len(long):
+            continue
+        # the points i + t (i + 1) of every long segment i, t = 1/k .. (k-1)/k, in order
+        i = np.repeat(long, k[long] - 1)
+        first = np.cumsum(k[long] - 1) - (k[long] - 1)
+        num = np.arange(len(i)) - np.repeat(first, k[long] - 1) + 1
+        t = (num / k[i])[:, None]
+        out.append(p[i] + t * (p[i + 1] - p[i]))
     return np.vstack(out)

@@ -37,9 +37,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .patches import min_area_triangulation
+from .patches import min_area_triangulations
 
-__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling"]
+__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling", "MAT_BATCH"]
+
+#: Candidate polygons of one size whose minimal-area triangulations are solved together (bounds
+#: the memory: a batch of 64-point polygons holds about ``MAT_BATCH`` x 42,000 triangle areas).
+MAT_BATCH = 64
 
 
 @dataclass
@@ -269,14 +273,16 @@ def _corner_cycles(g: _Graph) -> list[list[int]]:
     rows = np.array([k[0] for k in best], dtype=np.int64)
     cols = np.array([k[1] for k in best], dtype=np.int64)
     wts = np.array([max(g.lengths[d // 2], 1e-300) for d in best.values()])
+    full = csr_matrix((wts, (rows, cols)), shape=(m, m))
+    full.sort_indices()
+    row_of_entry = np.repeat(np.arange(m), np.diff(full.indptr))
     cycles = []
     for v in nodes:
         darts = g.out[v]
         if len(darts) < 2:
             continue
         iv = idx[v]
-        mask = (rows != iv) & (cols != iv)
-        graph = csr_matrix((wts[mask], (rows[mask], cols[mask])), shape=(m, m))
+        graph = _without_node(full, row_of_entry, iv)
         heads = sorted({idx[g.head(d)] for d in darts})
         dist, pred = dijkstra(graph, directed=True, indices=heads, return_predecessors=True)
         row_of = {h: r for r, h in enumerate(heads)}
@@ -298,6 +304,26 @@ def _corner_cycles(g: _Graph) -> list[list[int]]:
                     w = p
                 cycles.append([d1] + path[::-1] + [d2 ^ 1])
     return cycles
+
+
+def _without_node(full, row_of_entry: np.ndarray, iv: int):
+    """The graph ``full`` (CSR, sorted indices) less the arcs into and out of node ``iv``.
+
+    The same matrix as building the CSR again from the remaining arcs (same ``indptr``,
+    ``indices`` and ``data``), without the conversion from coordinates.
+
+    Parameters
+    ----------
+    full : (m, m) scipy.sparse.csr_matrix
+    row_of_entry : (nnz,) ndarray of int
+        Row of each stored entry of ``full``.
+    iv : int
+    """
+    from scipy.sparse import csr_matrix
+
+    keep = (row_of_entry != iv) & (full.indices != iv)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(row_of_entry[keep], minlength=full.shape[0]))])
+    return csr_matrix((full.data[keep], full.indices[keep], indptr), shape=full.shape)
 
 
 def _canonical(cycle: list[int]) -> tuple:
@@ -355,9 +381,8 @@ def candidate_cycles(
     cands = [seen[k] for k in sorted(seen)]
     cands += [[2 * c] for c in g.loops]
     per_curve = {}
-    costs = np.zeros(len(cands))
-    inward = []  # per candidate: {curve: mean inward unit vector}
-    for k, cyc in enumerate(cands):
+    polys, owners = [], []
+    for cyc in cands:
         kc = max(2, min(8, coarse_points // len(cyc) + 1))
         poly, owner = [], []
         for d in cyc:
@@ -370,15 +395,22 @@ def candidate_cycles(
             pts = per_curve[key] if d % 2 == 0 else per_curve[key][::-1]
             poly.append(pts[:-1])
             owner += [d // 2] * (len(pts) - 1)
-        poly = np.vstack(poly)
-        owner = np.array(owner)
-        if len(poly) < 3:
-            costs[k] = 0.0
-            inward.append({})
-            continue
-        area, tris = min_area_triangulation(poly)
-        costs[k] = area
-        inward.append(_inward_directions(poly, tris, owner))
+        polys.append(np.vstack(poly))
+        owners.append(np.array(owner))
+    # minimal-area triangulations, solved together for the polygons of each size
+    costs = np.zeros(len(cands))
+    tris = [None] * len(cands)
+    by_size = {}
+    for k, poly in enumerate(polys):
+        if len(poly) >= 3:
+            by_size.setdefault(len(poly), []).append(k)
+    for ks in by_size.values():
+        for lo in range(0, len(ks), MAT_BATCH):
+            part = ks[lo:lo + MAT_BATCH]
+            areas, ts = min_area_triangulations(np.stack([polys[k] for k in part]))
+            for k, a, t in zip(part, areas, ts):
+                costs[k], tris[k] = a, t
+    inward = [{} if tris[k] is None else _inward_directions(polys[k], tris[k], owners[k]) for k in range(len(cands))]
     return Candidates(cands, costs, inward, len(edges))
 
 

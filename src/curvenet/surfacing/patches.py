@@ -18,13 +18,15 @@ A minimal-area triangulation of the polygon (dynamic program of Barequet and Sha
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..errors import MethodError, require
 from .fairing import boundary_laplacian
 
-__all__ = ["min_area_triangulation", "triangulate_patch", "is_simple_polygon", "cotan_laplacian",
-           "FLAT_CURVATURE", "FLAT_HEIGHT"]
+__all__ = ["min_area_triangulation", "min_area_triangulations", "triangulate_patch", "is_simple_polygon", "cotan_laplacian",
+           "FLAT_CURVATURE", "FLAT_HEIGHT", "MAT_TABLES"]
 
 #: A patch's boundary curves count as about planar (no curvature of their own to fair by, so the
 #: slopes of the curves continuing into the patch give its curvature) when their mean normal
@@ -36,6 +38,10 @@ FLAT_CURVATURE = 0.02
 #: reconstructed sphere model: curvature x size 0.024, height span 0.002 of the size), its
 #: heights are not.
 FLAT_HEIGHT = 0.01
+
+#: Polygon sizes whose index tables the minimal-area triangulation keeps (:func:`_gap_table`;
+#: the candidate cycles are scored on coarse polygons of at most a few sizes each).
+MAT_TABLES = 128
 
 
 def _cross(u, v):
@@ -52,6 +58,26 @@ def _cross(u, v):
 
 def _tri_area(a, b, c):
     return 0.5 * np.sqrt((_cross(b - a, c - a) ** 2).sum(axis=-1))
+
+
+@lru_cache(maxsize=MAT_TABLES)
+def _gap_table(n: int):
+    """Index triples ``(i, k, j)``, ``i < k < j = i + gap``, of a polygon of ``n`` points, by gap.
+
+    Returns ``I, K, J`` (each ``(n (n - 1) (n - 2) / 6,)`` int arrays, ordered by gap, then ``i``,
+    then ``k``), the start of each gap's block (``(n + 1,)``, indexed by gap from 2 on) and, per gap, the
+    flat indices of ``W[i, k]`` and ``W[k, j]`` in an ``(n, n)`` table.
+    """
+    Is, Ks, Js, start = [], [], [], np.zeros(n + 1, dtype=np.int64)
+    for gap in range(2, n):
+        i = np.repeat(np.arange(n - gap), gap - 1)
+        k = i + np.tile(np.arange(1, gap), n - gap)
+        Is.append(i)
+        Ks.append(k)
+        Js.append(i + gap)
+        start[gap + 1] = start[gap] + len(i)
+    I, K, J = (np.concatenate(x) if x else np.zeros(0, dtype=np.int64) for x in (Is, Ks, Js))
+    return I, K, J, start, I * n + K, K * n + J
 
 
 def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
@@ -71,25 +97,59 @@ def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
 
     Notes
     -----
-    The dynamic program ``W[i, j] = min_k W[i, k] + W[k, j] + area(i, k, j)`` of Barequet and
-    Sharir (1995) / Liepa (2003), vectorised over ``(i, k)`` for each gap ``j - i``:
-    :math:`O(n^3)` time, :math:`O(n^2)` memory.
+    :func:`min_area_triangulations` on one polygon.
     """
     p = np.asarray(poly, dtype=float)
-    n = len(p)
-    if n < 3:
+    if len(p) < 3:
         return 0.0, np.zeros((0, 3), dtype=np.int64)
-    W = np.zeros((n, n))
-    arg = np.zeros((n, n), dtype=np.int64)
+    areas, tris = min_area_triangulations(p[None])
+    return float(areas[0]), tris[0]
+
+
+def min_area_triangulations(polys: np.ndarray) -> tuple[np.ndarray, list]:
+    """Minimal-area triangulations of polygons of the same size, solved together.
+
+    Parameters
+    ----------
+    polys : (B, n, 3) ndarray
+        ``B`` closed polygons of ``n >= 3`` points each, not repeating their first point.
+
+    Returns
+    -------
+    areas : (B,) ndarray
+        Total area of each triangulation.
+    triangles : list of (n - 2, 3) ndarray of int
+        Vertex indices of each, oriented like its polygon.
+
+    Notes
+    -----
+    The dynamic program ``W[i, j] = min_k W[i, k] + W[k, j] + area(i, k, j)`` of Barequet and
+    Sharir (1995) / Liepa (2003), vectorised over the polygons and ``(i, k)`` for each gap
+    ``j - i``, with the areas of all triangles computed at once beforehand (index tables cached
+    per ``n``, :func:`_gap_table`): :math:`O(B n^3)` time and memory. Each polygon's result is
+    the one it gets alone (the same floating-point operations; ties go to the smallest ``k``).
+    """
+    p = np.asarray(polys, dtype=float)
+    B, n = p.shape[:2]
+    I, K, J, start, IK, KJ = _gap_table(n)
+    area = _tri_area(p[:, I], p[:, K], p[:, J])
+    W = np.zeros((B, n * n))
+    arg = np.zeros((B, n * n), dtype=np.int64)
     for gap in range(2, n):
-        i = np.arange(n - gap)[:, None]
-        k = i + np.arange(1, gap)[None, :]
-        j = i + gap
-        vals = W[i, k] + W[k, j] + _tri_area(p[i], p[k], p[j])
-        best = np.argmin(vals, axis=1)
-        r = np.arange(n - gap)
-        W[r, r + gap] = vals[r, best]
-        arg[r, r + gap] = k[r, best]
+        m = n - gap
+        lo, hi = start[gap], start[gap] + m * (gap - 1)
+        vals = (W[:, IK[lo:hi]] + W[:, KJ[lo:hi]] + area[:, lo:hi]).reshape(B, m, gap - 1)
+        best = np.argmin(vals, axis=2)[..., None]
+        cell = np.arange(m) * (n + 1) + gap  # flat index of (i, i + gap)
+        W[:, cell] = np.take_along_axis(vals, best, axis=2)[..., 0]
+        arg[:, cell] = np.take_along_axis(K[lo:hi].reshape(1, m, gap - 1), best, axis=2)[..., 0]
+    arg = arg.reshape(B, n, n)
+    return W[:, n - 1].copy(), [_mat_triangles(a) for a in arg]
+
+
+def _mat_triangles(arg: np.ndarray) -> np.ndarray:
+    """Triangles ``(i, k, j)`` of a minimal-area triangulation from its table of best ``k``."""
+    n = len(arg)
     tris = []
     stack = [(0, n - 1)]
     while stack:
@@ -100,7 +160,7 @@ def min_area_triangulation(poly: np.ndarray) -> tuple[float, np.ndarray]:
         tris.append((i, k, j))
         stack.append((i, k))
         stack.append((k, j))
-    return float(W[0, n - 1]), np.array(tris, dtype=np.int64)
+    return np.array(tris, dtype=np.int64)
 
 
 def is_simple_polygon(q: np.ndarray) -> bool:
@@ -192,6 +252,12 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
     M : (n,) ndarray
         Vertex areas.
     """
+    Wm, M = _cotan_weights(V, T)
+    return _laplacian(Wm, clip), M
+
+
+def _cotan_weights(V: np.ndarray, T: np.ndarray):
+    """Summed cotangent edge weights ``(n, n)`` (CSR, symmetric) and the vertex areas ``(n,)``."""
     from scipy.sparse import coo_matrix
 
     if V.shape[1] == 2:
@@ -203,7 +269,7 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
         # weight of edge (b, c) from the angle at a
         u = V[T[:, b]] - V[T[:, a]]
         v = V[T[:, c]] - V[T[:, a]]
-        cr = np.linalg.norm(np.cross(u, v), axis=1)
+        cr = np.linalg.norm(_cross(u, v), axis=1)
         cot = np.einsum("ij,ij->i", u, v) / np.maximum(cr, 1e-300)
         I.append(T[:, b])
         J.append(T[:, c])
@@ -213,17 +279,22 @@ def cotan_laplacian(V: np.ndarray, T: np.ndarray, *, clip: bool = True):
     W = np.concatenate(ws)
     Wm = coo_matrix((np.concatenate([W, W]), (np.concatenate([I, J]), np.concatenate([J, I]))), shape=(n, n)).tocsr()
     Wm.sum_duplicates()
+    area = _tri_area(V[T[:, 0]], V[T[:, 1]], V[T[:, 2]])
+    # the same sums, in the same order, as np.add.at(M, T.ravel(), np.repeat(area / 3, 3))
+    M = np.bincount(T.ravel(), weights=np.repeat(area / 3.0, 3), minlength=n)
+    return Wm, M
+
+
+def _laplacian(Wm, clip: bool):
+    """``diag(row sums) - W`` of summed edge weights (negative weights set to 0 with ``clip``)."""
+    from scipy.sparse import diags
+
+    Wm = Wm.copy()
     if clip:
         Wm.data = np.maximum(Wm.data, 0.0)
     Wm.eliminate_zeros()
     d = np.asarray(Wm.sum(axis=1)).ravel()
-    from scipy.sparse import diags
-
-    L = (diags(d) - Wm).tocsr()
-    area = _tri_area(V[T[:, 0]], V[T[:, 1]], V[T[:, 2]])
-    M = np.zeros(n)
-    np.add.at(M, T.ravel(), np.repeat(area / 3.0, 3))
-    return L, M
+    return (diags(d) - Wm).tocsr()
 
 
 def _extend(L, M, xb: np.ndarray, nb: int, laplacian: float = 0.0) -> np.ndarray:
@@ -243,15 +314,17 @@ def _extend(L, M, xb: np.ndarray, nb: int, laplacian: float = 0.0) -> np.ndarray
     return np.asarray(x).reshape(-1, xb.shape[1])
 
 
-def _harmonic_field(Vd, T, values, known):
+def _harmonic_field(Vd, T, values, known, L=None):
     """Harmonic interpolation over the domain mesh of values given at some boundary points.
 
     The first ``len(values)`` vertices carry ``values`` where ``known``; every other vertex is
-    free (natural boundary condition on the free boundary points). Returns (N,) values.
+    free (natural boundary condition on the free boundary points). ``L``: the clipped cotangent
+    Laplacian of ``(Vd, T)`` if already computed. Returns (N,) values.
     """
     from scipy.sparse.linalg import spsolve
 
-    L, _ = cotan_laplacian(Vd, T)
+    if L is None:
+        L, _ = cotan_laplacian(Vd, T)
     N = len(Vd)
     fixed = np.zeros(N, dtype=bool)
     fixed[: len(values)] = known
@@ -259,30 +332,33 @@ def _harmonic_field(Vd, T, values, known):
     out[: len(values)][known] = values[known]
     free = np.flatnonzero(~fixed)
     if len(free):
-        Lff = L[free][:, free].tocsc()
-        rhs = -(L[free][:, np.flatnonzero(fixed)] @ out[fixed])
+        Lf = L[free]
+        Lff = Lf[:, free].tocsc()
+        rhs = -(Lf[:, np.flatnonzero(fixed)] @ out[fixed])
         out[free] = spsolve(Lff, rhs)
     return out
 
 
-def _coons_field(Vd, T, values, sides):
+def _coons_field(Vd, T, values, sides, L=None):
     """Transfinite (Coons) interpolation over a four-sided domain of values given on its sides.
 
     ``u`` and ``v`` are harmonic coordinates (``u`` 0 on side 0 and 1 on side 2, ``v`` 0 on side 3
     and 1 on side 1, free elsewhere); each side's values are interpolated along its coordinate and
     blended bilinearly: a value that varies along two opposite sides alone (a cylinder's arcs)
-    is carried straight across. Returns (N,) values, or ``None`` if the coordinates degenerate.
+    is carried straight across. ``L``: the clipped cotangent Laplacian of ``(Vd, T)`` if already
+    computed. Returns (N,) values, or ``None`` if the coordinates degenerate.
     """
     s0, s1, s2, s3 = sides
-    N = len(Vd)
     nb = len(values)
+    if L is None:
+        L, _ = cotan_laplacian(Vd, T)
 
     def coord(zero, one):
         vals = np.zeros(nb)
         known = np.zeros(nb, dtype=bool)
         vals[one], known[one] = 1.0, True
         vals[zero], known[zero] = 0.0, True
-        return _harmonic_field(Vd, T, vals, known)
+        return _harmonic_field(Vd, T, vals, known, L)
 
     u, v = coord(s0, s2), coord(s3, s1)
     if not (np.isfinite(u).all() and np.isfinite(v).all()):
@@ -501,7 +577,8 @@ def triangulate_patch(
         # a height field over the best-fit plane: the tangential layout is the domain mesh
         # itself (its quality is kept); only the heights are extended from the boundary
         c, vt = frame
-        L, M = cotan_laplacian(Vd, T, clip=False)
+        Wm, M = _cotan_weights(Vd, T)  # one pass for the plain and the clipped Laplacian
+        L, Lc = _laplacian(Wm, clip=False), None
         hb = (poly - c) @ vt[2]
         H = _mean_normal_curvature(poly, vt[2], corners, n0) if fair else 0.0
         size = float(np.ptp(q[:n0], axis=0).max())
@@ -515,15 +592,15 @@ def triangulate_patch(
         if bl is not None:
             values, known, sides = bl
             f = None
+            Lc = _laplacian(Wm, clip=True)
             if len(sides) == 4 and all(known[sd].all() for sd in sides):
-                f = _coons_field(Vd, T, values, sides)
+                f = _coons_field(Vd, T, values, sides, Lc)
             if f is None:
-                f = _harmonic_field(Vd, T, values, known)
+                f = _harmonic_field(Vd, T, values, known, Lc)
             lap = f[n:, None]
         hi = _extend(L, M, hb[:, None], n, lap)[:, 0]
         if not np.isfinite(hi).all():
-            L, M = cotan_laplacian(Vd, T)
-            hi = _extend(L, M, hb[:, None], n)[:, 0]
+            hi = _extend(_laplacian(Wm, clip=True) if Lc is None else Lc, M, hb[:, None], n)[:, 0]
         X = c + Vd[n:] @ vt[:2] + hi[:, None] * vt[2]
         return X, T, kind
     # circle domain: harmonic extension of the 3D boundary (clipped weights: maximum principle)
