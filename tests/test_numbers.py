@@ -103,6 +103,8 @@ def test_table_text(kind, piece, bulk, monkeypatch):
         assert table_text(a, glue, int_cols=[0]) == _table_by_hand(a, glue, [0])
         want = _table_by_hand(a, glue, [0], groups.tolist())
         assert group_texts(a, glue, int_cols=[0], groups=groups) == want
+        views = numbers.table_groups(a, glue, int_cols=[0], groups=groups, views=True)
+        assert [bytes(v).decode() for v in views] == want
         pieces, fill = table_pieces(a, glue, int_cols=[0], groups=groups)
         assert b"".join(fill(b"|".join(pieces))).decode().split("|") == want
         assert table_text(a[:, 1:], glue[1:]) == _table_by_hand(a[:, 1:], glue[1:])
@@ -157,10 +159,14 @@ def test_chunks_change_nothing(monkeypatch):
     off = np.insert(off, 5, off[5])  # an empty group
     ids = rng.integers(0, 3, x.size)
     glue = ["\n 40\n", " ", "\n 10\n"]
+    xi = x.copy()
+    xi[:, 1] = ints[:, 1]  # an integer column
 
     def run():
         return (numbers.table_bytes(x, [" ", " 1.5 ", "\n"]), numbers.table_groups(ints, [" ", " ", "\nf "], groups=off),
-                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "))
+                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "),
+                [bytes(v) for v in numbers.table_groups(xi, [" ", " 1.5 ", "\n"], groups=off, int_cols=[1], views=True)],
+                [bytes(v) for v in numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3, views=True)])
 
     whole = run()
     for chunk in (7, 100, 4096):
@@ -181,8 +187,10 @@ def test_glued_groups(glue, monkeypatch):
     for a, b in zip(off[:-1].tolist(), off[1:].tolist()):
         t = "".join(repr(v) + glue[j] for v, j in zip(x[a:b].tolist(), ids[a:b].tolist()))
         want.append(t[:len(t) - len(glue[ids[b - 1]])].encode() if b > a else b"")
-    assert numbers.glued_groups(x, ids, glue, groups=off) == want
-    monkeypatch.setattr(numbers, "_CHUNK", 50)
-    assert numbers.glued_groups(x, ids, glue, groups=off) == want
-    monkeypatch.setattr(numbers, "_orjson", lambda: None)
-    assert numbers.glued_groups(x, ids, glue, groups=off) == want
+    for chunk, orjson in ((numbers._CHUNK, True), (50, True), (50, False)):  # one chunk, several, no orjson
+        monkeypatch.setattr(numbers, "_CHUNK", chunk)
+        if not orjson:
+            monkeypatch.setattr(numbers, "_orjson", lambda: None)
+        assert numbers.glued_groups(x, ids, glue, groups=off) == want
+        views = numbers.glued_groups(x, ids, glue, groups=off, views=True)
+        assert [bytes(v) for v in views] == want  # each group's text, not the text around it

@@ -10,7 +10,7 @@ audits it and compares its entities with those ezdxf builds from the same networ
 from __future__ import annotations
 
 import io
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from ..errors import InputError, require
 from ..lengths import step_lengths
 from ..network import CurveNetwork
 from ..style import curve_colors
-from .numbers import glued_groups, table_groups, table_pieces
+from .numbers import glued_groups, table_groups
 from .splines import DEGREE, cubic_splines, open_fit_points
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
@@ -119,8 +119,9 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
 
     Returns
     -------
-    text : list of bytes
-        The entities, each starting with its ``  0`` tag, in pieces to be joined.
+    text : list of bytes or memoryview
+        The entities, each starting with its ``  0`` tag, in pieces to be joined (the numbers'
+        text as views into the texts of chunks of numbers: the join copies each byte once).
     seed : int
         A handle above every handle used.
     """
@@ -140,7 +141,7 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
     last = first + int(step.sum()) - 1
     base = 10 ** len(f"{max(last, first):X}")  # decimal-looking handles above the curves'
     keep = np.repeat(~is_spline & (sizes >= 2), sizes)  # the points of the polylines
-    vertex_text, fill = _vertex_texts(P[keep], sizes[poly], base, owner)
+    vertex_text = _vertex_texts(P[keep], sizes[poly], base, owner)
     rgb = np.array([true_color[names[i]] for i in written.tolist()], dtype=np.int64)
     out: list = [b""] * (3 * len(written))
     p_idx = np.flatnonzero(~is_spline[written])
@@ -154,7 +155,8 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
             out[3 * k:3 * k + 3] = a, b, b"\n"
     n_vert = int(keep.sum())
     seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
-    return [*fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
+    out.append(_point_text(net.nodes, base + n_vert, owner))
+    return out, seed
 
 
 def _polyline_tags(handles: np.ndarray, rgb: np.ndarray, closed: np.ndarray, owner: str) -> list[bytes]:
@@ -187,17 +189,17 @@ def _xyz_rows(points) -> np.ndarray:
     return np.column_stack([p, np.zeros((len(p), 3 - p.shape[1]))])
 
 
-def _vertex_texts(P: np.ndarray, sizes: np.ndarray, base: int, owner: str) -> tuple[list[bytes], Callable]:
+def _vertex_texts(P: np.ndarray, sizes: np.ndarray, base: int, owner: str) -> list[bytes | memoryview]:
     """The VERTEX entities at the points ``P`` (V, 3) of polylines of ``sizes`` points, each
     from the handle of its first vertex to its last vertex's z (the tags before and after are
-    the caller's), and the function that puts in their tags once the caller has joined them with
-    its text (:func:`curvenet.io.numbers.table_pieces`)."""
+    the caller's), as views into the texts of chunks of polylines
+    (:func:`curvenet.io.numbers.table_groups`)."""
     if not len(sizes):
-        return [], lambda text: [text]
+        return []
     table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
     mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n100\nAcDbVertex\n100\nAcDb3dPolylineVertex\n 10\n"
     glue = [mid, "\n 20\n", "\n 30\n", "\n 70\n32\n  0\nVERTEX\n  5\n"]
-    return table_pieces(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]))
+    return table_groups(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]), views=True)
 
 
 def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
@@ -313,9 +315,10 @@ def _gather(n_curves: int, batched: np.ndarray, F: np.ndarray, f_off: np.ndarray
 _SPLINE_GLUE = ["\n 40\n", "\n 10\n", "\n 20\n", "\n 30\n", "\n 11\n", "\n 21\n", "\n 31\n"]
 
 
-def _spline_texts(sp: _SplineTables) -> list[bytes]:
+def _spline_texts(sp: _SplineTables) -> list[bytes | memoryview]:
     """The tags of each spline from its first knot's value to its last fit point's z: knots,
-    control points, fit points, in one bulk call (:func:`curvenet.io.numbers.glued_groups`)."""
+    control points, fit points, in one bulk call (:func:`curvenet.io.numbers.glued_groups`), as
+    views into the texts of chunks of splines."""
     if not len(sp.degree):
         return []
     nk, nc, nf = np.diff(sp.knot_off), 3 * np.diff(sp.ctrl_off), 3 * np.diff(sp.fit_off)
@@ -329,7 +332,7 @@ def _spline_texts(sp: _SplineTables) -> list[bytes]:
         values[at] = part
         glue[at] = np.tile(np.array(codes, dtype=np.int8), len(part) // len(codes))
         glue[start[:-1] + first + n - 1] = last
-    return glued_groups(values, glue, _SPLINE_GLUE, groups=start)
+    return glued_groups(values, glue, _SPLINE_GLUE, groups=start, views=True)
 
 
 #: Fit points closer than this fraction of their curve's extent to the one before are dropped.
