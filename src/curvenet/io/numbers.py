@@ -98,21 +98,33 @@ def _bulk(a: np.ndarray) -> bytes:
     bad = _unlike_repr(a)
     if not bad.any():
         return _dumps(a)[1:-1]
-    pieces = _dumps(np.where(bad, np.nan, a))[1:-1].split(b"null")  # orjson writes nan as null
-    fixes = [repr(x).encode() for x in a[bad].tolist()]
-    out = [b""] * (2 * len(fixes) + 1)
-    out[0::2], out[1::2] = pieces, fixes
-    return b"".join(out)
+    return b"".join(_with_repr(a, bad, b""))
+
+
+def _with_repr(a: np.ndarray, bad: np.ndarray, last: bytes) -> list:
+    """The pieces of the text of :func:`_bulk` of float values ``a`` whose values ``bad`` (a
+    mask, a few) are unlike ``repr``'s: orjson's text of the others (the bad ones as NaN, which
+    it writes ``null``) in views between the ``repr`` of the bad ones, then ``last``; a pass of
+    ``bytes.find`` from one ``null`` to the next instead of a split of the whole text."""
+    text = _dumps(np.where(bad, np.nan, a))
+    view = memoryview(text)
+    pieces: list = []
+    at = 1  # after "["
+    for x in a[bad].tolist():
+        i = text.find(b"null", at)
+        pieces += [view[at:i], repr(x).encode()]
+        at = i + 4
+    pieces += [view[at:len(text) - 1], last]  # (without the "]")
+    return pieces
 
 
 def _comma_text(a: np.ndarray) -> bytearray:
     """:func:`_bulk` of a flat array with a comma after every value (the last too), as a
     mutable text for the marking passes: orjson's ``[...]`` copied once, its brackets turned
     into that last comma (without a copy of the text for the slice and one for the comma)."""
-    if a.dtype.kind == "f" and _unlike_repr(a).any():
-        body = bytearray(_bulk(a))
-        body.append(44)
-        return body
+    bad = _unlike_repr(a) if a.dtype.kind == "f" else None
+    if bad is not None and bad.any():
+        return bytearray().join(_with_repr(a, bad, b","))
     body = bytearray(_dumps(a))
     body[-1] = 44  # "]" -> ","
     del body[0]  # "[" (a move within the buffer)
