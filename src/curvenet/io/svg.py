@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import InputError
 from ..network import CurveNetwork
 from ..style import NODE_COLORS, curve_colors
+from .numbers import g_table_bytes
 
 __all__ = ["network_to_svg", "PROJECTIONS", "VIEWS", "project"]
 
@@ -18,6 +19,9 @@ PROJECTIONS = ("xy", "xz", "yz", "iso")
 
 #: View names of the command line (``--view``) and the projection each one is.
 VIEWS = {"top": "xy", "front": "xz", "side": "yz", "iso": "iso"}
+
+#: Significant digits of the coordinates (``%.9g``: a hundredth of a micrometre on a 10 m drawing).
+SVG_DIGITS = 9
 
 #: Unit vectors of the isometric drawing plane: u along (1, -1, 0), v along (-1, -1, 2); the
 #: view looks down the diagonal (1, 1, 1), so the three axes are drawn equally foreshortened
@@ -106,7 +110,7 @@ def network_to_svg(
     r = 0.008 * big
 
     def num(v: float) -> str:
-        return f"{v:.9g}"
+        return f"{v:.{SVG_DIGITS}g}"
 
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -143,16 +147,18 @@ def network_to_svg(
 
 def _point_lists(uv: np.ndarray, sizes: np.ndarray) -> list[str]:
     """The ``points`` attribute of each curve (``sizes`` points each, their (u, v) the rows of
-    ``uv`` curve after curve): ``u,-v`` pairs with 9 significant digits (as
-    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one call, with a
-    line end after each curve's last pair."""
+    ``uv`` curve after curve): ``u,-v`` pairs with :data:`SVG_DIGITS` significant digits (as
+    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one bulk call
+    (:func:`curvenet.io.numbers.g_table_bytes`, the text of ``%`` to the byte), with a line end
+    after each curve's last pair, which splits the text into the curves'."""
     if not len(uv):
         return ["" for _ in sizes]
-    vals = np.column_stack([uv[:, 0], 0.0 - uv[:, 1]]).ravel().tolist()
-    sizes = sizes.tolist()
-    fmt = "".join("%.9g,%.9g " * (k - 1) + "%.9g,%.9g\n" for k in sizes if k)
-    texts = iter((fmt % tuple(vals)).split("\n"))
-    return [next(texts) if k else "" for k in sizes]
+    buf = bytearray(g_table_bytes(np.column_stack([uv[:, 0], 0.0 - uv[:, 1]]), SVG_DIGITS, [",", " "]))
+    chars = np.frombuffer(buf, dtype=np.uint8)
+    spaces = np.flatnonzero(chars == ord(" "))  # one after each pair (no number's text holds one)
+    chars[spaces[np.cumsum(sizes[sizes > 0]) - 1]] = ord("\n")  # after each curve's last pair
+    texts = iter(buf.decode("ascii").split("\n"))
+    return [next(texts) if k else "" for k in sizes.tolist()]
 
 
 def _project_curves(net: CurveNetwork, projection: str) -> tuple[np.ndarray, np.ndarray]:
