@@ -194,3 +194,22 @@ def test_glued_groups(glue, monkeypatch):
         assert numbers.glued_groups(x, ids, glue, groups=off) == want
         views = numbers.glued_groups(x, ids, glue, groups=off, views=True)
         assert [bytes(v) for v in views] == want  # each group's text, not the text around it
+
+
+def test_table_chunks_join_to_the_table(monkeypatch):
+    """table_chunks: pieces that join to table_bytes' text and decode one by one (non-ASCII
+    glue, chunks and fill pieces of a few values and bytes)."""
+    pytest.importorskip("orjson")
+    rng = np.random.default_rng(14)
+    a = rng.normal(size=(700, 3)) * 10.0 ** rng.integers(-8, 8, (700, 1))
+    a[:, 0] = rng.integers(-10**6, 10**6, 700)
+    glue = [" ", " → ", "\n"]
+    want = _table_by_hand(a, glue, [0]).encode("utf-8")
+    for chunk, piece in ((numbers._CHUNK, numbers._FILL_PIECE), (30, 7), (7, 3)):
+        monkeypatch.setattr(numbers, "_CHUNK", chunk)
+        monkeypatch.setattr(numbers, "_FILL_PIECE", piece)
+        chunks = numbers.table_chunks(a, glue, int_cols=[0])
+        assert b"".join(chunks) == want == numbers.table_bytes(a, glue, int_cols=[0])
+        assert "".join(bytes(t).decode("utf-8") for t in chunks) == want.decode("utf-8")
+        assert len(chunks) > 1 or chunk == numbers._CHUNK
+    assert numbers.table_chunks(np.zeros((0, 3)), glue) == []

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
+    "table_chunks",
     "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE", "glued_groups", "g_matrix",
     "g_table_bytes",
 ]
@@ -179,19 +180,38 @@ def table_bytes(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Seque
     >>> table_bytes([[1.0, 0.5], [2.0, 1e-7]], [" ", "\\n"], int_cols=[0])
     b'1 0.5\\n2 1e-07\\n'
     """
+    return b"".join(table_chunks(rows, glue, int_cols=int_cols))
+
+
+def table_chunks(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = ()) -> list[bytes | bytearray]:
+    """:func:`table_bytes` in pieces, for a caller that joins them with text of its own or
+    decodes them one by one: no copy of the whole text (a fresh allocation of tens of MB, whose
+    pages the system zeroes on first touch, costs as much as writing it).
+
+    Parameters
+    ----------
+    rows, glue, int_cols
+        As for :func:`table_bytes`.
+
+    Returns
+    -------
+    list of bytes or bytearray
+        Pieces of whole values and glue (each valid UTF-8 when the glue is), joined in order
+        the text of :func:`table_bytes`.
+    """
     a, g, _ = _table_input(rows, glue, None)
     if not len(a):
-        return b""
+        return []
     step = max(1, _CHUNK // a.shape[1])
     if len(a) > step and _orjson() is not None:  # rows in chunks: the passes over them stay in cache
-        return b"".join(table_bytes(a[i:i + step], g, int_cols=int_cols) for i in range(0, len(a), step))
+        return [t for i in range(0, len(a), step) for t in table_chunks(a[i:i + step], g, int_cols=int_cols)]
     if a.size < _SMALL or _orjson() is None:
-        return b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))
+        return [b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))]
     cols = tuple(int_cols) if a.dtype.kind == "f" else ()
     if a.shape[1] == 1 and not cols:
-        return _bulk(a.ravel()).replace(b",", g[0]) + g[0]
+        return [_bulk(a.ravel()).replace(b",", g[0]) + g[0]]
     body, fill, _ = _marked(a, g, cols, None)
-    return b"".join(fill(body))
+    return fill(body)
 
 
 def table_groups(
@@ -461,8 +481,9 @@ def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
 
 
 def table_text(rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] = ()) -> str:
-    """:func:`table_bytes` as ``str``."""
-    return table_bytes(rows, glue, int_cols=int_cols).decode("utf-8")
+    """:func:`table_bytes` as ``str`` (its pieces decoded one by one: no copy of the whole text
+    as bytes)."""
+    return "".join([t.decode("utf-8") for t in table_chunks(rows, glue, int_cols=int_cols)])
 
 
 def group_texts(rows: ArrayLike, glue: Sequence[str], *, groups: ArrayLike, int_cols: Sequence[int] = ()) -> list[str]:
