@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..lengths import step_lengths
 from ..network import CurveNetwork
+from .gc_pause import collector_paused
 from .numbers import int_rows_text, join_columns, rows_text, shortest, table_chunks
 
 __all__ = ["network_to_swc", "SWC_UNDEFINED", "SWC_FORK", "SWC_END", "SWC_RADIUS_FRACTION"]
@@ -81,7 +82,8 @@ def network_to_swc(
         step = _median_step(stack[:first[-1]], sizes)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type)).tolist()
-    runs, cut = _walk(net, val, sizes.tolist(), first.tolist(), node_type, sample_type)
+    with collector_paused():  # (a tuple per run of samples: see curvenet.io.gc_pause)
+        runs, cut = _walk(net, val, sizes.tolist(), first.tolist(), node_type, sample_type)
     count = int(runs[:, 1].sum()) if len(runs) else 0
     out = [
         f"# curvenet network: {n} nodes, {net.n_curves} curves; {count} samples",
