@@ -131,9 +131,13 @@ def curve_order(curves: Sequence[Curve]) -> list[int]:
     pts = [c.points for c in curves]
     sizes = np.fromiter(map(len, pts), dtype=np.int64, count=n)
     full = [p for p in pts if len(p)]
-    if not full or len({p.shape[1:] for p in full}) != 1 or full[0].ndim != 2:
+    try:  # (raises on points of different shapes: no check of each curve's shape)
+        P = np.concatenate(full) if full else None
+    except ValueError:
+        P = None
+    if P is None or P.ndim != 2:
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
-    P = _rounded(np.concatenate(full).astype(float, copy=False)) + 0.0
+    P = _rounded(P.astype(float, copy=False)) + 0.0
     if not np.isfinite(P).all():  # (tuples holding nan compare as Python does, not as numpy)
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
     has = sizes > 0
