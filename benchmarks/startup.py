@@ -8,8 +8,12 @@ k=16 ``cKDTree`` query on the same points, as every speed figure of the project)
     about a million points, and the surface mesh OBJ writer on a torus of as many vertices
     (:func:`torus_mesh`), best of ``--repeat`` calls, wall-clock and processor time, against
     the target of 1 s. The network
-    is reconstructed once from the synthetic cloud of ``benchmarks/perf.py`` and cached in
-    ``--cache`` (``/tmp`` by default) as ``.npz``.
+    is reconstructed once from the synthetic (noisy) cloud of ``benchmarks/perf.py`` and cached
+    in ``--cache`` (``/tmp`` by default) as ``.npz``; its curves are fitted, so its ``.dxf``
+    holds splines. The writers of :data:`UNFITTED_FORMATS` (``.dxf``: polylines) are timed on
+    the unfitted network of the same cloud too (``fit=False``, cached beside it). With
+    ``--hashes``, the SHA-256 of every file (a DXF's times and GUIDs masked), to show that two
+    versions of the writers write the same bytes.
 ``cli``
     A fresh ``curvenet reconstruct f.xyz -o o.json`` process on a 34k-point file, best and
     median of ``--repeat`` runs (our own loop, as hyperfine would), against the target of
@@ -25,6 +29,7 @@ Usage::
 
     python benchmarks/startup.py                    # all parts, full sizes
     python benchmarks/startup.py --part writers --n 1e6
+    python benchmarks/startup.py --part writers --hashes --repeat 1   # the digests of the files
     python benchmarks/startup.py --quick            # tiny sizes, for CI (cannot rot)
 
 Runs above 1e6 points take the shared lock of the machine (``flock /work/notes/bigrun.lock``)
@@ -34,8 +39,10 @@ when run by hand.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
+import re
 import resource
 import statistics
 import subprocess
@@ -122,15 +129,19 @@ def load_network(path: Path):
     return CurveNetwork(z["nodes"], curves, meta["parameters"], meta["stats"])
 
 
-def network(n: int, cache: Path):
-    """The network of the ``n``-point cloud and the cloud, reconstructed once and cached."""
+def network(n: int, cache: Path, fit: bool | None = None):
+    """The network of the ``n``-point cloud and the cloud, reconstructed once and cached.
+
+    ``fit`` is the default method's keyword: None (its default: the noisy cloud's curves are
+    fitted, ``parameters["fit"]`` True) or False (the curves through the input points)."""
     P = cloud(n)
-    path = cache / f"curvenet_startup_net_{n}.npz"
+    tag = "" if fit is None else f"_fit{int(fit)}"
+    path = cache / f"curvenet_startup_net_{n}{tag}.npz"
     if path.exists():
         return load_network(path), P
     import curvenet
 
-    net = curvenet.reconstruct(P)
+    net = curvenet.reconstruct(P) if fit is None else curvenet.reconstruct(P, fit=fit)
     save_network(net, path)
     return net, P
 
@@ -160,20 +171,46 @@ def torus_mesh(n: int):
     return SurfaceMesh(V, T, patch, cycles, [[] for _ in cycles])
 
 
-def writers(n: int, repeat: int, cache: Path, out: Path, exts=()) -> list[tuple]:
-    """Best time of every writer (the pure function and :func:`write_network`'s file)."""
+#: The writers timed on the unfitted network too (the default one is fitted: its ``.dxf`` holds
+#: splines, the unfitted one's polylines; the others write other numbers).
+UNFITTED_FORMATS = (".dxf", ".swc", ".svg")
+
+#: Lines of ezdxf's header that change from one call to the next (creation and update times,
+#: GUIDs), and the stamp of its objects: masked before a DXF is hashed (``--hashes``).
+_DXF_VARYING = re.compile(rb"(\$(?:TDCREATE|TDUPDATE|FINGERPRINTGUID|VERSIONGUID)\n *\d+\n)[^\n]*\n|"
+                          rb"\n  1\n\d+\.\d+\.\d+ @ [^\n]*\n")
+
+
+#: The CLASSES section of a DXF, whose entries ezdxf writes in the order of a set of strings
+#: (Python's string hashing: another order in each process).
+_DXF_CLASSES = re.compile(rb"(  2\nCLASSES\n)(.*?)(  0\nENDSEC\n)", re.S)
+
+
+def output_digest(path: Path) -> str:
+    """SHA-256 of a written file; in a DXF the varying header values masked
+    (:data:`_DXF_VARYING`) and the classes sorted (:data:`_DXF_CLASSES`)."""
+    data = path.read_bytes()
+    if path.suffix == ".dxf":
+        data = _DXF_VARYING.sub(lambda m: (m.group(1) or b"\n  1\n") + b"*\n", data)
+        data = _DXF_CLASSES.sub(lambda m: m.group(1) + b"".join(sorted(m.group(2).split(b"  0\nCLASS\n"))) + m.group(3),
+                                data, count=1)
+    return hashlib.sha256(data).hexdigest()
+
+
+def writers(n: int, repeat: int, cache: Path, out: Path, exts=(), hashes: bool = False) -> list[tuple]:
+    """Best time of every writer (the pure function and :func:`write_network`'s file), on the
+    default (fitted) network, then of :data:`UNFITTED_FORMATS` on the unfitted network."""
     from curvenet.io import WRITERS, atomic_write, write_network
     from curvenet.io.labels import labels_to_csv, point_labels
 
     net, P = network(n, cache)
     n_pts = sum(len(c.points) for c in net.curves)
     print(f"network: {len(P):,} input points, {net.n_nodes:,} nodes, {net.n_curves:,} curves, "
-          f"{n_pts:,} curve points")
+          f"{n_pts:,} curve points, fitted: {bool(net.parameters.get('fit'))}")
     floor = min(knn_floor(P) for _ in range(2))
     print(f"reference: k=16 cKDTree query on the {len(P):,} points {floor:.3f} s; the writers' times are"
           " wall-clock (cpu: this process's processor time, which the other processes of the machine"
           " do not inflate)")
-    rows = []
     only = [e for e in (exts or WRITERS) if e in WRITERS]
     jobs = [(ext, lambda p, e=ext: write_network(net, p)) for ext in only]
     lab = point_labels(net, P)
@@ -186,30 +223,53 @@ def writers(n: int, repeat: int, cache: Path, out: Path, exts=()) -> list[tuple]
         print(f"surface mesh: {len(mesh.vertices):,} vertices, {len(mesh.triangles):,} triangles, "
               f"{mesh.n_patches:,} patches")
         jobs.append((".obj (surface mesh)", lambda p: atomic_write(p, mesh_to_obj(mesh))))
+    rows = _time_jobs(jobs, repeat, out, floor, hashes)
+    unfitted = [e for e in only if e in UNFITTED_FORMATS]
+    if unfitted:
+        net_u, _ = network(n, cache, fit=False)
+        print(f"unfitted network (fit=False): {net_u.n_nodes:,} nodes, {net_u.n_curves:,} curves, "
+              f"{sum(len(c.points) for c in net_u.curves):,} curve points")
+        jobs = [(f"{ext} (unfitted)", lambda p, e=ext: write_network(net_u, p)) for ext in unfitted]
+        rows += _time_jobs(jobs, repeat, out, floor, hashes, json_best=next((r[1] for r in rows if r[0] == ".json"), None))
+    return rows
+
+
+def _time_jobs(jobs: list, repeat: int, out: Path, floor: float, hashes: bool, json_best: float | None = None) -> list[tuple]:
+    """Best wall-clock and processor time of each ``(label, job)`` (``job(path)`` writes the file),
+    printed against the query ``floor`` and the target; with ``hashes`` the file's digest too.
+
+    Each call writes a new file: the previous call's is removed before the clock starts.
+    Replacing an existing file makes the rename free the old one's pages and blocks, which cost
+    this machine's disk (ext4, online discard) 0.3-0.5 s of system time for the 150 MB of a
+    million-point DXF: the file system's time, not the writer's, and the same for any writer
+    of as many bytes."""
+    rows = []
     for ext, job in jobs:
-        if ext == ".dxf":
+        if ext.startswith(".dxf"):
             try:
                 import ezdxf  # noqa: F401
             except ImportError:
-                print("  .dxf: skipped (ezdxf missing)")
+                print(f"  {ext}: skipped (ezdxf missing)")
                 continue
         best = cpu = None
         path = out / ("net" + ext.split()[0])
         for _ in range(repeat):
+            path.unlink(missing_ok=True)  # a new file each time (see _time_jobs)
             t, c = time.perf_counter(), time.process_time()
             job(path)
             s, c = time.perf_counter() - t, time.process_time() - c
             best = s if best is None else min(best, s)
             cpu = c if cpu is None else min(cpu, c)
         size = path.stat().st_size / 1e6
+        digest = f"  sha256 {output_digest(path)}" if hashes else ""
         path.unlink()
         flag = "ok" if best <= WRITE_TARGET_S else "OVER"
         cpu_flag = "ok" if cpu <= WRITE_TARGET_S else "OVER"
         rows.append((ext, best, best / floor, size, flag))
-        json_best = next((r[1] for r in rows if r[0] == ".json"), None)
+        json_best = json_best or next((r[1] for r in rows if r[0] == ".json"), None)
         vs_json = f"  {best / json_best:5.2f} x json" if json_best else ""
         print(f"  {ext:20s} {best:7.3f} s (cpu {cpu:6.3f} s)  {best / floor:6.2f} x query{vs_json}  {size:8.1f} MB  "
-              f"load {os.getloadavg()[0]:4.1f}  target {WRITE_TARGET_S} s: {flag} (cpu: {cpu_flag})", flush=True)
+              f"load {os.getloadavg()[0]:4.1f}  target {WRITE_TARGET_S} s: {flag} (cpu: {cpu_flag}){digest}", flush=True)
     return rows
 
 
@@ -407,6 +467,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--formats", default="",
                     help="writers to time, e.g. .obj,.vtu,mesh.obj (the surface mesh's OBJ; default: all)")
+    ap.add_argument("--hashes", action="store_true",
+                    help="print the SHA-256 of each writer's file (a DXF's times and GUIDs masked): same bytes?")
     ap.add_argument("--cache", type=Path, default=Path(tempfile.gettempdir()))
     ap.add_argument("--quick", action="store_true", help="tiny sizes (CI)")
     ap.add_argument("--skip-plain", action="store_true",
@@ -419,7 +481,8 @@ def main(argv=None) -> int:
         tmp = Path(d)
         if args.part in ("writers", "all"):
             print(f"\n== writers: every output format, best of {args.repeat} ==")
-            writers(int(args.n), args.repeat, args.cache, tmp, [e for e in args.formats.split(",") if e])
+            writers(int(args.n), args.repeat, args.cache, tmp, [e for e in args.formats.split(",") if e],
+                    hashes=args.hashes)
         if args.part in ("cli", "all"):
             print(f"\n== a fresh curvenet reconstruct process, best and median of {args.repeat} ==")
             fresh_cli(int(args.cli_n), args.repeat, tmp, plain=not args.skip_plain)

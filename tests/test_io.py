@@ -208,3 +208,22 @@ def test_json_fast_and_plain_writers_agree(monkeypatch, net):
     odd.curves[0].points[1, 1] = np.nan
     with pytest.raises(ValueError):
         network_to_json(odd)
+
+
+def test_atomic_write_encodes_text_in_pieces(tmp_path, monkeypatch):
+    """A ``str`` is written (and hashed, inside all_or_nothing) encoded a few characters at a
+    time: the file holds its UTF-8 bytes, multi-byte characters across piece boundaries too."""
+    from curvenet.io import atomic
+    from curvenet.io.atomic import all_or_nothing
+
+    text = "n T x y z\n" + "é✓ 1.5 𝜋\n" * 50
+    for piece in (1, 3, 7, 1 << 20):
+        monkeypatch.setattr(atomic, "ENCODE_PIECE", piece)
+        atomic_write(tmp_path / "a.txt", text)
+        assert (tmp_path / "a.txt").read_bytes() == text.encode("utf-8")
+        with all_or_nothing():
+            atomic_write(tmp_path / "b.txt", text)
+            atomic_write(tmp_path / "b.txt", text.encode("utf-8"))  # the same bytes: allowed
+            with pytest.raises(OutputError):
+                atomic_write(tmp_path / "b.txt", text + "!")
+        assert (tmp_path / "b.txt").read_bytes() == text.encode("utf-8")

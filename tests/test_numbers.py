@@ -103,6 +103,8 @@ def test_table_text(kind, piece, bulk, monkeypatch):
         assert table_text(a, glue, int_cols=[0]) == _table_by_hand(a, glue, [0])
         want = _table_by_hand(a, glue, [0], groups.tolist())
         assert group_texts(a, glue, int_cols=[0], groups=groups) == want
+        views = numbers.table_groups(a, glue, int_cols=[0], groups=groups, views=True)
+        assert [bytes(v).decode() for v in views] == want
         pieces, fill = table_pieces(a, glue, int_cols=[0], groups=groups)
         assert b"".join(fill(b"|".join(pieces))).decode().split("|") == want
         assert table_text(a[:, 1:], glue[1:]) == _table_by_hand(a[:, 1:], glue[1:])
@@ -157,10 +159,14 @@ def test_chunks_change_nothing(monkeypatch):
     off = np.insert(off, 5, off[5])  # an empty group
     ids = rng.integers(0, 3, x.size)
     glue = ["\n 40\n", " ", "\n 10\n"]
+    xi = x.copy()
+    xi[:, 1] = ints[:, 1]  # an integer column
 
     def run():
         return (numbers.table_bytes(x, [" ", " 1.5 ", "\n"]), numbers.table_groups(ints, [" ", " ", "\nf "], groups=off),
-                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "))
+                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "),
+                [bytes(v) for v in numbers.table_groups(xi, [" ", " 1.5 ", "\n"], groups=off, int_cols=[1], views=True)],
+                [bytes(v) for v in numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3, views=True)])
 
     whole = run()
     for chunk in (7, 100, 4096):
@@ -181,8 +187,29 @@ def test_glued_groups(glue, monkeypatch):
     for a, b in zip(off[:-1].tolist(), off[1:].tolist()):
         t = "".join(repr(v) + glue[j] for v, j in zip(x[a:b].tolist(), ids[a:b].tolist()))
         want.append(t[:len(t) - len(glue[ids[b - 1]])].encode() if b > a else b"")
-    assert numbers.glued_groups(x, ids, glue, groups=off) == want
-    monkeypatch.setattr(numbers, "_CHUNK", 50)
-    assert numbers.glued_groups(x, ids, glue, groups=off) == want
-    monkeypatch.setattr(numbers, "_orjson", lambda: None)
-    assert numbers.glued_groups(x, ids, glue, groups=off) == want
+    for chunk, orjson in ((numbers._CHUNK, True), (50, True), (50, False)):  # one chunk, several, no orjson
+        monkeypatch.setattr(numbers, "_CHUNK", chunk)
+        if not orjson:
+            monkeypatch.setattr(numbers, "_orjson", lambda: None)
+        assert numbers.glued_groups(x, ids, glue, groups=off) == want
+        views = numbers.glued_groups(x, ids, glue, groups=off, views=True)
+        assert [bytes(v) for v in views] == want  # each group's text, not the text around it
+
+
+def test_table_chunks_join_to_the_table(monkeypatch):
+    """table_chunks: pieces that join to table_bytes' text and decode one by one (non-ASCII
+    glue, chunks and fill pieces of a few values and bytes)."""
+    pytest.importorskip("orjson")
+    rng = np.random.default_rng(14)
+    a = rng.normal(size=(700, 3)) * 10.0 ** rng.integers(-8, 8, (700, 1))
+    a[:, 0] = rng.integers(-10**6, 10**6, 700)
+    glue = [" ", " → ", "\n"]
+    want = _table_by_hand(a, glue, [0]).encode("utf-8")
+    for chunk, piece in ((numbers._CHUNK, numbers._FILL_PIECE), (30, 7), (7, 3)):
+        monkeypatch.setattr(numbers, "_CHUNK", chunk)
+        monkeypatch.setattr(numbers, "_FILL_PIECE", piece)
+        chunks = numbers.table_chunks(a, glue, int_cols=[0])
+        assert b"".join(chunks) == want == numbers.table_bytes(a, glue, int_cols=[0])
+        assert "".join(bytes(t).decode("utf-8") for t in chunks) == want.decode("utf-8")
+        assert len(chunks) > 1 or chunk == numbers._CHUNK
+    assert numbers.table_chunks(np.zeros((0, 3)), glue) == []

@@ -36,8 +36,13 @@ def _bits(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64).view(np.int64)
 
 
-def test_cubic_splines_equal_scipy_s_bit_for_bit():
+@pytest.mark.parametrize("shuffled", [False, True], ids=["by-size", "shuffled"])
+def test_cubic_splines_equal_scipy_s_bit_for_bit(shuffled):
+    """Each curve's control points and knots are SciPy's, whatever the order of the curves'
+    sizes (the joint system groups the blocks by size)."""
     curves = _curves()
+    if shuffled:
+        curves = [curves[i] for i in np.random.default_rng(4).permutation(len(curves))]
     off = np.concatenate([[0], np.cumsum([len(c) for c in curves])])
     control, knots = cubic_splines(np.concatenate(curves), off)
     for j, c in enumerate(curves):

@@ -73,26 +73,42 @@ def curve_colors(net: CurveNetwork, *, palette: Sequence[str] = PALETTE) -> list
     """
     k = len(palette)
     starts = [-1 if c.start is None else int(c.start) for c in net.curves]
-    ends = [-1 if c.end is None else int(c.end) for c in net.curves]
-    at_node: list[list[int]] = [[] for _ in range(max(starts + ends + [-1]) + 1)]  # colours at each node
+    ends = [s if c.end is None else int(c.end) for c, s in zip(net.curves, starts)]
+    taken_at = [0] * (max(starts + ends + [-1]) + 1)  # bit j set: a curve of colour j ends at the node
     counts = [0] * k
     out = [0] * net.n_curves
-    every = range(k)
+    least = _LeastUsed(k, counts)
     for i in curve_order(net.curves):
-        s, e = starts[i], (ends[i] if ends[i] >= 0 else starts[i])
-        taken = set(at_node[s] + at_node[e]) if s >= 0 else ()
-        if taken:
-            free = [j for j in every if j not in taken] or every
-            j = min(free, key=counts.__getitem__)  # the least used, the first in the palette on a tie
-        else:
-            j = counts.index(min(counts))
+        s, e = starts[i], ends[i]
+        taken = taken_at[s] | taken_at[e] if s >= 0 else 0
+        j = least(taken) if taken else counts.index(min(counts))
         out[i] = j
         counts[j] += 1
         if s >= 0:
-            at_node[s].append(j)
-            if e != s:
-                at_node[e].append(j)
+            taken_at[s] |= 1 << j
+            taken_at[e] |= 1 << j
     return [palette[j] for j in out]
+
+
+class _LeastUsed:
+    """The colour :func:`curve_colors` gives a curve whose end nodes hold the colours of a bit
+    mask: the least used (``counts``, shared with the caller) of the colours not in the mask, the
+    first in the palette on a tie; of all colours when the mask holds every one.
+
+    The colours left free by each mask are found once (a network's nodes hold few masks).
+    """
+
+    def __init__(self, k: int, counts: list[int]):
+        self._every = tuple(range(k))
+        self._free: dict[int, tuple[int, ...]] = {}
+        self._count = counts.__getitem__
+
+    def __call__(self, taken: int) -> int:
+        free = self._free.get(taken)
+        if free is None:
+            free = tuple(j for j in self._every if not taken >> j & 1) or self._every
+            self._free[taken] = free
+        return min(free, key=self._count)
 
 
 def curve_order(curves: Sequence[Curve]) -> list[int]:
@@ -115,9 +131,13 @@ def curve_order(curves: Sequence[Curve]) -> list[int]:
     pts = [c.points for c in curves]
     sizes = np.fromiter(map(len, pts), dtype=np.int64, count=n)
     full = [p for p in pts if len(p)]
-    if not full or len({np.shape(p)[1:] for p in full}) != 1 or np.ndim(full[0]) != 2:
+    try:  # (raises on points of different shapes: no check of each curve's shape)
+        P = np.concatenate(full) if full else None
+    except ValueError:
+        P = None
+    if P is None or P.ndim != 2:
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
-    P = _rounded(np.concatenate(full).astype(float, copy=False)) + 0.0
+    P = _rounded(P.astype(float, copy=False)) + 0.0
     if not np.isfinite(P).all():  # (tuples holding nan compare as Python does, not as numpy)
         return sorted(range(n), key=lambda i: curve_sort_key(curves[i]))
     has = sizes > 0

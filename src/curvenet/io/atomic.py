@@ -13,6 +13,7 @@ import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 from .._sigint import checkpoint, finishing
 from ..errors import OutputError
@@ -162,15 +163,32 @@ def _unlink(tmp) -> None:
         pass
 
 
-def _write_temp(p: Path, data: bytes) -> str:
-    """Write ``data`` to a new temporary file beside ``p`` (synced, with ``p``'s permissions or
-    the default ones); returns its name. Removed again on any error."""
+#: A ``str`` is written encoded this many characters at a time: each piece's bytes stay in the
+#: processor's cache and reuse the same memory, where encoding a text of tens of MB at once
+#: takes a fresh allocation whose pages the system zeroes first (0.05 s for the 80 MB of a
+#: million-point SWC file).
+ENCODE_PIECE = 1 << 20
+
+
+def _encoded(data: bytes | str) -> Iterator[bytes]:
+    """The bytes of ``data`` (UTF-8 for ``str``) in pieces of :data:`ENCODE_PIECE` characters."""
+    if isinstance(data, str):
+        for i in range(0, len(data), ENCODE_PIECE):
+            yield data[i:i + ENCODE_PIECE].encode("utf-8")
+    else:
+        yield data
+
+
+def _write_temp(p: Path, data: bytes | str) -> str:
+    """Write ``data`` (``str`` as UTF-8) to a new temporary file beside ``p`` (synced, with
+    ``p``'s permissions or the default ones); returns its name. Removed again on any error."""
     parent = _folder(p)
     tmp = None
     try:
         fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=TEMP_SUFFIX, dir=parent)
         with os.fdopen(fd, "wb") as f:
-            f.write(data)
+            for piece in _encoded(data):
+                f.write(piece)
             f.flush()
             os.fsync(f.fileno())
         if p.exists():
@@ -221,8 +239,6 @@ def atomic_write(path, data, *, inputs=()) -> Path:
         was written before with other bytes.
     """
     p = check_output_path(path, inputs=inputs)
-    if isinstance(data, str):
-        data = data.encode("utf-8")
     batch = _BATCH.get()
     if batch is None:
         tmp = _write_temp(p, data)
@@ -235,7 +251,10 @@ def atomic_write(path, data, *, inputs=()) -> Path:
             raise
         return p
     key = p.resolve()
-    digest = hashlib.sha256(data).digest()
+    sha = hashlib.sha256()
+    for piece in _encoded(data):
+        sha.update(piece)
+    digest = sha.digest()
     if key in batch.staged:
         if batch.staged[key][1] != digest:
             raise OutputError(f"{p}: written twice in one run with different contents")

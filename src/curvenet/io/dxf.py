@@ -10,7 +10,8 @@ audits it and compares its entities with those ezdxf builds from the same networ
 from __future__ import annotations
 
 import io
-from typing import Callable, NamedTuple
+from itertools import chain
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,7 +19,8 @@ from ..errors import InputError, require
 from ..lengths import step_lengths
 from ..network import CurveNetwork
 from ..style import curve_colors
-from .numbers import glued_groups, table_groups, table_pieces
+from .gc_pause import collector_paused
+from .numbers import table_groups
 from .splines import DEGREE, cubic_splines, open_fit_points
 
 __all__ = ["network_to_dxf", "CURVE_LAYER", "NODE_LAYER", "DXF_UNITS"]
@@ -77,7 +79,8 @@ def network_to_dxf(net: CurveNetwork, *, splines: bool | None = None, units: str
     doc.layers.add(CURVE_LAYER, color=5)
     doc.layers.add(NODE_LAYER, color=1)
     owner = doc.modelspace().block_record_handle
-    entities, seed = _entities(net, bool(splines), owner, int(str(doc.entitydb.handles), 16))
+    with collector_paused():  # (100k pieces of text: see curvenet.io.gc_pause)
+        entities, seed = _entities(net, bool(splines), owner, int(str(doc.entitydb.handles), 16))
     doc.entitydb.handles.reset(f"{seed:X}")  # ezdxf writes it as $HANDSEED, the next free handle
     buf = io.StringIO()
     doc.write(buf)
@@ -119,8 +122,9 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
 
     Returns
     -------
-    text : list of bytes
-        The entities, each starting with its ``  0`` tag, in pieces to be joined.
+    text : list of bytes or memoryview
+        The entities, each starting with its ``  0`` tag, in pieces to be joined (the numbers'
+        text as views into the texts of chunks of numbers: the join copies each byte once).
     seed : int
         A handle above every handle used.
     """
@@ -140,21 +144,23 @@ def _entities(net: CurveNetwork, splines: bool, owner: str, first: int) -> tuple
     last = first + int(step.sum()) - 1
     base = 10 ** len(f"{max(last, first):X}")  # decimal-looking handles above the curves'
     keep = np.repeat(~is_spline & (sizes >= 2), sizes)  # the points of the polylines
-    vertex_text, fill = _vertex_texts(P[keep], sizes[poly], base, owner)
+    vertex_text = _vertex_texts(P[keep], sizes[poly], base, owner)
     rgb = np.array([true_color[names[i]] for i in written.tolist()], dtype=np.int64)
-    out: list = [b""] * (3 * len(written))
+    pieces: list[tuple] = [()] * len(written)  # the pieces of each written curve's entity
     p_idx = np.flatnonzero(~is_spline[written])
     tags = _polyline_tags(handles[p_idx], rgb[p_idx], closed[poly], owner)
     for k, (a, b) in enumerate(zip(p_idx.tolist(), vertex_text)):
-        out[3 * a:3 * a + 3] = tags[2 * k], b, tags[2 * k + 1]
+        pieces[a] = (tags[2 * k], b, tags[2 * k + 1])
     if sp is not None:
         s_idx = np.flatnonzero(is_spline[written])
         heads = _spline_heads(handles[s_idx], rgb[s_idx], closed[written[s_idx]], sp, owner)
         for k, a, b in zip(s_idx.tolist(), heads, _spline_texts(sp)):
-            out[3 * k:3 * k + 3] = a, b, b"\n"
+            pieces[k] = (a, *b)
     n_vert = int(keep.sum())
     seed = int(str(base + n_vert + len(net.nodes)), 16)  # above the last decimal-looking handle
-    return [*fill(b"".join(out)), _point_text(net.nodes, base + n_vert, owner)], seed
+    out = list(chain.from_iterable(pieces))
+    out.append(_point_text(net.nodes, base + n_vert, owner))
+    return out, seed
 
 
 def _polyline_tags(handles: np.ndarray, rgb: np.ndarray, closed: np.ndarray, owner: str) -> list[bytes]:
@@ -187,17 +193,17 @@ def _xyz_rows(points) -> np.ndarray:
     return np.column_stack([p, np.zeros((len(p), 3 - p.shape[1]))])
 
 
-def _vertex_texts(P: np.ndarray, sizes: np.ndarray, base: int, owner: str) -> tuple[list[bytes], Callable]:
+def _vertex_texts(P: np.ndarray, sizes: np.ndarray, base: int, owner: str) -> list[bytes | memoryview]:
     """The VERTEX entities at the points ``P`` (V, 3) of polylines of ``sizes`` points, each
     from the handle of its first vertex to its last vertex's z (the tags before and after are
-    the caller's), and the function that puts in their tags once the caller has joined them with
-    its text (:func:`curvenet.io.numbers.table_pieces`)."""
+    the caller's), as views into the texts of chunks of polylines
+    (:func:`curvenet.io.numbers.table_groups`)."""
     if not len(sizes):
-        return [], lambda text: [text]
+        return []
     table = np.column_stack([base + np.arange(len(P)), P]).astype(np.float64)
     mid = f"\n330\n{owner}\n100\nAcDbEntity\n  8\n{CURVE_LAYER}\n100\nAcDbVertex\n100\nAcDb3dPolylineVertex\n 10\n"
     glue = [mid, "\n 20\n", "\n 30\n", "\n 70\n32\n  0\nVERTEX\n  5\n"]
-    return table_pieces(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]))
+    return table_groups(table, glue, int_cols=(0,), groups=np.concatenate([[0], np.cumsum(sizes)]), views=True)
 
 
 def _point_text(nodes: np.ndarray, base: int, owner: str) -> bytes:
@@ -309,27 +315,27 @@ def _gather(n_curves: int, batched: np.ndarray, F: np.ndarray, f_off: np.ndarray
     return _SplineTables(is_spline, degree, fit_all, fit_off, ctrl_all, ctrl_off, knot_all, knot_off)
 
 
-#: The glue after the numbers of a spline (:func:`_spline_texts`), by index.
-_SPLINE_GLUE = ["\n 40\n", "\n 10\n", "\n 20\n", "\n 30\n", "\n 11\n", "\n 21\n", "\n 31\n"]
+#: The tags between a spline's numbers (:func:`_spline_texts`): after each knot, within and
+#: between the rows of its control points and of its fit points.
+_KNOT_GLUE = ["\n 40\n"]
+_CONTROL_GLUE = ["\n 20\n", "\n 30\n", "\n 10\n"]
+_FIT_GLUE = ["\n 21\n", "\n 31\n", "\n 11\n"]
+
+#: The tags after a spline's last knot, after its last control point and after its last fit point.
+_AFTER_KNOTS, _AFTER_CONTROL, _AFTER_FIT = b"\n 10\n", b"\n 11\n", b"\n"
 
 
-def _spline_texts(sp: _SplineTables) -> list[bytes]:
-    """The tags of each spline from its first knot's value to its last fit point's z: knots,
-    control points, fit points, in one bulk call (:func:`curvenet.io.numbers.glued_groups`)."""
+def _spline_texts(sp: _SplineTables) -> list[tuple]:
+    """The tags of each spline from its first knot's value to the line end after its last fit
+    point's z: knots, control points, fit points, each table in one bulk call
+    (:func:`curvenet.io.numbers.table_groups`, views into the texts of chunks of splines) and
+    the tags between them, in pieces to be joined."""
     if not len(sp.degree):
         return []
-    nk, nc, nf = np.diff(sp.knot_off), 3 * np.diff(sp.ctrl_off), 3 * np.diff(sp.fit_off)
-    size = nk + nc + nf
-    start = np.concatenate([[0], np.cumsum(size)])
-    values = np.empty(start[-1])
-    glue = np.empty(start[-1], dtype=np.int8)
-    for part, n, first, codes, last in ((sp.knots, nk, 0, [0], 1), (sp.control.ravel(), nc, nk, [2, 3, 1], 4),
-                                        (sp.fit.ravel(), nf, nk + nc, [5, 6, 4], 4)):
-        at = np.arange(len(part)) + np.repeat(start[:-1] + first - np.concatenate([[0], np.cumsum(n)])[:-1], n)
-        values[at] = part
-        glue[at] = np.tile(np.array(codes, dtype=np.int8), len(part) // len(codes))
-        glue[start[:-1] + first + n - 1] = last
-    return glued_groups(values, glue, _SPLINE_GLUE, groups=start)
+    knots = table_groups(sp.knots.reshape(-1, 1), _KNOT_GLUE, groups=sp.knot_off, views=True)
+    control = table_groups(sp.control, _CONTROL_GLUE, groups=sp.ctrl_off, views=True)
+    fit = table_groups(sp.fit, _FIT_GLUE, groups=sp.fit_off, views=True)
+    return [(k, _AFTER_KNOTS, c, _AFTER_CONTROL, f, _AFTER_FIT) for k, c, f in zip(knots, control, fit)]
 
 
 #: Fit points closer than this fraction of their curve's extent to the one before are dropped.

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
+    "table_chunks",
     "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE", "glued_groups", "g_matrix",
     "g_table_bytes",
 ]
@@ -98,11 +99,38 @@ def _bulk(a: np.ndarray) -> bytes:
     bad = _unlike_repr(a)
     if not bad.any():
         return _dumps(a)[1:-1]
-    pieces = _dumps(np.where(bad, np.nan, a))[1:-1].split(b"null")  # orjson writes nan as null
-    fixes = [repr(x).encode() for x in a[bad].tolist()]
-    out = [b""] * (2 * len(fixes) + 1)
-    out[0::2], out[1::2] = pieces, fixes
-    return b"".join(out)
+    return b"".join(_with_repr(a, bad, b""))
+
+
+def _with_repr(a: np.ndarray, bad: np.ndarray, last: bytes) -> list:
+    """The pieces of the text of :func:`_bulk` of float values ``a`` whose values ``bad`` (a
+    mask, a few) are unlike ``repr``'s: orjson's text of the others (the bad ones as NaN, which
+    it writes ``null``) in views between the ``repr`` of the bad ones, then ``last``; a pass of
+    ``bytes.find`` from one ``null`` to the next (of its ``n``, a byte no number's text holds: a
+    search by ``memchr``) instead of a split of the whole text."""
+    text = _dumps(np.where(bad, np.nan, a))
+    view = memoryview(text)
+    pieces: list = []
+    at = 1  # after "["
+    for x in a[bad].tolist():
+        i = text.find(b"n", at)
+        pieces += [view[at:i], repr(x).encode()]
+        at = i + 4
+    pieces += [view[at:len(text) - 1], last]  # (without the "]")
+    return pieces
+
+
+def _comma_text(a: np.ndarray) -> bytearray:
+    """:func:`_bulk` of a flat array with a comma after every value (the last too), as a
+    mutable text for the marking passes: orjson's ``[...]`` copied once, its brackets turned
+    into that last comma (without a copy of the text for the slice and one for the comma)."""
+    bad = _unlike_repr(a) if a.dtype.kind == "f" else None
+    if bad is not None and bad.any():
+        return bytearray().join(_with_repr(a, bad, b","))
+    body = bytearray(_dumps(a))
+    body[-1] = 44  # "]" -> ","
+    del body[0]  # "[" (a move within the buffer)
+    return body
 
 
 def _value_texts(a: np.ndarray, int_cols: Sequence[int]) -> list[list[str]]:
@@ -153,24 +181,44 @@ def table_bytes(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Seque
     >>> table_bytes([[1.0, 0.5], [2.0, 1e-7]], [" ", "\\n"], int_cols=[0])
     b'1 0.5\\n2 1e-07\\n'
     """
+    return b"".join(table_chunks(rows, glue, int_cols=int_cols))
+
+
+def table_chunks(rows: ArrayLike, glue: Sequence[str | bytes], *, int_cols: Sequence[int] = ()) -> list[bytes | bytearray]:
+    """:func:`table_bytes` in pieces, for a caller that joins them with text of its own or
+    decodes them one by one: no copy of the whole text (a fresh allocation of tens of MB, whose
+    pages the system zeroes on first touch, costs as much as writing it).
+
+    Parameters
+    ----------
+    rows, glue, int_cols
+        As for :func:`table_bytes`.
+
+    Returns
+    -------
+    list of bytes or bytearray
+        Pieces of whole values and glue (each valid UTF-8 when the glue is), joined in order
+        the text of :func:`table_bytes`.
+    """
     a, g, _ = _table_input(rows, glue, None)
     if not len(a):
-        return b""
+        return []
     step = max(1, _CHUNK // a.shape[1])
     if len(a) > step and _orjson() is not None:  # rows in chunks: the passes over them stay in cache
-        return b"".join(table_bytes(a[i:i + step], g, int_cols=int_cols) for i in range(0, len(a), step))
+        return [t for i in range(0, len(a), step) for t in table_chunks(a[i:i + step], g, int_cols=int_cols)]
     if a.size < _SMALL or _orjson() is None:
-        return b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))
+        return [b"".join(t.encode() + x for r in _value_texts(a, int_cols) for t, x in zip(r, g))]
     cols = tuple(int_cols) if a.dtype.kind == "f" else ()
     if a.shape[1] == 1 and not cols:
-        return _bulk(a.ravel()).replace(b",", g[0]) + g[0]
+        return [_bulk(a.ravel()).replace(b",", g[0]) + g[0]]
     body, fill, _ = _marked(a, g, cols, None)
-    return b"".join(fill(body))
+    return fill(body)
 
 
 def table_groups(
-    rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = ()
-) -> list[bytes]:
+    rows: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike, int_cols: Sequence[int] = (),
+    views: bool = False,
+) -> list[bytes] | list[bytes | memoryview]:
     """:func:`table_bytes` of each group of rows, each without the glue after its last value.
 
     Parameters
@@ -179,10 +227,14 @@ def table_groups(
         As for :func:`table_bytes`.
     groups : (g + 1,) array_like of int
         Row offsets: group ``k`` is rows ``groups[k]:groups[k + 1]``.
+    views : bool
+        Return each group's text as a ``memoryview`` into the text of a chunk of groups
+        instead of as ``bytes`` of its own: for a caller that joins the groups (with text
+        between them) into one text, which then copies each byte once.
 
     Returns
     -------
-    list of g bytes
+    list of g bytes (or memoryview, with ``views``)
 
     Examples
     --------
@@ -194,20 +246,25 @@ def table_groups(
     cuts = _chunk_groups(off, a.shape[1])
     if len(cuts) > 2 and _orjson() is not None:  # whole groups in chunks of about _CHUNK values
         return [t for ga, gb in zip(cuts[:-1], cuts[1:]) for t in
-                table_groups(a[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga], int_cols=int_cols)]
+                table_groups(a[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga], int_cols=int_cols, views=views)]
     if not len(a) or a.size < _SMALL or _orjson() is None:
         return table_pieces(a, g, groups=off, int_cols=int_cols)[0]  # (the glue in already)
     body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
-    return _grouped(b"".join(fill(body)).split(group_mark), off)
+    text = b"".join(fill(body))
+    if views:
+        return _views(text, group_mark[0], off)
+    return _grouped(text.split(group_mark), off)
 
 
 def _equal_glue(body: bytearray, commas: np.ndarray, ids: np.ndarray, glue: list[bytes], ends: np.ndarray,
-                group_mark: int) -> bytes:
+                group_mark: int) -> tuple[bytearray, np.ndarray]:
     """The numbers ``body`` (each followed by a comma, at ``commas``) with the comma after value
     ``k`` replaced by ``glue[ids[k]]``, all glue of one length ``L``, but at the values ``ends``
     (by ``group_mark``): one ``replace`` pass widens every comma to the first glue, then the
     bytes where the glue differ are scattered in place (for a DXF's ``"\\n 40\\n"``,
-    ``"\\n 10\\n"``...: two numpy assignments instead of a pass per glue)."""
+    ``"\\n 10\\n"``...: two numpy assignments instead of a pass per glue).
+
+    Returns the text and the positions of its group marks (one per value of ``ends``)."""
     L = len(glue[0])
     buf = np.frombuffer(body, dtype=np.uint8)
     buf[commas[ends]] = group_mark
@@ -220,7 +277,7 @@ def _equal_glue(body: bytearray, commas: np.ndarray, ids: np.ndarray, glue: list
     which = ids[regular]
     for q in np.flatnonzero((table != table[0]).any(axis=0)).tolist():
         out[pos + q] = table[which, q]
-    return bytes(text)
+    return text, commas[ends] + (L - 1) * (ends - np.arange(len(ends)))  # (widened commas before each)
 
 
 def _chunk_groups(off: np.ndarray, m: int) -> list[int]:
@@ -241,6 +298,27 @@ def _grouped(pieces: list, off: np.ndarray) -> list[bytes]:
     return out
 
 
+def _views(text: bytes | bytearray, group_mark: int, off: np.ndarray,
+           ends: np.ndarray | None = None) -> list[bytes | memoryview]:
+    """The text of each group as a view into ``text``, whose nonempty groups each end with the
+    byte ``group_mark`` (at ``ends`` when known, else found by ``bytes.find``: ``memchr``, where
+    a numpy comparison of every byte costs ten times more); empty groups get ``b""``."""
+    view = memoryview(text)
+    out: list[bytes | memoryview] = [b""] * (len(off) - 1)
+    full = np.flatnonzero(np.diff(off) > 0).tolist()
+    if ends is not None:
+        starts = np.concatenate([[0], ends[:-1] + 1])
+        for k, a, b in zip(full, starts.tolist(), ends.tolist()):
+            out[k] = view[a:b]
+        return out
+    mark, at = bytes([group_mark]), 0
+    for k in full:
+        b = text.find(mark, at)
+        out[k] = view[at:b]
+        at = b + 1
+    return out
+
+
 def _marked(
     a: np.ndarray, glue: list[bytes], int_cols: tuple, off: np.ndarray | None
 ) -> tuple[bytearray, Callable[[bytes | bytearray], list[bytes | bytearray]], bytes]:
@@ -254,8 +332,7 @@ def _marked(
     call per match).
     """
     n, m = a.shape
-    body = bytearray(_bulk(a.ravel()))
-    body.append(44)  # every value followed by a comma
+    body = _comma_text(a.ravel())  # every value followed by a comma
     buf = np.frombuffer(body, dtype=np.uint8)
     commas = np.flatnonzero(buf == 44)
     free = [c for c in _MARKS if c not in set(b"".join(glue))]
@@ -332,7 +409,8 @@ def table_pieces(
     return _grouped(body.split(group_mark), off), fill
 
 
-def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike) -> list[bytes]:
+def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike,
+                 views: bool = False) -> list[bytes] | list[bytes | memoryview]:
     """The text of each group of values, each value followed by a glue of its own choosing.
 
     :func:`table_groups` with the glue chosen value by value instead of by column: one bulk
@@ -349,10 +427,13 @@ def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | byt
         Texts free of control characters other than tab and line ends.
     groups : (g + 1,) array_like of int
         Value offsets: group ``k`` is values ``groups[k]:groups[k + 1]``.
+    views : bool
+        Each group's text as a ``memoryview`` into the text of a chunk of groups (see
+        :func:`table_groups`).
 
     Returns
     -------
-    list of g bytes
+    list of g bytes (or memoryview, with ``views``)
         Each group's values and the glue between them (none after the last).
 
     Examples
@@ -369,13 +450,13 @@ def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | byt
     cuts = _chunk_groups(off, 1)
     if len(cuts) > 2 and _orjson() is not None:  # whole groups in chunks of about _CHUNK values
         return [t for ga, gb in zip(cuts[:-1], cuts[1:]) for t in
-                glued_groups(x[off[ga]:off[gb]], ids[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga])]
+                glued_groups(x[off[ga]:off[gb]], ids[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga],
+                             views=views)]
     if not len(x) or len(x) < _SMALL or _orjson() is None:
         texts = [repr(v).encode() + g[j] for v, j in zip(x.tolist(), ids.tolist())]
         return [b"".join(texts[a:b])[: -len(g[ids[b - 1]]) or None] if b > a else b""
                 for a, b in zip(off[:-1].tolist(), off[1:].tolist())]
-    body = bytearray(_bulk(x))
-    body.append(44)  # every value followed by a comma
+    body = _comma_text(x)  # every value followed by a comma
     buf = np.frombuffer(body, dtype=np.uint8)
     commas = np.flatnonzero(buf == 44)
     free = [c for c in _MARKS if c not in set(b"".join(g))]
@@ -383,7 +464,9 @@ def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | byt
     group_mark = free.pop()
     ends = (off[1:] - 1)[np.diff(off) > 0]
     if len({len(t) for t in g}) == 1 and len(g[0]) > 1:  # glue of one length: scattered in place
-        text = _equal_glue(body, commas, ids, g, ends, group_mark)
+        text, at = _equal_glue(body, commas, ids, g, ends, group_mark)
+        if views:
+            return _views(text, group_mark, off, at)
         return _grouped(text.split(bytes([group_mark])), off)
     marks = code[ids]
     marks[ends] = group_mark
@@ -395,6 +478,8 @@ def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | byt
         for mark, t in todo:
             piece = piece.replace(mark, t)
         pieces.append(piece)
+    if views:
+        return _views(b"".join(pieces), group_mark, off)
     return _grouped(b"".join(pieces).split(bytes([group_mark])), off)
 
 
@@ -404,8 +489,9 @@ def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
 
 
 def table_text(rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] = ()) -> str:
-    """:func:`table_bytes` as ``str``."""
-    return table_bytes(rows, glue, int_cols=int_cols).decode("utf-8")
+    """:func:`table_bytes` as ``str`` (its pieces decoded one by one: no copy of the whole text
+    as bytes)."""
+    return "".join([t.decode("utf-8") for t in table_chunks(rows, glue, int_cols=int_cols)])
 
 
 def group_texts(rows: ArrayLike, glue: Sequence[str], *, groups: ArrayLike, int_cols: Sequence[int] = ()) -> list[str]:

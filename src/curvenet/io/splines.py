@@ -10,8 +10,10 @@ SciPy calls for each curve:
 
 * the collocation matrix of each curve is SciPy's (``_coloc``): the same de Boor recursion
   (:func:`_de_boor`), operation for operation, at the same knots (``_not_a_knot``);
-* the matrices are placed one after the other on the diagonal of one banded matrix, each
-  followed by :data:`_PAD` rows and columns of the identity (right-hand side zero). LU with
+* the matrices are placed one after the other on the diagonal of one banded matrix (the
+  curves grouped by their number of points, so that each group's blocks are one slab of the
+  band storage, written by a few slices), each followed by :data:`_PAD` rows and columns of
+  the identity (right-hand side zero). LU with
   partial pivoting of a block-diagonal banded matrix works on each block alone: the entries
   between blocks are zeros, never chosen as pivots, and the padding keeps every product of a
   zero entry with a value of another block (which could turn a ``-0.0`` into ``0.0``) out of
@@ -177,28 +179,34 @@ def cubic_splines(F: np.ndarray, off: np.ndarray) -> tuple[np.ndarray, np.ndarra
         return np.zeros((0,) + F.shape[1:]), np.zeros(0)
     if not np.isfinite(F).all():
         return None
-    base = off[:-1] + _PAD * np.arange(C)  # each block's first unknown in the joint system
-    total = int(off[-1]) + _PAD * C
-    ab = np.zeros((3 * DEGREE + 1, total), order="F")
-    rhs = np.zeros((total, F.shape[1]))
+    d = F.shape[1]
+    order = np.argsort(sizes, kind="stable")  # the blocks of curves of one size side by side
+    width = sizes[order] + _PAD  # a block's unknowns, then its padding
+    first = np.concatenate([[0], np.cumsum(width)])  # each block's first unknown, in that order
+    ab = np.zeros((3 * DEGREE + 1, int(first[-1])), order="F")
+    rhs = np.zeros((int(first[-1]), d))
+    control = np.empty_like(F, dtype=np.float64)
     knots = np.empty(int(off[-1]) + (DEGREE + 1) * C)
     k_off = off[:-1] + (DEGREE + 1) * np.arange(C)
-    pad = np.ones(total, dtype=bool)
-    for n in np.unique(sizes).tolist():
-        idx = np.flatnonzero(sizes == n)
+    runs = np.flatnonzero(np.diff(sizes[order])) + 1
+    spans = list(zip(np.r_[0, runs].tolist(), np.r_[runs, C].tolist()))
+    for a, b in spans:  # the curves order[a:b], of n points each
+        idx, n = order[a:b], int(sizes[order[a]])
         G = F[off[idx][:, None] + np.arange(n)]  # (m, n, d)
         u = chord_parameters(G)
         if not (np.diff(u, axis=1) > 0).all():
             return None
         t = _not_a_knot(u)
         h, row, col = _collocation(u, t)
-        ab[row, base[idx][:, None, None] + col] = h
-        at = base[idx][:, None] + np.arange(n)
-        rhs[at] = G
-        pad[at] = False
+        band = ab.T[first[a]:first[b]].reshape(b - a, n + _PAD, 3 * DEGREE + 1)  # (views of the
+        band[:, col, row] = h  # group's columns of ab and rows of rhs, block by block)
+        band[:, n:, 2 * DEGREE] = 1.0  # the padding: identity
+        rhs[first[a]:first[b]].reshape(b - a, n + _PAD, d)[:, :n] = G
         knots[k_off[idx][:, None] + np.arange(n + DEGREE + 1)] = t
-    ab[2 * DEGREE, pad] = 1.0
     _, _, x, info = lapack.dgbsv(DEGREE, DEGREE, ab, rhs, overwrite_ab=1, overwrite_b=1)
     if info != 0:
         return None
-    return x[~pad], knots
+    for a, b in spans:
+        idx, n = order[a:b], int(sizes[order[a]])
+        control[off[idx][:, None] + np.arange(n)] = x[first[a]:first[b]].reshape(b - a, n + _PAD, d)[:, :n]
+    return control, knots

@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import InputError
 from ..network import CurveNetwork
 from ..style import NODE_COLORS, curve_colors
+from .numbers import g_table_bytes
 
 __all__ = ["network_to_svg", "PROJECTIONS", "VIEWS", "project"]
 
@@ -18,6 +19,9 @@ PROJECTIONS = ("xy", "xz", "yz", "iso")
 
 #: View names of the command line (``--view``) and the projection each one is.
 VIEWS = {"top": "xy", "front": "xz", "side": "yz", "iso": "iso"}
+
+#: Significant digits of the coordinates (``%.9g``: a hundredth of a micrometre on a 10 m drawing).
+SVG_DIGITS = 9
 
 #: Unit vectors of the isometric drawing plane: u along (1, -1, 0), v along (-1, -1, 2); the
 #: view looks down the diagonal (1, 1, 1), so the three axes are drawn equally foreshortened
@@ -106,7 +110,7 @@ def network_to_svg(
     r = 0.008 * big
 
     def num(v: float) -> str:
-        return f"{v:.9g}"
+        return f"{v:.{SVG_DIGITS}g}"
 
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -115,44 +119,72 @@ def network_to_svg(
         f"<title>curvenet network: {net.n_nodes} nodes, {net.n_curves} curves</title>",
         f'<g id="curves" fill="none" stroke-width="{num(sw)}" stroke-linecap="round" stroke-linejoin="round">',
     ]
-    colors = curve_colors(net)
-    for i, (c, points) in enumerate(zip(net.curves, _point_lists(curves_uv, sizes))):
-        tag = "polygon" if c.closed else "polyline"
-        ends = "free loop" if c.start is None else f"nodes {c.start}-{c.end}"
-        data = "" if c.start is None else f' data-start="{int(c.start)}" data-end="{int(c.end)}"'
-        out.append(  # (the title holds no character to escape: digits and fixed words)
-            f'<{tag} id="curve-{i}" class="curve" stroke="{colors[i]}"{data} points="{points}">'
-            f"<title>curve {i}: {ends}</title></{tag}>"
-        )
+    if net.n_curves:
+        out.append(_curve_elements(net, curve_colors(net), _point_lists(curves_uv, sizes)))
     out.append("</g>")
     if nodes and len(nodes_uv):
-        kinds = net.node_kinds
-        val = net.valence.tolist()
-        attr = {k: quoteattr(k) for k in set(kinds)}
         out.append(f'<g id="nodes" stroke="black" stroke-width="{num(sw / 2)}">')
-        rad = num(r)
-        for j, (u, v) in enumerate(nodes_uv.tolist()):
-            out.append(
-                f'<circle id="node-{j}" class={attr[kinds[j]]} cx="{u:.9g}" cy="{0.0 - v:.9g}" r="{rad}" '
-                f'fill="{NODE_COLORS[kinds[j]]}"><title>node {j}, valence {int(val[j])}</title></circle>'
-            )
+        out.append(_node_elements(net, nodes_uv, num(r)))
         out.append("</g>")
     out.append("</svg>")
     return "\n".join(out) + "\n"
 
 
+#: The element of a curve between nodes and of a free loop (``%`` formats: tag, id, colour,
+#: [start, end,] points, id, [start, end,] tag). The titles hold no character to escape
+#: (digits and fixed words).
+_CURVE = ('<%s id="curve-%d" class="curve" stroke="%s" data-start="%d" data-end="%d" points="%s">'
+          "<title>curve %d: nodes %s-%s</title></%s>")
+_FREE_CURVE = '<%s id="curve-%d" class="curve" stroke="%s" points="%s"><title>curve %d: free loop</title></%s>'
+
+#: The element of a node (``%`` format: id, class, cx, cy, radius, fill, id, valence).
+_NODE = ('<circle id="node-%d" class=%s cx="%s" cy="%s" r="%s" fill="%s"><title>node %d, valence %d</title>'
+         "</circle>")
+
+
+def _curve_elements(net: CurveNetwork, colors: list[str], points: list[str]) -> str:
+    """The elements of all curves, one a line (:data:`_CURVE`, :data:`_FREE_CURVE`), written by
+    one ``%`` (the text made once, without a string per curve joined after)."""
+    fmts, args = [], []
+    for i, (c, color, pts) in enumerate(zip(net.curves, colors, points)):
+        tag = "polygon" if c.closed else "polyline"
+        if c.start is None:
+            fmts.append(_FREE_CURVE)
+            args += (tag, i, color, pts, i, tag)
+        else:
+            fmts.append(_CURVE)
+            args += (tag, i, color, int(c.start), int(c.end), pts, i, c.start, c.end, tag)
+    return "\n".join(fmts) % tuple(args)
+
+
+def _node_elements(net: CurveNetwork, nodes_uv: np.ndarray, radius: str) -> str:
+    """The elements of all nodes at drawing coordinates ``nodes_uv`` (n, 2), one a line
+    (:data:`_NODE`), their coordinates as ``%.9g`` in bulk (:func:`g_table_bytes`)."""
+    kinds = net.node_kinds.tolist()
+    val = net.valence.tolist()
+    attr = {k: quoteattr(k) for k in set(kinds)}
+    uv = g_table_bytes(np.column_stack([nodes_uv[:, 0], 0.0 - nodes_uv[:, 1]]), SVG_DIGITS, [" ", " "])
+    coords = uv.decode("ascii").split(" ")  # u, v of each node (no number's text holds a space)
+    args: list = []
+    for j, k in enumerate(kinds):
+        args += (j, attr[k], coords[2 * j], coords[2 * j + 1], radius, NODE_COLORS[k], j, val[j])
+    return "\n".join([_NODE] * len(kinds)) % tuple(args)
+
+
 def _point_lists(uv: np.ndarray, sizes: np.ndarray) -> list[str]:
     """The ``points`` attribute of each curve (``sizes`` points each, their (u, v) the rows of
-    ``uv`` curve after curve): ``u,-v`` pairs with 9 significant digits (as
-    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one call, with a
-    line end after each curve's last pair."""
+    ``uv`` curve after curve): ``u,-v`` pairs with :data:`SVG_DIGITS` significant digits (as
+    ``f"{u:.9g},{0.0 - v:.9g}"``), joined by spaces; all pairs formatted in one bulk call
+    (:func:`curvenet.io.numbers.g_table_bytes`, the text of ``%`` to the byte), with a line end
+    after each curve's last pair, which splits the text into the curves'."""
     if not len(uv):
         return ["" for _ in sizes]
-    vals = np.column_stack([uv[:, 0], 0.0 - uv[:, 1]]).ravel().tolist()
-    sizes = sizes.tolist()
-    fmt = "".join("%.9g,%.9g " * (k - 1) + "%.9g,%.9g\n" for k in sizes if k)
-    texts = iter((fmt % tuple(vals)).split("\n"))
-    return [next(texts) if k else "" for k in sizes]
+    buf = bytearray(g_table_bytes(np.column_stack([uv[:, 0], 0.0 - uv[:, 1]]), SVG_DIGITS, [",", " "]))
+    chars = np.frombuffer(buf, dtype=np.uint8)
+    spaces = np.flatnonzero(chars == ord(" "))  # one after each pair (no number's text holds one)
+    chars[spaces[np.cumsum(sizes[sizes > 0]) - 1]] = ord("\n")  # after each curve's last pair
+    texts = iter(buf.decode("ascii").split("\n"))
+    return [next(texts) if k else "" for k in sizes.tolist()]
 
 
 def _project_curves(net: CurveNetwork, projection: str) -> tuple[np.ndarray, np.ndarray]:

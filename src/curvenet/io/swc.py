@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import InputError
 from ..lengths import step_lengths
 from ..network import CurveNetwork
-from .numbers import int_rows_text, join_columns, rows_text, shortest, table_text
+from .gc_pause import collector_paused
+from .numbers import int_rows_text, join_columns, rows_text, shortest, table_chunks
 
 __all__ = ["network_to_swc", "SWC_UNDEFINED", "SWC_FORK", "SWC_END", "SWC_RADIUS_FRACTION"]
 
@@ -75,12 +76,14 @@ def network_to_swc(
     n = net.n_nodes
     sizes = np.fromiter((len(c.points) for c in net.curves), dtype=np.int64, count=net.n_curves)
     first = np.concatenate([[0], np.cumsum(sizes)])  # each curve's first row in the stack below
-    stack = np.concatenate([np.reshape(c.points, (-1, d)) for c in net.curves] + [np.reshape(net.nodes, (-1, d))])
+    stack = np.concatenate([c.points if c.points.ndim == 2 else c.points.reshape(-1, d) for c in net.curves]
+                           + [np.reshape(net.nodes, (-1, d))])
     if radius is None:
         step = _median_step(stack[:first[-1]], sizes)
         radius = SWC_RADIUS_FRACTION * step if step > 0 else SWC_FALLBACK_RADIUS
     node_type = np.where(val >= 3, fork_type, np.where(val == 1, end_type, sample_type)).tolist()
-    runs, cut = _walk(net, sizes.tolist(), first.tolist(), node_type, sample_type)
+    with collector_paused():  # (a tuple per run of samples: see curvenet.io.gc_pause)
+        runs, cut = _walk(net, val, sizes.tolist(), first.tolist(), node_type, sample_type)
     count = int(runs[:, 1].sum()) if len(runs) else 0
     out = [
         f"# curvenet network: {n} nodes, {net.n_curves} curves; {count} samples",
@@ -88,15 +91,19 @@ def network_to_swc(
         f"# cycles cut: {cut} (links to an already written sample left out)",
         "# n T x y z R P",
     ]
-    return "\n".join(out) + "\n" + _sample_lines(stack, runs, d, shortest([radius]))
+    lines = _sample_lines(stack, runs, d, shortest([radius]))
+    return "".join(["\n".join(out) + "\n"] + [t.decode("utf-8") for t in lines])
 
 
-def _walk(net: CurveNetwork, sizes: list, first: list, node_type: list, sample_type: int) -> tuple[np.ndarray, int]:
+def _walk(net: CurveNetwork, val: np.ndarray, sizes: list, first: list, node_type: list,
+          sample_type: int) -> tuple[np.ndarray, int]:
     """The runs of samples of :func:`network_to_swc`'s breadth-first walk, in writing order.
 
     Parameters
     ----------
     net : CurveNetwork
+    val : (n,) int ndarray
+        Valence of each node.
     sizes, first : list of int
         Points of each curve and its first row in the stack of all curves' points then the nodes.
     node_type : list of int
@@ -126,7 +133,6 @@ def _walk(net: CurveNetwork, sizes: list, first: list, node_type: list, sample_t
     sample_of_node = [0] * n  # 0: not written yet
     used = [False] * len(sizes)
     cut = 0
-    val = net.valence
     for root in sorted(range(n), key=(val != 1).tolist().__getitem__):  # free ends first (stable)
         if sample_of_node[root]:
             continue
@@ -162,11 +168,11 @@ def _walk(net: CurveNetwork, sizes: list, first: list, node_type: list, sample_t
     return np.array(runs, dtype=np.int64).reshape(-1, 5), cut
 
 
-def _sample_lines(stack: np.ndarray, runs: np.ndarray, d: int, radius: str) -> str:
+def _sample_lines(stack: np.ndarray, runs: np.ndarray, d: int, radius: str) -> list[bytes | bytearray]:
     """The sample lines ``n T x y z R P`` of the runs of samples (see :func:`_walk`), whose
-    positions are rows of ``stack`` (m, d)."""
+    positions are rows of ``stack`` (m, d), in pieces to be joined."""
     if not len(runs):
-        return ""
+        return []
     row, size, back, kind, parent0 = runs.T
     count = int(size.sum())
     run_start = np.concatenate([[0], np.cumsum(size)[:-1]])
@@ -180,14 +186,14 @@ def _sample_lines(stack: np.ndarray, runs: np.ndarray, d: int, radius: str) -> s
         table = np.zeros((count, 6))
         table[:, 0], table[:, 1], table[:, 5] = ids, types, parents
         table[:, 2:2 + d] = stack[rows]
-        return table_text(table, [" ", " ", " ", " ", f" {radius} ", "\n"], int_cols=(0, 1, 5))
+        return table_chunks(table, [" ", " ", " ", " ", f" {radius} ", "\n"], int_cols=(0, 1, 5))
     xyz = np.zeros((count, 3))
     xyz[:, :d] = stack[rows]
-    return join_columns([
+    return [join_columns([
         int_rows_text(np.column_stack([ids, types])),
         rows_text(xyz, "", " ", f" {radius}\n"),
         int_rows_text(parents.reshape(-1, 1)),
-    ])
+    ]).encode()]
 
 
 #: Integers below this are exact as float64 (a sample type above it is written apart).
