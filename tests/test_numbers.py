@@ -157,43 +157,18 @@ def test_chunks_change_nothing(monkeypatch):
     ints = rng.integers(-10**6, 10**6, (3000, 3))
     off = np.unique(np.r_[0, rng.integers(0, 3000, 200), 3000])
     off = np.insert(off, 5, off[5])  # an empty group
-    ids = rng.integers(0, 3, x.size)
-    glue = ["\n 40\n", " ", "\n 10\n"]
     xi = x.copy()
     xi[:, 1] = ints[:, 1]  # an integer column
 
     def run():
         return (numbers.table_bytes(x, [" ", " 1.5 ", "\n"]), numbers.table_groups(ints, [" ", " ", "\nf "], groups=off),
-                numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3), numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "),
-                [bytes(v) for v in numbers.table_groups(xi, [" ", " 1.5 ", "\n"], groups=off, int_cols=[1], views=True)],
-                [bytes(v) for v in numbers.glued_groups(x.ravel(), ids, glue, groups=off * 3, views=True)])
+                numbers.g_table_bytes(x, 9, [" ", " ", "\n"], "v "),
+                [bytes(v) for v in numbers.table_groups(xi, [" ", " 1.5 ", "\n"], groups=off, int_cols=[1], views=True)])
 
     whole = run()
     for chunk in (7, 100, 4096):
         monkeypatch.setattr(numbers, "_CHUNK", chunk)
         assert run() == whole
-
-
-@pytest.mark.parametrize("glue", [["\n 40\n", "\n 10\n", "\n 21\n"], [" ", ";", "\n"], ["ab", "ab"], [" x ", "\n", ""]])
-def test_glued_groups(glue, monkeypatch):
-    """Glue of one length (scattered in place), of one byte and of mixed lengths; with orjson
-    and without, in one chunk and in several."""
-    rng = np.random.default_rng(13)
-    x = rng.normal(size=5000) * 10.0 ** rng.integers(-8, 8, 5000)
-    ids = rng.integers(0, len(glue), 5000)
-    off = np.unique(np.r_[0, rng.integers(0, 5000, 300), 5000])
-    off = np.insert(off, 3, off[3])  # an empty group
-    want = []
-    for a, b in zip(off[:-1].tolist(), off[1:].tolist()):
-        t = "".join(repr(v) + glue[j] for v, j in zip(x[a:b].tolist(), ids[a:b].tolist()))
-        want.append(t[:len(t) - len(glue[ids[b - 1]])].encode() if b > a else b"")
-    for chunk, orjson in ((numbers._CHUNK, True), (50, True), (50, False)):  # one chunk, several, no orjson
-        monkeypatch.setattr(numbers, "_CHUNK", chunk)
-        if not orjson:
-            monkeypatch.setattr(numbers, "_orjson", lambda: None)
-        assert numbers.glued_groups(x, ids, glue, groups=off) == want
-        views = numbers.glued_groups(x, ids, glue, groups=off, views=True)
-        assert [bytes(v) for v in views] == want  # each group's text, not the text around it
 
 
 def test_table_chunks_join_to_the_table(monkeypatch):

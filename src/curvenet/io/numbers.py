@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 __all__ = [
     "shortest", "shortest_rows", "rows_text", "ints_text", "int_lists", "int_rows_text", "join_columns", "table_bytes",
     "table_chunks",
-    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE", "glued_groups", "g_matrix",
+    "table_groups", "table_pieces", "table_text", "group_texts", "REPR_RANGE", "g_matrix",
     "g_table_bytes",
 ]
 
@@ -256,30 +256,6 @@ def table_groups(
     return _grouped(text.split(group_mark), off)
 
 
-def _equal_glue(body: bytearray, commas: np.ndarray, ids: np.ndarray, glue: list[bytes], ends: np.ndarray,
-                group_mark: int) -> tuple[bytearray, np.ndarray]:
-    """The numbers ``body`` (each followed by a comma, at ``commas``) with the comma after value
-    ``k`` replaced by ``glue[ids[k]]``, all glue of one length ``L``, but at the values ``ends``
-    (by ``group_mark``): one ``replace`` pass widens every comma to the first glue, then the
-    bytes where the glue differ are scattered in place (for a DXF's ``"\\n 40\\n"``,
-    ``"\\n 10\\n"``...: two numpy assignments instead of a pass per glue).
-
-    Returns the text and the positions of its group marks (one per value of ``ends``)."""
-    L = len(glue[0])
-    buf = np.frombuffer(body, dtype=np.uint8)
-    buf[commas[ends]] = group_mark
-    regular = np.ones(len(commas), dtype=bool)
-    regular[ends] = False
-    table = np.frombuffer(b"".join(glue), dtype=np.uint8).reshape(len(glue), L)
-    text = body.replace(b",", table[0].tobytes())  # the bytes all glue shares are in place then
-    out = np.frombuffer(text, dtype=np.uint8)
-    pos = commas[regular] + (L - 1) * np.arange(int(regular.sum()))
-    which = ids[regular]
-    for q in np.flatnonzero((table != table[0]).any(axis=0)).tolist():
-        out[pos + q] = table[which, q]
-    return text, commas[ends] + (L - 1) * (ends - np.arange(len(ends)))  # (widened commas before each)
-
-
 def _chunk_groups(off: np.ndarray, m: int) -> list[int]:
     """Group indices that cut groups of rows (offsets ``off``, ``m`` values a row) into chunks
     of about :data:`_CHUNK` values (a group larger than that is a chunk of its own): the first
@@ -407,80 +383,6 @@ def table_pieces(
         return out, _as_is
     body, fill, group_mark = _marked(a, g, tuple(int_cols) if a.dtype.kind == "f" else (), off)
     return _grouped(body.split(group_mark), off), fill
-
-
-def glued_groups(values: ArrayLike, glue_of: ArrayLike, glue: Sequence[str | bytes], *, groups: ArrayLike,
-                 views: bool = False) -> list[bytes] | list[bytes | memoryview]:
-    """The text of each group of values, each value followed by a glue of its own choosing.
-
-    :func:`table_groups` with the glue chosen value by value instead of by column: one bulk
-    call writes the numbers of tables of different widths (a DXF spline's knots, control points
-    and fit points) in the order of a file.
-
-    Parameters
-    ----------
-    values : (n,) array_like of float
-        Written as ``repr`` writes them.
-    glue_of : (n,) array_like of int
-        Index into ``glue`` of the text after each value (ignored for the last of a group).
-    glue : sequence of str or bytes
-        Texts free of control characters other than tab and line ends.
-    groups : (g + 1,) array_like of int
-        Value offsets: group ``k`` is values ``groups[k]:groups[k + 1]``.
-    views : bool
-        Each group's text as a ``memoryview`` into the text of a chunk of groups (see
-        :func:`table_groups`).
-
-    Returns
-    -------
-    list of g bytes (or memoryview, with ``views``)
-        Each group's values and the glue between them (none after the last).
-
-    Examples
-    --------
-    >>> glued_groups([1.0, 2.0, 3.0, 4.0], [0, 1, 0, 0], [" ", ";"], groups=[0, 3, 4])
-    [b'1.0 2.0;3.0', b'4.0']
-    """
-    x = np.ascontiguousarray(values, dtype=np.float64).ravel()
-    ids = np.asarray(glue_of, dtype=np.intp).ravel()
-    off = np.asarray(groups, dtype=np.int64)
-    g = [t.encode() if isinstance(t, str) else bytes(t) for t in glue]
-    if len(ids) != len(x):
-        raise ValueError(f"glue_of must have one entry per value: {len(ids)} for {len(x)}")
-    cuts = _chunk_groups(off, 1)
-    if len(cuts) > 2 and _orjson() is not None:  # whole groups in chunks of about _CHUNK values
-        return [t for ga, gb in zip(cuts[:-1], cuts[1:]) for t in
-                glued_groups(x[off[ga]:off[gb]], ids[off[ga]:off[gb]], g, groups=off[ga:gb + 1] - off[ga],
-                             views=views)]
-    if not len(x) or len(x) < _SMALL or _orjson() is None:
-        texts = [repr(v).encode() + g[j] for v, j in zip(x.tolist(), ids.tolist())]
-        return [b"".join(texts[a:b])[: -len(g[ids[b - 1]]) or None] if b > a else b""
-                for a, b in zip(off[:-1].tolist(), off[1:].tolist())]
-    body = _comma_text(x)  # every value followed by a comma
-    buf = np.frombuffer(body, dtype=np.uint8)
-    commas = np.flatnonzero(buf == 44)
-    free = [c for c in _MARKS if c not in set(b"".join(g))]
-    code = np.array([t[0] if len(t) == 1 else free.pop() for t in g], dtype=np.uint8)
-    group_mark = free.pop()
-    ends = (off[1:] - 1)[np.diff(off) > 0]
-    if len({len(t) for t in g}) == 1 and len(g[0]) > 1:  # glue of one length: scattered in place
-        text, at = _equal_glue(body, commas, ids, g, ends, group_mark)
-        if views:
-            return _views(text, group_mark, off, at)
-        return _grouped(text.split(bytes([group_mark])), off)
-    marks = code[ids]
-    marks[ends] = group_mark
-    buf[commas] = marks
-    todo = sorted(((bytes([c]), t) for c, t in zip(code.tolist(), g) if len(t) != 1), key=lambda ct: len(ct[1]))
-    pieces = []
-    for i in range(0, len(body), _FILL_PIECE):
-        piece = body[i:i + _FILL_PIECE]
-        for mark, t in todo:
-            piece = piece.replace(mark, t)
-        pieces.append(piece)
-    if views:
-        return _views(b"".join(pieces), group_mark, off)
-    return _grouped(b"".join(pieces).split(bytes([group_mark])), off)
 
 
 def _as_is(text: bytes | bytearray) -> list[bytes | bytearray]:
