@@ -140,20 +140,22 @@ def test_without_the_split_the_jogs_merge(monkeypatch):
     assert np.mean([s["n_nodes_found"] for s in without]) < 11
 
 
-def test_noise_free_input_is_left_to_the_close_junction_test(monkeypatch):
-    # on clean samples the shell is not widened: the split does not run (real sketches' strokes
-    # meeting a few spacings apart are one junction of their ground truth)
-    calls = []
-    from curvenet.methods.robust import paired
+def test_strokes_crossing_a_curve_loosely_are_one_junction():
+    # a straight curve through A and B, crossed at A at 90 degrees and at B at 45 degrees: one
+    # junction drawn loosely (the rule of best_pair); crossed in parallel: a ladder (split)
+    d45 = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    loose = _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, [1, 0, 0]), (B, d45)], noise=0.05)
+    assert best_pair(loose, (A + B) / 2, H) is None
+    rungs = _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, [1, 0, 0]), (B, [0, 1, 0])], noise=0.05)
+    assert best_pair(rungs, (A + B) / 2, H) is not None
 
-    orig = paired.best_pairs
-    monkeypatch.setattr(paired, "best_pairs", lambda *a: calls.append(1) or orig(*a))
-    pts, _ = synth.sample(_stepped_box(), rng=5)
-    reconstruct(pts)
-    assert calls == []
-    pts, _ = synth.sample(_stepped_box(), noise=0.2, rng=5)
-    reconstruct(pts)
-    assert calls
+
+def test_jogs_are_two_junctions_on_noise_free_samples_too():
+    truth = _stepped_box()
+    h = synth.h_of(truth)
+    for s in range(3):
+        pts, _ = synth.sample(truth, rng=200 + s)
+        assert compare(reconstruct(pts), truth, h=h)["n_nodes_found"] == 12
 
 
 def test_many_regions_at_once_give_each_region_s_own_answer():

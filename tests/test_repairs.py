@@ -636,9 +636,21 @@ def test_split_paired_junctions_parts_a_jog_under_noise():
     assert groups == [[0, 1], [2, 3]]
 
 
-def test_split_paired_junctions_leaves_noise_free_input():
-    topo, _ = _jog(4.0)
-    _assert_untouched(R.split_paired_junctions, topo)
+def test_split_paired_junctions_keeps_strokes_crossing_a_line_loosely():
+    # the same jog, but A's branch up replaced by one going on along x (a straight curve through
+    # A and B) and B's branch down leaning 45 degrees: two strokes crossing one curve at two
+    # angles 4 h apart, one junction drawn loosely
+    net = _Net()
+    d = 4.0
+    r = net.region(np.r_[_line((-2, 0), (d + 2, 0), 9), [[0, 1], [0, 2], [d + 1, -1], [d + 2, -2]]])
+    net.chain(_line((0, 15), (0, 3), 13), (-1, r))
+    net.chain(_line((-15, 0), (-3, 0), 13), (-1, r))
+    net.chain(_line((d + 12, -12), (d + 2.5, -2.5), 13), (-1, r))
+    net.chain(_line((d + 15, 0), (d + 3, 0), 13), (-1, r))
+    topo = net.topology()
+    before = _state(topo)
+    _run(R.split_paired_junctions, topo, PAIR_NOISE)
+    assert _state(topo) == before
 
 
 def test_split_paired_junctions_keeps_a_crossing_whole():

@@ -7,6 +7,10 @@ more. The branches tell them apart: the lines fitted on their ends do not meet a
 but split into two groups whose lines meet at two points, with region points along the
 segment between them. :func:`split_paired_junctions` finds such regions after the repairs
 and replaces each by two junctions joined by a new chain (:meth:`.topology.Topology.split_region`).
+One reading is left as one junction: a straight curve passing through both points with two
+branches crossing it at different angles, a few spacings apart, is strokes meeting loosely
+where one junction was meant (real sketches); branches crossing it in parallel (a ladder's
+rungs, a comb's teeth) are two junctions.
 
 The test is the converse of :func:`.repairs.merge_close_junctions` (branches aiming at one
 node make one junction): a line "meets" a point when the point lies within the strip of the
@@ -153,8 +157,9 @@ def best_pair(L: Lines, anchor: np.ndarray, h: float):
     groups of two or more lines has every group's lines meet its point with the points over
     ``PAIRED.sep * h`` apart, every branch's end nearer its own group's point and the summed
     squared distances of the lines to their points at most ``PAIRED.gain`` times those to the
-    one point (curved branches of one junction miss it, but miss two points almost as much).
-    Each group's point is found with the segment between the two
+    one point (curved branches of one junction miss it, but miss two points almost as much),
+    and, when a line of each group runs along the segment (one straight curve through both
+    points), the other lines parallel (within ``PAIRED.parallel_cos``). Each group's point is found with the segment between the two
     points counted as one more line of both (``PAIRED.rounds`` rounds): a junction whose other
     two branches are collinear (a T) is fixed along them by the segment.
 
@@ -232,6 +237,18 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     cost = _costs(Lr, own)
     good &= cost <= PAIRED.gain * np.repeat(cost1, S)
     good &= ~np.repeat(meets1, S)
+    # one straight curve through both points (a line of each group along the segment) with the
+    # other branches crossing it at two places: junctions only when those are parallel (a
+    # ladder's rungs, a comb's teeth); strokes crossing a curve at two angles a few spacings
+    # apart are one junction drawn loosely (real sketches)
+    e = xb - xa
+    e = e / np.maximum(np.linalg.norm(e, axis=1), np.finfo(float).tiny)[:, None]
+    along = np.abs(np.einsum("nmi,ni->nm", Lr.u, e)) > PAIRED.parallel_cos
+    through = (along.sum(axis=1) == 2) & ((along & Bb).sum(axis=1) == 1)
+    first = np.argmax(~along, axis=1)
+    v0 = Lr.u[np.arange(len(first)), first]
+    par = (np.abs(np.einsum("nmi,ni->nm", Lr.u, v0)) > PAIRED.parallel_cos) | along
+    good &= ~through | par.all(axis=1)
     cost = np.where(good, cost, np.inf).reshape(R, S)
     k = np.argmin(cost, axis=1)  # the least cost (ties: the first split)
     ok = np.isfinite(cost[np.arange(R), k])
@@ -321,13 +338,10 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     junctions joined by a chain of those points.
 
     The region's other points go to the nearer junction (by their projection on the segment).
-    A region with a chain that has both ends there (a loop) is left as it is. Noise-free input is
-    left as it is: there the shell is not widened and the close junctions it merges are
-    separated, or kept as one, by :func:`.junctions.separate_close_junctions` (on real
-    sketches, strokes meeting a few spacings apart make one junction of the ground truth).
+    A region with a chain that has both ends there (a loop) is left as it is. Under noise the
+    shell is widened and merges such junctions more often; on noise-free input it runs after
+    :func:`.junctions.separate_close_junctions`, for the pairs that test left as one.
     """
-    if sc.clean:
-        return
     P, h = topo.P, sc.h
     cand, incs = [], []
     for r in np.flatnonzero(topo.v >= PAIRED.min_valence).tolist():

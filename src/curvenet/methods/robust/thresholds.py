@@ -600,6 +600,10 @@ class Paired(NamedTuple):
     #: crossings under noise, where every such split lost curves)
     #: origin: measured with the split (issue 25) on those runs
     gain: float = 0.15
+    #: lines within this cosine of parallel are one direction (about 18 degrees): a line along the
+    #: segment between the two points, rungs parallel to each other
+    #: origin: set with the through-curve rule of the split (issue 25), not tuned
+    parallel_cos: float = 0.95
     #: the branches' end portions are measured on their last this many points at once (a longer
     #: portion, rare, is measured alone): memory and speed only, not a result
     #: origin: a padding width (end portions under noise 0.3h hold about 10 points)
