@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from curvenet import bench, synth
-from curvenet.methods.robust import junctions, thresholds
+from curvenet.methods.robust import junctions, repairs, thresholds
 from curvenet.metrics import compare
 from curvenet.reconstruct import reconstruct
 
@@ -15,12 +15,20 @@ def _score(name, condition="clean"):
     return compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
 
 
+def _without_paired_split(monkeypatch):
+    """The repairs without split_paired_junctions (it separates close junctions too: the tests
+    below measure another mechanism alone)."""
+    monkeypatch.setattr(repairs, "ORDER", tuple(r for r in repairs.ORDER if r.__name__ != "split_paired_junctions"))
+
+
 def test_a_finer_split_scale_separates_close_corners(monkeypatch):
     # the building outline's notches put coplanar right-angle corners 4-5h apart: one shell
     # re-test (0.7 of the shell) leaves several corners in one region, the second (0.5) splits
     # some of them (26 true nodes: 17 found with one re-test, 19 with two)
-    # (with separate_close_junctions off in both runs: it separates such corners too)
+    # (with separate_close_junctions and the paired split off in both runs: they separate such
+    # corners too)
     assert len(thresholds.SPLIT.scales) >= 2
+    _without_paired_split(monkeypatch)
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(close_scales=()))
     now = _score("outline")
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(scales=thresholds.SPLIT.scales[:1],
@@ -96,6 +104,9 @@ def test_junctions_a_few_spacings_apart_are_separated(monkeypatch):
     # one shell test region holds several of them until separate_close_junctions re-tests it
     # on smaller shells. Measured over 8 copies jittered by 1e-6 h (mean curve F1 with / without
     # it): ladder 0.36 / 0.27, comb 0.49 / 0.39, streets 0.99 / 0.91 (20 / 19 nodes, every copy)
+    # (the paired split off in both: it separates some of them too)
+    _without_paired_split(monkeypatch)
+
     def means(rows):
         return np.mean([r["curve_f1"] for r in rows]), np.mean([r["n_nodes_found"] for r in rows])
 

@@ -398,7 +398,7 @@ def table_text(rows: ArrayLike, glue: Sequence[str], *, int_cols: Sequence[int] 
 
 def group_texts(rows: ArrayLike, glue: Sequence[str], *, groups: ArrayLike, int_cols: Sequence[int] = ()) -> list[str]:
     """:func:`table_groups` as ``str``."""
-    return [b.decode("utf-8") for b in table_groups(rows, glue, groups=groups, int_cols=int_cols)]
+    return [str(b, "utf-8") for b in table_groups(rows, glue, groups=groups, int_cols=int_cols)]
 
 
 def rows_text(rows: ArrayLike, prefix: str = "", sep: str = " ", end: str = "\n") -> str:

@@ -5,12 +5,16 @@ short street link, a twig near a fork) lie inside one another's shell; under noi
 is widened and their flagged points form one region, found as one junction of valence 4 or
 more. The branches tell them apart: the lines fitted on their ends do not meet at one point,
 but split into two groups whose lines meet at two points, with region points along the
-segment between them. :func:`split_paired_junctions` finds such regions after the repairs
-and replaces each by two junctions joined by a new chain (:meth:`.topology.Topology.split_region`).
+segment between them. :func:`split_paired_junctions` finds such regions after the repairs that
+mend chains and replaces each by two junctions joined by a new chain
+(:meth:`.topology.Topology.split_region`); :func:`.repairs.merge_close_junctions` runs after it
+and merges back a pair whose branches aim at one node (two strokes drawn into a hub that part).
 One reading is left as one junction: a straight curve passing through both points with two
 branches crossing it at different angles, a few spacings apart, is strokes meeting loosely
 where one junction was meant (real sketches); branches crossing it in parallel (a ladder's
-rungs, a comb's teeth) are two junctions.
+rungs, a comb's teeth) are two junctions. And a straight curve with a half in each group
+(:func:`_straight_pairs`) must run along the segment: it passes through both points (under
+heavy noise an X crossing otherwise splits into two V's).
 
 The test is the converse of :func:`.repairs.merge_close_junctions` (branches aiming at one
 node make one junction): a line "meets" a point when the point lies within the strip of the
@@ -249,11 +253,33 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     v0 = Lr.u[np.arange(len(first)), first]
     par = (np.abs(np.einsum("nmi,ni->nm", Lr.u, v0)) > PAIRED.parallel_cos) | along
     good &= ~through | par.all(axis=1)
+    # a straight curve with a half in each group (two lines facing each other, each through the
+    # other's centroid) passes through both points: it must run along the segment (an X
+    # crossing seen under noise splits into two V's whose points lie off that curve)
+    cross = Bb[:, :, None] != Bb[:, None, :]
+    good &= ~np.any(np.repeat(_straight_pairs(L), S, axis=0) & cross & ~(along[:, :, None] & along[:, None, :]),
+                    axis=(1, 2))
     cost = np.where(good, cost, np.inf).reshape(R, S)
     k = np.argmin(cost, axis=1)  # the least cost (ties: the first split)
     ok = np.isfinite(cost[np.arange(R), k])
     pick = np.arange(R) * S + k
     return np.where(ok, k, -1), xa[pick], xb[pick]
+
+
+def _straight_pairs(L: Lines) -> np.ndarray:
+    """Per region, the pairs of lines that are one straight curve through it: (R, m, m) bool for
+    lines ``L`` of shape (R, m, d), True where the two branches face each other (their directions
+    towards their ends within ``PAIRED.parallel_cos`` of opposite) and each line passes the other's
+    centroid, on average, within the strip or the aim angle ``REPAIRS.merge_tan`` seen over half
+    the distance between the centroids (as a line meets a point)."""
+    ud = L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
+    facing = np.einsum("rmi,rni->rmn", ud, ud) < -PAIRED.parallel_cos
+    r = L.c[:, None, :, :] - L.c[:, :, None, :]  # (R, m, n, d): from line m's point to line n's
+    along = np.einsum("rmni,rmi->rmn", r, L.u)
+    rr = np.einsum("rmni,rmni->rmn", r, r)
+    dist = np.sqrt(np.maximum(rr - along * along, 0.0))
+    lim = np.maximum(L.lim[:, :, None], L.lim[:, None, :]) + REPAIRS.merge_tan * 0.5 * np.sqrt(rr)
+    return facing & (0.5 * (dist + np.swapaxes(dist, 1, 2)) <= lim)
 
 
 def _costs(L: Lines, x: np.ndarray) -> np.ndarray:

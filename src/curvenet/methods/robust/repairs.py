@@ -532,9 +532,9 @@ ORDER = (
     attach_dangling,
     prune_spurs,
     join_through_pass_regions,
-    merge_close_junctions,
-    absorb_short_loops,  # a short chain between two merged junctions is now a short loop
     split_paired_junctions,
+    merge_close_junctions,  # (after the split: it merges back what it takes for one junction)
+    absorb_short_loops,  # a short chain between two merged junctions is now a short loop
 )
 
 
