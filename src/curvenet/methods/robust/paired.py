@@ -13,8 +13,9 @@ One reading is left as one junction: a straight curve passing through both point
 branches crossing it at different angles, a few spacings apart, is strokes meeting loosely
 where one junction was meant (real sketches); branches crossing it in parallel (a ladder's
 rungs, a comb's teeth) are two junctions. And a straight curve with a half in each group
-(:func:`_straight_pairs`) must run along the segment: it passes through both points (under
-heavy noise an X crossing otherwise splits into two V's).
+(:func:`_straight_pairs`) must run along the segment (its direction, the mean of its halves',
+within ``PAIRED.parallel_cos``): it passes through both points (under heavy noise an X crossing
+otherwise splits into two V's).
 
 The test is the converse of :func:`.repairs.merge_close_junctions` (branches aiming at one
 node make one junction): a line "meets" a point when the point lies within the strip of the
@@ -257,8 +258,12 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     # other's centroid) passes through both points: it must run along the segment (an X
     # crossing seen under noise splits into two V's whose points lie off that curve)
     cross = Bb[:, :, None] != Bb[:, None, :]
-    good &= ~np.any(np.repeat(_straight_pairs(L), S, axis=0) & cross & ~(along[:, :, None] & along[:, None, :]),
-                    axis=(1, 2))
+    # (the curve's direction: the mean of its two halves' directions, each towards its end)
+    ud = L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
+    mean = ud[:, :, None, :] - ud[:, None, :, :]  # (R, m, m, d)
+    mean = mean / np.maximum(np.linalg.norm(mean, axis=3), np.finfo(float).tiny)[..., None]
+    on_seg = np.abs(np.einsum("rmni,rsi->rsmn", mean, e.reshape(R, S, d))).reshape(R * S, m, m) > PAIRED.parallel_cos
+    good &= ~np.any(np.repeat(_straight_pairs(L), S, axis=0) & cross & ~on_seg, axis=(1, 2))
     cost = np.where(good, cost, np.inf).reshape(R, S)
     k = np.argmin(cost, axis=1)  # the least cost (ties: the first split)
     ok = np.isfinite(cost[np.arange(R), k])
