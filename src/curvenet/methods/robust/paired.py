@@ -261,7 +261,7 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     # (the curve's direction: the mean of its two halves' directions, each towards its end)
     ud = L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
     mean = ud[:, :, None, :] - ud[:, None, :, :]  # (R, m, m, d)
-    mean = mean / np.maximum(np.linalg.norm(mean, axis=3), np.finfo(float).tiny)[..., None]
+    mean = mean / np.maximum(np.linalg.norm(mean, axis=-1), np.finfo(float).tiny)[..., None]
     on_seg = np.abs(np.einsum("rmni,rsi->rsmn", mean, e.reshape(R, S, d))).reshape(R * S, m, m) > PAIRED.parallel_cos
     good &= ~np.any(np.repeat(_straight_pairs(L), S, axis=0) & cross & ~on_seg, axis=(1, 2))
     cost = np.where(good, cost, np.inf).reshape(R, S)
