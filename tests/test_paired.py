@@ -210,3 +210,18 @@ def test_branch_lines_are_the_end_portions_lines(monkeypatch):
         c, u = fit_line(E)
         assert np.allclose(L.c[b], c) and np.allclose(L.tip[b], E[0])
         assert np.isclose(abs(L.u[b] @ u), 1.0)
+
+
+def test_group_medians_are_numpy_s_medians():
+    from curvenet.methods.robust.chains import group_medians
+
+    rng = np.random.default_rng(4)
+    counts = np.array([1, 2, 0, 5, 6, 3])
+    v = rng.normal(size=counts.sum())
+    got = group_medians(v, counts)
+    off = np.r_[0, np.cumsum(counts)]
+    for g, c in enumerate(counts):
+        if c:
+            assert got[g] == np.median(v[off[g]:off[g + 1]])
+        else:
+            assert np.isnan(got[g])

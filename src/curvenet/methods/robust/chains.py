@@ -298,6 +298,32 @@ def step_lengths(P, ids):
     return out
 
 
+def group_medians(values: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """The median of each group of consecutive values (as ``np.median``: the middle value, or the
+    mean of the two middle ones), all groups at once.
+
+    Parameters
+    ----------
+    values : (n,) ndarray
+        The groups' values, group after group.
+    counts : (g,) ndarray of int
+        The size of each group (sum n).
+
+    Returns
+    -------
+    (g,) ndarray
+        NaN for an empty group.
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    grp = np.repeat(np.arange(len(counts)), counts)
+    v = values[np.lexsort((values, grp))]
+    start = np.r_[0, np.cumsum(counts)[:-1]].astype(np.int64)
+    out = np.full(len(counts), np.nan)
+    has = counts > 0
+    out[has] = (v[start[has] + (counts[has] - 1) // 2] + v[start[has] + counts[has] // 2]) / 2
+    return out
+
+
 def polylen(X):
     if len(X) < 2:
         return 0.0

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels as _k
-from .chains import Chain, end_counts, end_portion
+from .chains import Chain, end_counts, end_portion, group_medians
 from .junctions import fork_possible, hidden_fork, region_paths, swallowed_branches
 from .params import RobustParams, Scales
 from .thresholds import CURVES, LINKS, NODES, NUMERIC, SHELL
@@ -207,17 +207,10 @@ def junction_positions(P, sc: Scales, prm: RobustParams, items):
     rflat = np.concatenate(rids).astype(np.int64, copy=False)
     rlen = np.array([len(r) for r in rids], dtype=np.int64)
     grp = np.repeat(np.arange(len(rids)), rlen)
-    # each junction's spacing: the median of h over its region points (as np.median: the
-    # middle value, or the mean of the two middle ones), all junctions at once
-    hv = h[rflat]
-    o = np.lexsort((hv, grp))
-    hv = hv[o]
-    start = np.r_[0, np.cumsum(rlen)[:-1]]
-    lo = start + np.maximum(rlen - 1, 0) // 2
-    hi = start + rlen // 2
+    # each junction's spacing: the median of h over its region points, all junctions at once
     hj = np.asarray(hfall, dtype=np.float64)
     has = rlen > 0
-    hj[has] = (hv[lo[has]] + hv[np.minimum(hi, len(hv) - 1)[has]]) / 2
+    hj[has] = group_medians(h[rflat], rlen)[has]
     # region points sorted and unique per junction
     o = np.lexsort((rflat, grp))
     rs, gs = rflat[o], grp[o]

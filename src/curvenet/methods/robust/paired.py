@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .chains import end_portion
+from .chains import end_portion, group_medians
 from .params import RobustParams, Scales
 from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
@@ -259,11 +259,11 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     # crossing seen under noise splits into two V's whose points lie off that curve)
     cross = Bb[:, :, None] != Bb[:, None, :]
     # (the curve's direction: the mean of its two halves' directions, each towards its end)
-    ud = L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
+    ud = _towards_tips(L)
     mean = ud[:, :, None, :] - ud[:, None, :, :]  # (R, m, m, d)
     mean = mean / np.maximum(np.linalg.norm(mean, axis=-1), np.finfo(float).tiny)[..., None]
     on_seg = np.abs(np.einsum("rmni,rsi->rsmn", mean, e.reshape(R, S, d))).reshape(R * S, m, m) > PAIRED.parallel_cos
-    good &= ~np.any(np.repeat(_straight_pairs(L), S, axis=0) & cross & ~on_seg, axis=(1, 2))
+    good &= ~np.any(np.repeat(_straight_pairs(L, ud), S, axis=0) & cross & ~on_seg, axis=(1, 2))
     cost = np.where(good, cost, np.inf).reshape(R, S)
     k = np.argmin(cost, axis=1)  # the least cost (ties: the first split)
     ok = np.isfinite(cost[np.arange(R), k])
@@ -271,13 +271,18 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     return np.where(ok, k, -1), xa[pick], xb[pick]
 
 
-def _straight_pairs(L: Lines) -> np.ndarray:
+def _towards_tips(L: Lines) -> np.ndarray:
+    """The directions of lines ``L`` (R, m, d), each turned towards its branch's end (the
+    fitted directions have either sign): (R, m, d)."""
+    return L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
+
+
+def _straight_pairs(L: Lines, ud: np.ndarray) -> np.ndarray:
     """Per region, the pairs of lines that are one straight curve through it: (R, m, m) bool for
-    lines ``L`` of shape (R, m, d), True where the two branches face each other (their directions
-    towards their ends within ``PAIRED.parallel_cos`` of opposite) and each line passes the other's
-    centroid, on average, within the strip or the aim angle ``REPAIRS.merge_tan`` seen over half
+    lines ``L`` of shape (R, m, d) (``ud``: their :func:`_towards_tips`), True where the two
+    branches face each other (their directions towards their ends within ``PAIRED.parallel_cos``
+    of opposite) and each line passes the other's centroid, on average, within the strip or the aim angle ``REPAIRS.merge_tan`` seen over half
     the distance between the centroids (as a line meets a point)."""
-    ud = L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
     facing = np.einsum("rmi,rni->rmn", ud, ud) < -PAIRED.parallel_cos
     r = L.c[:, None, :, :] - L.c[:, :, None, :]  # (R, m, n, d): from line m's point to line n's
     along = np.einsum("rmni,rmi->rmn", r, L.u)
@@ -387,7 +392,6 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     single = np.logical_or.reduceat(~(np.linalg.norm(L.u, axis=1) > 0), off[:-1])  # a one-point branch
     anchors, hr = _region_stats(P, h, [topo.regions[r] for r in cand])
     found: dict[int, tuple] = {}
-    d = P.shape[1]
     for m in np.unique(nl).tolist():  # the regions of m lines at once
         js = np.flatnonzero((nl == m) & ~single)
         if not len(js):
@@ -398,7 +402,6 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
         B = _splits(m)
         for q in np.flatnonzero(k >= 0).tolist():
             found[int(js[q])] = (B[k[q]], xa[q], xb[q], float(np.max(L.lim[rows[q]])))
-    del d
     for j in sorted(found):
         r, inc = cand[j], incs[j]
         mask, xa, xb, lim = found[j]
@@ -431,8 +434,4 @@ def _region_stats(P: np.ndarray, h: np.ndarray, rids: list[np.ndarray]) -> tuple
     flat = np.concatenate(rids)
     start = np.r_[0, np.cumsum(n)[:-1]]
     cen = np.add.reduceat(P[flat], start, axis=0) / n[:, None]
-    grp = np.repeat(np.arange(len(rids)), n)
-    hv = h[flat]
-    hv = hv[np.lexsort((hv, grp))]
-    lo, hi = start + (n - 1) // 2, start + n // 2
-    return cen, (hv[lo] + hv[hi]) / 2
+    return cen, group_medians(h[flat], n)
