@@ -152,12 +152,13 @@ def main(argv=None) -> int:
                    tiles=p["tiles"], tile_side=p["tile_side"], halo=p["halo"], spacing=p["spacing"],
                    noise=p["noise"], clean=p["clean"], estimates_points=p["estimates_points"],
                    tile_points_max=net.stats["tile_points_max"], unmatched_ports=net.stats["unmatched_ports"],
+                   fitted_on_client=net.stats.get("fitted_here", 0),
                    nodes=net.n_nodes, curves=net.n_curves, passes_s=net.stats["time"])
         print(f"tiled, {args.workers} workers: {wall:.1f} s ({n / wall:,.0f} points/s); {p['tiles']} tiles of "
               f"side {p['tile_side']:.1f} m (at most {net.stats['tile_points_max']:,} points with the halo), "
               f"halo {p['halo']:.2f} m; worker peaks {', '.join(f'{x:.2f}' for x in peaks)} GB, client peak "
               f"{cpeak:.2f} GB; {net.n_nodes} nodes, {net.n_curves} curves, {net.stats['unmatched_ports']} "
-              f"unmatched ports", flush=True)
+              f"unmatched ports, {net.stats.get('fitted_here', 0)} curves fitted on the client", flush=True)
         print("  passes: " + ", ".join(f"{k} {v:.1f} s" for k, v in net.stats["time"].items()), flush=True)
         print(f"  estimates over {p['estimates_points']:,} points (exact: {p.get('estimates_exact')}): "
               f"spacing {p['spacing']:.4f}, "

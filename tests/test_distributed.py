@@ -427,3 +427,24 @@ def test_ctrl_c_removes_the_scratch_store(tmp_path, tree3d):
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 130 and "interrupted" in err, err
     assert list(scratch.iterdir()) == [] and not out.exists()
+
+
+def test_curves_fitted_by_their_tiles_equal_curves_fitted_once_stitched(tree3d, tmp_path, monkeypatch):
+    # under noise each tile fits the curves it holds whole and the stitching only those that
+    # cross a face: the network equals the one whose every curve is fitted once stitched
+    from curvenet.distributed import tasks
+
+    P, one = tree3d
+    h = one.parameters["spacing"]
+    f = _save(tmp_path, P)
+    net = reconstruct_tiled(f, tiles=20 * h, scheduler="threads", workers=1)
+    assert 0 < net.stats["fitted_here"] < net.n_curves
+    monkeypatch.setattr(tasks, "fit_whole_pieces", lambda tile, sigma: tile)
+    ref = reconstruct_tiled(f, tiles=20 * h, scheduler="threads", workers=1)
+    assert ref.stats["fitted_here"] == ref.n_curves
+    assert np.array_equal(net.nodes, ref.nodes) and len(net.curves) == len(ref.curves)
+    for a, b in zip(net.curves, ref.curves):
+        assert (a.start, a.end, a.closed) == (b.start, b.end, b.closed)
+        assert np.array_equal(a.indices, b.indices)
+        assert np.allclose(a.points, b.points, rtol=0, atol=1e-9 * h)
+    _assert_same(one, net, h)

@@ -54,3 +54,26 @@ def test_the_duplicate_rule_follows_the_estimates():
     assert reconstruct_robust(P2, estimates=est).parameters["duplicates_dropped"] == 101
     noisy = Estimates(hmed=est.hmed, sigma=SPACING.dedup_noise * est.hmed * 4)
     assert reconstruct_robust(P2, estimates=noisy).parameters["duplicates_dropped"] == 0
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.2])
+def test_point_estimates_take_the_query_distances_bit_for_bit(noise):
+    # point_estimates keeps the k-d tree query's distances instead of recomputing them from
+    # the neighbour ids (Neighbours.distances): the same bits, so the same medians and reaches
+    from curvenet.methods.robust import point_estimates
+    from curvenet.methods.robust.frames import neighbours, neighbours_and_distances
+    from curvenet.methods.robust.params import RobustParams
+
+    pts, _ = synth.sample(synth.model("torus"), noise=noise, rng=3)
+    prm = RobustParams.from_keywords()
+    nb, dist = neighbours_and_distances(pts, prm)
+    again = neighbours(pts, prm)
+    assert np.array_equal(dist, again.distances())
+    assert np.array_equal(nb.idx, again.idx) and np.array_equal(nb.h, again.h)
+    v = point_estimates(pts)
+    P = pts[v.order]
+    nb2 = neighbours(P, prm)
+    d2 = nb2.distances()
+    assert np.array_equal(v.reach, d2[:, -1])
+    rows = np.arange(len(P))[:, None]
+    assert np.array_equal(v.earlier, np.where(nb2.idx < rows, d2, np.inf).min(axis=1))

@@ -168,3 +168,18 @@ def test_public_api_type_hints_pass_mypy(tmp_path):
     (tmp_path / "untyped.py").write_text("def f(x):\n    return x\n")  # the check can fail
     r = subprocess.run([*args, str(tmp_path / "untyped.py")], capture_output=True, text=True, timeout=600)
     assert r.returncode == 1 and "missing a type annotation" in r.stdout
+
+
+def test_canonical_without_copy_is_the_same_form_and_shares_the_kept_curves():
+    from curvenet import synth
+
+    net = synth.model("wheel")
+    shuffled = CurveNetwork(net.nodes[::-1], [Curve(c.points, len(net.nodes) - 1 - c.start, len(net.nodes) - 1 - c.end)
+                                              if c.start is not None else c for c in net.curves[::-1]])
+    before = [c.points.copy() for c in shuffled.curves]
+    a, b = shuffled.canonical(), shuffled.canonical(copy=False)
+    assert a == b
+    shared = [any(np.shares_memory(cb.points, c.points) for c in shuffled.curves) for cb in b.curves]
+    assert any(shared) and not any(any(np.shares_memory(ca.points, c.points) for c in shuffled.curves)
+                                   for ca in a.curves)
+    assert all(np.array_equal(x, c.points) for x, c in zip(before, shuffled.curves))  # left as it was

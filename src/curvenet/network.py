@@ -352,13 +352,22 @@ class CurveNetwork:
                     raise FormatError(f"malformed curvenet network: node index {v} out of range")
         return cls(nodes, curves, dict(data.get("parameters", {})), dict(data.get("stats", {})))
 
-    def canonical(self, decimals: int = 6) -> "CurveNetwork":
+    def canonical(self, decimals: int = 6, *, copy: bool = True) -> "CurveNetwork":
         """The same network with nodes and curves in a canonical order.
 
         Nodes are sorted by their rounded coordinates; each open curve runs from its lower to
         its higher node id (ties broken by the polyline); a free closed loop starts at its
         lexicographically smallest point. Two networks that differ only in the order of nodes
         and curves have equal canonical forms.
+
+        Parameters
+        ----------
+        decimals : int
+            Coordinates are compared rounded to this many decimals.
+        copy : bool
+            False: a curve kept as it runs shares its ``points`` and ``indices`` arrays with
+            this network's (a curve turned round or a loop rolled gets new ones), so that a
+            large network built only to be put in order is not held twice.
         """
         r = np.round(self.nodes, decimals)
         order = np.lexsort(r.T[::-1]) if len(r) else np.zeros(0, dtype=np.int64)
@@ -368,7 +377,7 @@ class CurveNetwork:
         for c in self.curves:
             s = None if c.start is None else int(new_id[c.start])
             e = None if c.end is None else int(new_id[c.end])
-            cc = Curve(c.points.copy(), s, e, c.closed, c.indices.copy())
+            cc = Curve(c.points.copy(), s, e, c.closed, c.indices.copy()) if copy else Curve(c.points, s, e, c.closed, c.indices)
             if s is None and c.closed and len(cc.points):
                 k = _lexmin(np.round(cc.points, decimals))
                 cc.points = np.roll(cc.points, -k, axis=0)

@@ -10,14 +10,15 @@ side has the same segment, so the same port (same midpoint, opposite direction):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..network import CurveNetwork
+from ..methods.robust.curves import fit_curves
+from ..network import Curve, CurveNetwork
 from .grid import TileGrid
 
-__all__ = ["Piece", "TilePieces", "cut_network"]
+__all__ = ["Piece", "TilePieces", "cut_network", "piece_curve", "fit_whole_pieces"]
 
 
 @dataclass
@@ -33,11 +34,14 @@ class Piece:
     ends : tuple of two (str, int), or None
         Each end is ``("node", i)`` (the tile's owned node i) or ``("port", j)`` (the tile's
         port j); None for a closed loop without node, kept whole.
+    fitted : bool
+        The piece is a whole curve already fitted by its tile (:func:`fit_whole_pieces`).
     """
 
     points: np.ndarray
     indices: np.ndarray
     ends: tuple | None
+    fitted: bool = False
 
 
 @dataclass
@@ -138,3 +142,37 @@ def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray, occupie
             pieces.append(Piece(np.vstack(pts), np.concatenate(pid), (e0, e1)))
     return TilePieces(key, net.nodes[own_node], pieces,
                       np.array(ports, float).reshape(-1, d), np.array(tans, float).reshape(-1, d))
+
+
+def piece_curve(points: np.ndarray, indices: np.ndarray, ends) -> Curve:
+    """The curve the stitching makes of a run of pieces whose first one has ``ends`` (None: a
+    closed loop kept whole) and whose vertices are ``points`` (m, d), ``indices`` (m,); node
+    ids are left to the caller (0 here: the fit reads only the points and the closedness)."""
+    if ends is None:
+        return Curve(points, None, None, True, indices)
+    return Curve(points, 0, 0, False, indices)
+
+
+def fit_whole_pieces(tile: TilePieces, sigma: float) -> TilePieces:
+    """The tile's pieces that are whole curves (both ends at nodes, or a loop kept whole) fitted
+    as the default method fits its curves under noise (:func:`~curvenet.methods.robust.curves.fit_curves`),
+    so that the client fits only the curves that cross a tile face, once stitched.
+
+    Parameters
+    ----------
+    tile : TilePieces
+    sigma : float
+        The whole cloud's noise estimate.
+
+    Returns
+    -------
+    TilePieces
+        The same tile with those pieces replaced by fitted ones (``fitted`` set).
+    """
+    whole = [i for i, pc in enumerate(tile.pieces) if pc.ends is None or all(e[0] == "node" for e in pc.ends)]
+    fitted = fit_curves([piece_curve(tile.pieces[i].points, tile.pieces[i].indices, tile.pieces[i].ends)
+                         for i in whole], sigma)
+    pieces = list(tile.pieces)
+    for i, c in zip(whole, fitted):
+        pieces[i] = Piece(c.points, tile.pieces[i].indices, tile.pieces[i].ends, True)
+    return replace(tile, pieces=pieces)

@@ -12,7 +12,6 @@ import numpy as np
 from .._sigint import checkpoint
 from ..errors import CurvenetError, InputError, MethodError, require
 from ..methods.robust import Estimates
-from ..methods.robust.curves import fit_curves
 from ..network import CurveNetwork
 from . import tasks
 from .grid import TileGrid
@@ -276,17 +275,16 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
         return MethodError(f"tile {key} (box {_box(grid, key)}) failed: {_one_line(exc)}; "
                            f"its input files: {', '.join(files_)}")
 
-    parts = _gather(client, fut, tile_failed)
+    parts = list(_gather(client, fut, tile_failed).values())
     tm["tiles"] = time.perf_counter() - t1
+    n_max = max((p.n_points for p in parts), default=0)
 
-    # 5. stitch
+    # 5. stitch (and, under noise, the fit of the method's stage 8 for the curves that cross a
+    #    face: each tile fitted the curves it holds whole)
     t1 = time.perf_counter()
-    net = stitch(list(parts.values()), est.hmed, join=stitching)
+    net = stitch(parts, est.hmed, join=stitching, sigma=None if est.clean else est.sigma)
+    del parts  # (the pieces: as many points again as the network)
     tm["stitch"] = time.perf_counter() - t1
-    if not est.clean:  # 6. the fit of the method's stage 8, on the whole stitched curves
-        t1 = time.perf_counter()
-        net.curves = fit_curves(net.curves, est.sigma)
-        tm["fit"] = time.perf_counter() - t1
     tm["total"] = time.perf_counter() - t0
     net.parameters.update({
         "method": "robust",
@@ -304,7 +302,7 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
         "tiles": len(keys),
     })
     net.stats.update({"N_n": net.n_nodes, "N_c": net.n_curves, "N_d": n_total,
-                      "tile_points_max": max((p.n_points for p in parts.values()), default=0),
+                      "tile_points_max": n_max,
                       "time": tm})
     return net
 

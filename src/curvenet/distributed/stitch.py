@@ -5,6 +5,8 @@ their directions are opposite within ``PORT_ANGLE`` (each points out of its own 
 joined ports are cut nodes of valence 2: they are contracted, so that a curve crossing ten
 tiles comes out as one curve, and a loop cut into pieces as one closed loop. A port left
 without partner (the tiles disagree there) becomes a free end, counted in the result.
+Under noise the curves that cross a face are fitted here, once whole (each tile fitted the
+curves it holds whole).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..methods.robust.curves import fit_curves
 from ..network import Curve, CurveNetwork
 from .cut import TilePieces
 
@@ -43,7 +46,7 @@ def _match_ports(pos: np.ndarray, tan: np.ndarray, tile: np.ndarray, reach: floa
     return partner
 
 
-def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True) -> CurveNetwork:
+def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma: float | None = None) -> CurveNetwork:
     """Join the pieces of every tile into one network (in canonical order).
 
     Parameters
@@ -54,11 +57,16 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True) -> Cur
         The whole cloud's median spacing (the port match distance is in these units).
     join : bool
         Join ports across tiles (False: every port is a free end; the negative control).
+    sigma : float, optional
+        The whole cloud's noise estimate when the curves are to be fitted (a noisy cloud):
+        every curve not fitted whole by its tile (``Piece.fitted``: one that crosses a face)
+        is fitted here, once joined.
 
     Returns
     -------
     CurveNetwork
-        ``stats["unmatched_ports"]`` counts the ports without partner.
+        ``stats["unmatched_ports"]`` counts the ports without partner; ``stats["fitted_here"]``
+        the curves fitted here.
     """
     tiles = sorted(tiles, key=lambda t: t.key)
     d = next((t.nodes.shape[1] for t in tiles), 3)
@@ -94,26 +102,35 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True) -> Cur
             ends.append(e)
 
     curves: list[Curve] = []
+    done: list[bool] = []  # fitted by its tile (one whole piece)
     used = np.zeros(len(pieces), dtype=bool)
     for i, e in enumerate(ends):
         if e is None:
             used[i] = True
             pc = pieces[i]
             curves.append(Curve(pc.points, None, None, True, pc.indices))
+            done.append(pc.fitted)
     for i, e in enumerate(ends):  # chains that start at a node
         if used[i]:
             continue
         for side in (0, 1):
             if e[side][0] == "node":
+                n_used = int(used.sum())
                 curves.append(_walk(i, side, pieces, ends, owner, partner, used, closed=False))
+                done.append(pieces[i].fitted and int(used.sum()) == n_used + 1)
                 break
     for i in range(len(pieces)):  # what is left are loops of cut nodes only
         if not used[i]:
             curves.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True))
+            done.append(False)
+    todo = [] if sigma is None else [i for i, f in enumerate(done) if not f]
+    for i, c in zip(todo, fit_curves([curves[i] for i in todo], sigma)):
+        curves[i] = c
     net = CurveNetwork(np.vstack(nodes).reshape(-1, d), curves, {}, {})
-    net = net.canonical()
+    net = net.canonical(copy=False)  # (the curves are new: not held twice)
     net.stats["unmatched_ports"] = int(len(loose))
     net.stats["ports"] = int(len(pos))
+    net.stats["fitted_here"] = len(todo)
     return net
 
 

@@ -14,7 +14,7 @@ import threading
 import numpy as np
 
 from ..methods.robust import Estimates, estimate, reconstruct_robust
-from .cut import TilePieces, cut_network
+from .cut import TilePieces, cut_network, fit_whole_pieces
 from .grid import TileGrid
 from .inputs import Chunk, read_chunk, scan_chunk
 from .scratch import read_tile, write_part
@@ -90,11 +90,15 @@ def estimate_sample(root: str, keys: list) -> tuple[Estimates, int]:
 
 def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, occupied) -> TilePieces:
     """Reconstruct tile ``key`` with its halo (the default method, the whole cloud's
-    estimates, curves not fitted: :func:`.run.reconstruct_tiled` fits the stitched ones) and cut the network at the tile's box (``occupied``: the keys of every tile
-    that holds input points, see :func:`.cut.cut_network`)."""
+    estimates) and cut the network at the tile's box (``occupied``: the keys of every tile
+    that holds input points, see :func:`.cut.cut_network`). Under noise the pieces that are
+    whole curves are fitted here (:func:`.cut.fit_whole_pieces`); the stitching fits the
+    curves that cross a face, once whole."""
     P, ids = tile_points(root, grid, key, halo)
     with METHOD_LOCK:
         net = reconstruct_robust(P, estimates=estimates, fit=False)  # fitted once stitched
     out = cut_network(net, grid, key, ids, occupied)
     out.n_points = int(len(P))
+    if not estimates.clean:  # the method's fit under noise, of the curves this tile holds whole
+        out = fit_whole_pieces(out, estimates.sigma)
     return out

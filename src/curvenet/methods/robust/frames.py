@@ -19,7 +19,7 @@ from . import kernels as _k
 from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
-__all__ = ["Neighbours", "Frames", "neighbours", "frames", "duplicates", "local_spacing", "tangents",
+__all__ = ["Neighbours", "Frames", "neighbours", "neighbours_and_distances", "frames", "duplicates", "local_spacing", "tangents",
            "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "isolated", "lex_order", "pair_distances"]
 
 
@@ -82,10 +82,17 @@ class Frames(NamedTuple):
 
 def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
     """Stage 1: the k-d tree, the k nearest neighbours and the local spacing of the points ``P``."""
+    return neighbours_and_distances(P, prm)[0]  # (the distances go: Neighbours.distances recomputes them)
+
+
+def neighbours_and_distances(P: np.ndarray, prm: RobustParams) -> tuple[Neighbours, np.ndarray]:
+    """:func:`neighbours`, and the (N, k) distances of the query, for a caller that needs them
+    all (:meth:`Neighbours.distances` would recompute the same bits, at the cost of a gather of
+    every neighbour's coordinates: a third of the whole-cloud estimates' time)."""
     tree = build_tree(P)  # kept for the repairs (repairs.attach_dangling)
     dist, idx = knn(P, prm.k, ordered=True, tree=tree, index_dtype=_k.INDEX)
     h = local_spacing(dist, idx) if prm.spacing is None else np.full(len(P), float(prm.spacing))
-    return Neighbours(tree, idx, h)  # (the distances go: Neighbours.distances recomputes them)
+    return Neighbours(tree, idx, h), dist
 
 
 def pair_distances(P: np.ndarray, rows, I: np.ndarray) -> np.ndarray:

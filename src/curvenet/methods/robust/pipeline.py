@@ -37,7 +37,7 @@ from . import kernels as _k
 from .chains import trace_chains
 from .curves import build_curves, drop_spikes, fit_curves
 from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, isolated, lex_order, local_spacing,
-                     median_noise, median_spacing, neighbours, tangents)
+                     median_noise, median_spacing, neighbours, neighbours_and_distances, tangents)
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
@@ -325,13 +325,12 @@ def point_estimates(points, *, dedup_radius: float | None = None, spacing: float
     with _k.compiled_for(len(P0)):
         order = _internal_order(P0)
         P = P0[order]
-        nb = neighbours(P, prm)
+        nb, dist = neighbours_and_distances(P, prm)
         if dedup_radius is not None:
             keep = ~coincident(nb, dedup_radius)
             P, order = P[keep], order[keep]
-            nb = neighbours(P, prm)
+            nb, dist = neighbours_and_distances(P, prm)
         rms = tangents(P, nb.idx, nb.h, order=np.arange(len(P), dtype=np.int64))[2]
-    dist = nb.distances()
     rows = np.arange(len(P))[:, None]
     earlier = np.where(nb.idx < rows, dist, np.inf).min(axis=1)
     return PointEstimates(order, nb.h, rms, earlier, dist[:, -1].copy())
