@@ -448,3 +448,28 @@ def test_curves_fitted_by_their_tiles_equal_curves_fitted_once_stitched(tree3d, 
         assert np.array_equal(a.indices, b.indices)
         assert np.allclose(a.points, b.points, rtol=0, atol=1e-9 * h)
     _assert_same(one, net, h)
+
+
+def test_a_task_runs_the_method_on_its_own_thread(monkeypatch):
+    # a worker has one thread: within a task the neighbour queries and numba's parallel loops
+    # take one thread (and every core again after it)
+    from curvenet import neighbors
+    from curvenet.distributed.tasks import method_slot
+
+    seen = []
+    real = neighbors.query
+
+    def spy(tree, x, **kw):
+        seen.append(kw.get("workers"))
+        return real(tree, x, **kw)
+
+    monkeypatch.setattr(neighbors, "query", spy)
+    P = np.random.default_rng(0).random((500, 3))
+    neighbors.knn(P, 4)
+    with method_slot():
+        neighbors.knn(P, 4)
+        numba = pytest.importorskip("numba")
+        assert numba.get_num_threads() == 1
+    neighbors.knn(P, 4)
+    assert seen == [-1, 1, -1]
+    assert numba.get_num_threads() == numba.config.NUMBA_NUM_THREADS

@@ -183,3 +183,21 @@ def test_canonical_without_copy_is_the_same_form_and_shares_the_kept_curves():
     assert any(shared) and not any(any(np.shares_memory(ca.points, c.points) for c in shuffled.curves)
                                    for ca in a.curves)
     assert all(np.array_equal(x, c.points) for x, c in zip(before, shuffled.curves))  # left as it was
+
+
+def test_canonical_curve_order_is_the_order_by_the_whole_key():
+    # the canonical order sorts by end nodes, and by the rounded polyline only among curves
+    # with the same ends: the same order as sorting every curve by the whole key
+    from curvenet.network import _key, _key_order
+
+    rng = np.random.default_rng(5)
+    curves = []
+    for _ in range(300):
+        s, e = (None, None) if rng.random() < 0.1 else tuple(int(x) for x in rng.integers(0, 6, 2))
+        m = int(rng.integers(1, 5))
+        pts = np.round(rng.random((m, 3)) * 3) / 3  # many ties in the leading coordinates
+        if rng.random() < 0.2 and curves:  # exact duplicates of an earlier curve
+            other = curves[int(rng.integers(len(curves)))]
+            s, e, pts = other.start, other.end, other.points.copy()
+        curves.append(Curve(pts, s, e, s is None))
+    assert _key_order(curves, 6) == sorted(range(len(curves)), key=lambda i: _key(curves[i], 6))

@@ -2,12 +2,46 @@
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+from contextvars import ContextVar
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._sigint import held
 
-__all__ = ["knn", "build_tree", "locality_order", "query"]
+__all__ = ["knn", "build_tree", "locality_order", "query", "one_thread", "query_threads"]
+
+#: Threads of the neighbour queries in this context (-1: every core; see :func:`one_thread`).
+_THREADS: ContextVar[int] = ContextVar("curvenet_query_threads", default=-1)
+
+
+def query_threads() -> int:
+    """The threads a neighbour query takes here: -1 (every core) unless within :func:`one_thread`."""
+    return _THREADS.get()
+
+
+@contextmanager
+def one_thread():
+    """Run the enclosed work on the calling thread alone: the neighbour queries, and numba's
+    parallel loops when numba is loaded (its thread count is the calling thread's own).
+
+    For a task of a Dask worker that has one thread: the workers of a machine share its cores,
+    and a task that spread over every core would contend with the others.
+    """
+    import sys
+
+    token = _THREADS.set(1)
+    numba = sys.modules.get("numba")
+    old = numba.get_num_threads() if numba is not None else None
+    if numba is not None:
+        numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        _THREADS.reset(token)
+        if numba is not None:
+            numba.set_num_threads(old)
 
 
 def build_tree(points: np.ndarray) -> cKDTree:
@@ -22,7 +56,7 @@ def query(tree: cKDTree, x: np.ndarray, **kwargs):
         return tree.query(x, **kwargs)
 
 
-def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int = -1,
+def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int | None = None,
         ordered: bool = False, rows: np.ndarray | None = None, index_dtype=np.int64):
     """The ``k`` nearest neighbours of every point, the point itself excluded.
 
@@ -34,8 +68,8 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
         Number of neighbours; clipped to ``N - 1``.
     tree : cKDTree, optional
         A tree over ``points`` to reuse.
-    workers : int
-        Threads for the query (-1: all cores).
+    workers : int, optional
+        Threads for the query (-1: all cores); default :func:`query_threads`.
     ordered : bool
         The points are already in a cache-friendly order (e.g. numbered by
         :func:`locality_order`): they are queried as numbered. Otherwise, above 100,000 points,
@@ -55,6 +89,7 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
         order of the input points up to that relabelling.
     """
     n = len(points)
+    workers = query_threads() if workers is None else workers
     sel = None if rows is None else np.asarray(rows, dtype=np.int64)
     n_out = n if sel is None else len(sel)
     k = int(min(k, max(n - 1, 0)))

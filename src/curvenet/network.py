@@ -392,7 +392,7 @@ class CurveNetwork:
             ):
                 cc = cc.reversed()
             curves.append(cc)
-        curves.sort(key=lambda c: _key(c, decimals))
+        curves = [curves[i] for i in _key_order(curves, decimals)]
         return CurveNetwork(self.nodes[order], curves, dict(self.parameters), dict(self.stats))
 
     def to_networkx(self) -> "networkx.MultiGraph":
@@ -628,6 +628,23 @@ _PALETTE = (
 
 def _lexmin(p: np.ndarray) -> int:
     return int(np.lexsort(p.T[::-1])[0])
+
+
+def _key_order(curves: list[Curve], decimals: int) -> list[int]:
+    """``sorted(range(len(curves)), key=lambda i: _key(curves[i], decimals))``, with the
+    polyline part of the key (a tuple of every rounded coordinate: about 100 bytes a point)
+    built only for the curves that share both end nodes with another: the order by end nodes
+    is a stable sort of two integer columns, and only its runs of equal ends need the rest."""
+    ends = np.array([[-1 if c.start is None else c.start, -1 if c.end is None else c.end] for c in curves],
+                    dtype=np.int64).reshape(-1, 2)
+    order = np.lexsort((ends[:, 1], ends[:, 0]))  # (stable: ties keep the order of ``curves``)
+    out = order.tolist()
+    E = ends[order]
+    same = np.concatenate([[0], (E[1:] == E[:-1]).all(axis=1).astype(np.int8), [0]])
+    runs = np.diff(same)
+    for a, b in zip(np.flatnonzero(runs == 1).tolist(), (np.flatnonzero(runs == -1) + 1).tolist()):
+        out[a:b] = sorted(out[a:b], key=lambda i: _key(curves[i], decimals))
+    return out
 
 
 def _key(c: Curve, decimals: int) -> tuple[int, int, tuple[float, ...]]:

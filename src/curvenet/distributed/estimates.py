@@ -24,7 +24,7 @@ from ..methods.robust import Estimates, dedup_applies, dedup_radius, point_estim
 from ..methods.robust.thresholds import DEFAULTS
 from .grid import TileGrid
 from .scratch import read_values, write_values
-from .tasks import METHOD_LOCK, tile_points
+from .tasks import method_slot, tile_points
 
 __all__ = ["MEDIAN_BIN_SHIFT", "REACH_FACTOR", "TileValues", "bin_keys", "sparse_counts", "merge_counts",
            "middle_bins", "median_of", "tile_values", "tile_count_below", "tile_values_in",
@@ -132,7 +132,7 @@ def tile_values(root: str, grid: TileGrid, key, halo: float, lo, hi, radius: flo
         for name in _NAMES:
             write_values(root, key, f"{tag}-{name}", np.zeros(0))
         return TileValues(0, int(own.sum()), {"h": merge_counts([]), "rms": merge_counts([])})
-    with METHOD_LOCK:
+    with method_slot():
         v = point_estimates(P, dedup_radius=radius)
     mine = own[v.order]
     margin = _margins(P[v.order[mine]], grid, key, halo, np.asarray(lo, float), np.asarray(hi, float))

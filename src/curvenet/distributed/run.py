@@ -29,8 +29,10 @@ TILE_AUTO_POINTS: int = 400_000
 #: The whole-cloud estimates are first computed on whole tiles of at most about this many points
 #: in all (every tile when the cloud is smaller: then they are exactly the one-process values);
 #: for a larger cloud this sample only sets the scale (the halo) of the exact pass over every
-#: tile (:mod:`.estimates`).
-ESTIMATE_POINTS: int = 1_000_000
+#: tile (:mod:`.estimates`), which runs on every worker at once: the sample is one task, so it
+#: is kept small (the scale needs no more than a tile; the exact pass certifies it, see
+#: ``estimates_exact``).
+ESTIMATE_POINTS: int = 250_000
 #: A task that raises is retried this many times before the run fails (a lost worker's tasks
 #: are rescheduled by Dask itself).
 TASK_RETRIES: int = 2

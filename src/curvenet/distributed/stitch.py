@@ -158,7 +158,8 @@ def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> Curve:
             end = None
             break
         cur, s_in = nxt, s_next
-    P, I = np.vstack(pts), np.concatenate(ids)
+    # (one piece: its own arrays, no copy)
+    P, I = (pts[0], ids[0]) if len(pts) == 1 else (np.vstack(pts), np.concatenate(ids))
     if closed or start[0] != "node" or end is None:
         return Curve(P, None, None, True, I)
     return Curve(P, start[1], end[1], False, I)

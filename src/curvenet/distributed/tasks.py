@@ -10,21 +10,33 @@
 from __future__ import annotations
 
 import threading
+from contextlib import contextmanager
 
 import numpy as np
 
 from ..methods.robust import Estimates, estimate, reconstruct_robust
+from ..neighbors import one_thread
 from .cut import TilePieces, cut_network, fit_whole_pieces
 from .grid import TileGrid
 from .inputs import Chunk, read_chunk, scan_chunk
 from .scratch import read_tile, write_part
 
-__all__ = ["scan", "bin_chunk", "estimate_sample", "run_tile", "tile_points", "METHOD_LOCK"]
+__all__ = ["scan", "bin_chunk", "estimate_sample", "run_tile", "tile_points", "METHOD_LOCK", "method_slot"]
 
 #: One run of the method at a time per process: the method switches its kernels (compiled or
 #: plain Python) through module globals, which is not safe from two threads at once (the
 #: ``threads`` scheduler runs several tasks in one process; worker processes run one each).
 METHOD_LOCK = threading.Lock()
+
+
+@contextmanager
+def method_slot():
+    """The method's run within a task: one at a time per process (:data:`METHOD_LOCK`), on the
+    task's own thread (:func:`curvenet.neighbors.one_thread`: a worker has one thread, and the
+    workers of a machine share its cores; a task spread over all of them contends with the
+    others' tasks)."""
+    with METHOD_LOCK, one_thread():
+        yield
 
 
 def scan(chunk: Chunk, columns=None, drop_nonfinite: bool = False):
@@ -84,7 +96,7 @@ def estimate_sample(root: str, keys: list) -> tuple[Estimates, int]:
     """
     parts = [p for key in keys for p, _ in read_tile(root, key)]
     P = np.vstack(parts)
-    with METHOD_LOCK:
+    with method_slot():
         return estimate(P), int(len(P))
 
 
@@ -95,10 +107,10 @@ def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, 
     whole curves are fitted here (:func:`.cut.fit_whole_pieces`); the stitching fits the
     curves that cross a face, once whole."""
     P, ids = tile_points(root, grid, key, halo)
-    with METHOD_LOCK:
-        net = reconstruct_robust(P, estimates=estimates, fit=False)  # fitted once stitched
-    out = cut_network(net, grid, key, ids, occupied)
-    out.n_points = int(len(P))
-    if not estimates.clean:  # the method's fit under noise, of the curves this tile holds whole
-        out = fit_whole_pieces(out, estimates.sigma)
+    with method_slot():
+        net = reconstruct_robust(P, estimates=estimates, fit=False)  # fitted below, or once stitched
+        out = cut_network(net, grid, key, ids, occupied)
+        out.n_points = int(len(P))
+        if not estimates.clean:  # the method's fit under noise, of the curves this tile holds whole
+            out = fit_whole_pieces(out, estimates.sigma)
     return out

@@ -14,6 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ... import _sigint
+from ...neighbors import query_threads
 from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, polylen, step_lengths
 from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
@@ -295,7 +296,7 @@ def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
     # points, built for the k-NN query: points of no chain are left out by their owner -1)
     allp = np.concatenate(tpts)
     with _sigint.held():
-        near = sc.tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=-1)
+        near = sc.tree.query_ball_point(P[allp], np.repeat(reach_of, [len(x) for x in tpts]), workers=query_threads())
     cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
     qall = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))
     qoff = np.r_[0, np.cumsum(cnt)]
