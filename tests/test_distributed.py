@@ -473,3 +473,36 @@ def test_a_task_runs_the_method_on_its_own_thread(monkeypatch):
     neighbors.knn(P, 4)
     assert seen == [-1, 1, -1]
     assert numba.get_num_threads() == numba.config.NUMBA_NUM_THREADS
+
+
+def _fast(x):
+    return np.full(1000, x)
+
+
+def _slow_then_look(keys):
+    # a task that outlives the others, then says which of their results its worker still holds
+    from distributed import get_worker
+
+    time.sleep(3.0)
+    data = get_worker().data
+    return [k for k in keys if k in data]
+
+
+def test_a_pass_releases_each_result_on_the_workers_once_fetched():
+    # the tiles' pieces of a large cloud must not pile up on the workers until a pass ends
+    from curvenet.distributed.run import _gather
+
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None)
+    c = distributed.Client(cluster)
+    try:
+        fast = {i: c.submit(_fast, i, key=f"fast-{i}") for i in range(3)}
+        distributed.wait(list(fast.values()))
+        futs = dict(fast)
+        futs["slow"] = c.submit(_slow_then_look, [f"fast-{i}" for i in range(3)], key="slow")
+        del fast
+        out = _gather(c, futs, lambda label, exc: exc)
+        assert [int(out[i][0]) for i in range(3)] == [0, 1, 2]
+        assert out["slow"] == []  # released while the slow task still ran
+    finally:
+        c.close()
+        cluster.close()

@@ -82,14 +82,18 @@ def make_client(scheduler: str = "processes", workers: int | None = None, *, das
 def _gather(client, futures: dict, what):
     """Wait for every future (Ctrl-C checked meanwhile); the first failure raises.
 
-    ``futures`` maps a label to a future; ``what(label, exc)`` gives the error to raise. Whatever
-    the outcome, the futures are released on the way out (cancelled if still pending, their
-    results dropped from the workers): nothing of a phase stays alive on the cluster, so a worker
-    lost later makes Dask recompute only the tasks still needed, never the tasks of a finished
-    phase or run (whose scratch store may be gone by then).
+    ``futures`` maps a label to a future; ``what(label, exc)`` gives the error to raise. Each
+    result is fetched as soon as its task finishes and then released on the cluster, so a
+    worker holds the results of its finished tasks only until the client has them (not until
+    the whole pass ends: the tiles' pieces of a large cloud would pile up on the workers).
+    Whatever the outcome, the futures are released on the way out (cancelled if still pending):
+    nothing of a phase stays alive on the cluster, so a worker lost later makes Dask recompute
+    only the tasks still needed, never the tasks of a finished phase or run (whose scratch store
+    may be gone by then).
     """
     from distributed import wait
 
+    results: dict = {}
     try:
         pending = list(futures.values())
         while pending:
@@ -101,10 +105,13 @@ def _gather(client, futures: dict, what):
             for label, f in futures.items():
                 if f.status == "error":
                     raise what(label, f.exception())
-            pending = [f for f in pending if f.status not in ("finished", "error")]
-        return {label: f.result() for label, f in futures.items()}
+                if f.status == "finished" and label not in results:
+                    results[label] = f.result()
+                    f.release()
+            pending = [f for label, f in futures.items() if label not in results]
+        return {label: results[label] for label in futures}
     finally:
-        client.cancel(list(futures.values()))
+        client.cancel([f for label, f in futures.items() if label not in results])
 
 
 def _one_line(exc: BaseException) -> str:
