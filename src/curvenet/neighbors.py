@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from contextlib import contextmanager
 from contextvars import ContextVar
 
@@ -29,8 +30,6 @@ def one_thread():
     For a task of a Dask worker that has one thread: the workers of a machine share its cores,
     and a task that spread over every core would contend with the others.
     """
-    import sys
-
     token = _THREADS.set(1)
     numba = sys.modules.get("numba")
     old = numba.get_num_threads() if numba is not None else None

@@ -18,7 +18,7 @@ from ..methods.robust.curves import fit_curves
 from ..network import Curve, CurveNetwork
 from .grid import TileGrid
 
-__all__ = ["Piece", "TilePieces", "cut_network", "piece_curve", "fit_whole_pieces"]
+__all__ = ["Piece", "TilePieces", "cut_network", "fit_whole_pieces"]
 
 
 @dataclass
@@ -144,13 +144,13 @@ def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray, occupie
                       np.array(ports, float).reshape(-1, d), np.array(tans, float).reshape(-1, d))
 
 
-def piece_curve(points: np.ndarray, indices: np.ndarray, ends) -> Curve:
-    """The curve the stitching makes of a run of pieces whose first one has ``ends`` (None: a
-    closed loop kept whole) and whose vertices are ``points`` (m, d), ``indices`` (m,); node
-    ids are left to the caller (0 here: the fit reads only the points and the closedness)."""
-    if ends is None:
-        return Curve(points, None, None, True, indices)
-    return Curve(points, 0, 0, False, indices)
+def _whole_curve(pc: Piece) -> Curve:
+    """The curve a whole piece stands for, as the stitching makes it (a loop kept whole is
+    closed; a piece between two nodes is open); node ids 0 (the fit reads only the points and
+    the closedness)."""
+    if pc.ends is None:
+        return Curve(pc.points, None, None, True, pc.indices)
+    return Curve(pc.points, 0, 0, False, pc.indices)
 
 
 def fit_whole_pieces(tile: TilePieces, sigma: float) -> TilePieces:
@@ -170,8 +170,7 @@ def fit_whole_pieces(tile: TilePieces, sigma: float) -> TilePieces:
         The same tile with those pieces replaced by fitted ones (``fitted`` set).
     """
     whole = [i for i, pc in enumerate(tile.pieces) if pc.ends is None or all(e[0] == "node" for e in pc.ends)]
-    fitted = fit_curves([piece_curve(tile.pieces[i].points, tile.pieces[i].indices, tile.pieces[i].ends)
-                         for i in whole], sigma)
+    fitted = fit_curves([_whole_curve(tile.pieces[i]) for i in whole], sigma)
     pieces = list(tile.pieces)
     for i, c in zip(whole, fitted):
         pieces[i] = Piece(c.points, tile.pieces[i].indices, tile.pieces[i].ends, True)

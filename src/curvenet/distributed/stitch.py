@@ -102,7 +102,7 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma:
             ends.append(e)
 
     curves: list[Curve] = []
-    done: list[bool] = []  # fitted by its tile (one whole piece)
+    done: list[bool] = []  # fitted by its tile (a fitted piece is a whole curve: its walk is itself)
     used = np.zeros(len(pieces), dtype=bool)
     for i, e in enumerate(ends):
         if e is None:
@@ -115,13 +115,12 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma:
             continue
         for side in (0, 1):
             if e[side][0] == "node":
-                c, n_walked = _walk(i, side, pieces, ends, owner, partner, used, closed=False)
-                curves.append(c)
-                done.append(pieces[i].fitted and n_walked == 1)
+                curves.append(_walk(i, side, pieces, ends, owner, partner, used, closed=False))
+                done.append(pieces[i].fitted)
                 break
     for i in range(len(pieces)):  # what is left are loops of cut nodes only
         if not used[i]:
-            curves.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True)[0])
+            curves.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True))
             done.append(False)
     todo = [] if sigma is None else [i for i, f in enumerate(done) if not f]
     for i, c in zip(todo, fit_curves([curves[i] for i in todo], sigma)):
@@ -134,9 +133,9 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma:
     return net
 
 
-def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> tuple[Curve, int]:
+def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> Curve:
     """Follow pieces from piece ``i`` entering at ``side`` through joined ports; drop the port
-    midpoints on the way. Returns the curve and how many pieces it joins."""
+    midpoints on the way."""
     start = ends[i][side]
     pts, ids = [], []
     cur, s_in = i, side
@@ -161,5 +160,5 @@ def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> tuple[Curve
     # (one piece: its own arrays, no copy)
     P, I = (pts[0], ids[0]) if len(pts) == 1 else (np.vstack(pts), np.concatenate(ids))
     if closed or start[0] != "node" or end is None:
-        return Curve(P, None, None, True, I), len(pts)
-    return Curve(P, start[1], end[1], False, I), len(pts)
+        return Curve(P, None, None, True, I)
+    return Curve(P, start[1], end[1], False, I)
