@@ -238,16 +238,43 @@ def _cache_index(name: str) -> str | None:
 
 def _in_cache(names) -> bool:
     """True when numba's disk cache holds a compiled version of every kernel ``names`` (none:
-    True): its index file exists and is newer than the kernel's source (numba drops an index
-    older than its source)."""
+    True) that this process will load instead of compiling: see :func:`_loads_from_cache`."""
     for name in names:
-        path = _cache_index(name)
-        try:
-            if path is None or os.path.getmtime(path) < os.path.getmtime(KERNELS[name].plain.__code__.co_filename):
-                return False
-        except OSError:
+        answer = _loads_from_cache(KERNELS[name].compiled)
+        if answer is None:  # (a numba without the cache objects read there)
+            answer = _index_newer_than_source(name)
+        if not answer:
             return False
     return True
+
+
+def _loads_from_cache(dispatcher) -> bool | None:
+    """numba's own answer to "will ``dispatcher`` load from the disk cache": its cache index is
+    fresh by numba's rule (same numba version, same source stamp: the source file's time and
+    size in older numba, a hash of its content since 0.6x, so a reinstalled but unchanged source
+    still loads) and holds an entry compiled for this machine's processor. None when this numba
+    does not expose its cache index (the attributes read here are numba's, not documented)."""
+    try:
+        cache_file = dispatcher._cache._cache_file
+        magic = dispatcher.targetctx.codegen().magic_tuple()
+    except AttributeError:
+        return None
+    try:
+        index = cache_file._load_index()
+    except Exception:  # an unreadable index: numba would compile
+        return False
+    return any(len(key) > 1 and key[1] == magic for key in index)
+
+
+def _index_newer_than_source(name: str) -> bool:
+    """The cache rule of older numba, for a numba whose cache objects are not readable: the
+    kernel's index file exists and is newer than its source."""
+    path = _cache_index(name)
+    try:
+        return path is not None and os.path.getmtime(path) >= os.path.getmtime(
+            KERNELS[name].plain.__code__.co_filename)
+    except OSError:
+        return False
 
 
 def _compiled_already() -> bool:
