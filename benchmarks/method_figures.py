@@ -87,7 +87,7 @@ SECTIONS = {
     "LINKS": ("LINKS", "NOISY", "STRAND"),
     "JUNCTIONS": ("SHELL", "SPLIT"),
     "CHAINS": ("CHAINS", "ENDS"),
-    "REPAIRS": ("REPAIRS", "PAIRED"),
+    "REPAIRS": ("REPAIRS", "PAIRED", "SPANNING"),
     "NODES": ("NODES",),
     "CURVES": ("CURVES", "FIT", "UNTANGLE"),
     "NUMERIC": ("NUMERIC", "LINALG"),

@@ -21,7 +21,7 @@ from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
 from curvenet.methods.robust.params import RobustParams, Scales
-from curvenet.methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS
+from curvenet.methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
 from curvenet.methods.robust.topology import Topology
 
 PRM = RobustParams()
@@ -675,8 +675,65 @@ def test_split_paired_junctions_keeps_a_jog_under_the_separation():
     assert _state(topo) == before
 
 
+# ------------------------------------------------------------------------------ split_multiple_junctions
+def _row(d, teeth=3):
+    """A comb's spine along x with ``teeth`` teeth going up ``d`` apart (junctions at x = 0, d,
+    ...), seen as one region under noise: the spine's points from -3 to the last tooth + 3 and
+    three points up each tooth; every branch's chain ends 4 h from its junction."""
+    net = _Net()
+    xs = [i * d for i in range(teeth)]
+    n = int(np.ceil(xs[-1] + 6)) + 1
+    X = np.r_[_line((-3, 0), (xs[-1] + 3, 0), n), [[x, y] for x in xs for y in (1, 2, 3)]]
+    r = net.region(X)
+    net.chain(_line((-15, 0), (-4, 0), 12), (-1, r))
+    for x in xs:
+        net.chain(_line((x, 15), (x, 4), 12), (-1, r))
+    net.chain(_line((xs[-1] + 15, 0), (xs[-1] + 4, 0), 12), (-1, r))
+    return net.topology(), r
+
+
+def test_split_multiple_junctions_parts_a_row_of_three_under_noise():
+    topo, r = _row(4.0)
+    n_reg, n_chains = len(topo.regions), len(topo.chains)
+    assert topo.v[r] == 5
+    _run(R.split_multiple_junctions, topo, PAIR_NOISE)
+    assert len(topo.regions) == n_reg + 2 and len(topo.chains) == n_chains + 2
+    assert [int(topo.v[q]) for q in (r, n_reg, n_reg + 1)] == [3, 3, 3]
+    # each junction holds its tooth, the new chains run along the spine between the junctions
+    centre = {q: topo.P[topo.regions[q]].mean(axis=0) for q in (r, n_reg, n_reg + 1)}
+    # (the first and last hold the spine's region points beyond them too: 1 h off)
+    assert np.allclose(sorted(float(c[0]) for c in centre.values()), [0, 4, 8], atol=1.0)
+    for j in (n_chains, n_chains + 1):
+        X = topo.P[topo.chains[j].ids]
+        assert topo.alive[j] and np.allclose(X[:, 1], 0) and len(X) >= 1
+        row = sorted(centre, key=lambda q: centre[q][0])
+        assert sorted(topo.chains[j].ends) in (sorted(row[:2]), sorted(row[1:]))  # neighbours
+    for i in range(n_chains):  # every tooth and spine end at the junction nearest it
+        c = topo.chains[i]
+        (s,) = [s for s in (0, 1) if c.ends[s] in centre]
+        end = topo.P[topo.end_ids(i, s)[-1]]
+        q = c.ends[s]
+        assert np.linalg.norm(end - centre[q]) == min(np.linalg.norm(end - x) for x in centre.values())
+
+
+def test_split_multiple_junctions_leaves_a_row_under_the_separation():
+    topo, _ = _row(SPANNING.sep - EPS)
+    _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
+
+
+def test_split_multiple_junctions_leaves_a_pair_to_the_paired_split():
+    topo, r = _row(4.0, teeth=2)
+    assert topo.v[r] == 4 < SPANNING.region_valence
+    _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
+
+
+def test_split_multiple_junctions_leaves_noise_free_input():
+    topo, _ = _row(4.0)
+    _assert_untouched(R.split_multiple_junctions, topo, 0.0)
+
+
 # ------------------------------------------------------------------------------ the order
-TESTED = (R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
+TESTED = (R.split_multiple_junctions, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
           R.merge_close_junctions, R.split_paired_junctions)
 

@@ -35,7 +35,8 @@ from .params import RobustParams, Scales
 from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
-__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "best_pair", "best_pairs"]
+__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "best_pair",
+           "best_pairs"]
 
 
 class Lines(NamedTuple):
@@ -142,6 +143,13 @@ def meeting_point(c: np.ndarray, u: np.ndarray, anchor: np.ndarray) -> np.ndarra
     """
     L = Lines(c[None], u[None], c[None], np.zeros((1, len(c))))
     return _group_points(L, np.ones((1, len(c))), np.asarray(anchor, dtype=np.float64)[None])[0]
+
+
+def meet_at_one_point(L: Lines, anchor: np.ndarray) -> bool:
+    """Whether every line of ``L`` (m lines) meets their least-squares meeting point
+    (:func:`meeting_point`, held near ``anchor``): the branches of one junction."""
+    x = meeting_point(L.c, L.u, anchor)
+    return bool(_meets_all(L, np.broadcast_to(x, L.c.shape)).all())
 
 
 def _meets_all(L: Lines, x: np.ndarray) -> np.ndarray:

@@ -19,13 +19,14 @@ from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, po
 from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
+from .spanning import split_multiple_junctions
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS
 from .topology import Topology
 
 __all__ = ["ORDER", "run_repairs", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
            "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "join_through_pass_regions",
-           "merge_close_junctions", "close_tip_pairs"]
+           "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions"]
 
 
 def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> None:
@@ -525,6 +526,7 @@ def _aims_at(P, h, sc, chains, inc, xpos, hub, noise) -> bool:
 
 #: The repairs in the order :func:`run_repairs` applies them.
 ORDER = (
+    split_multiple_junctions,  # (first: the row's region as the shell test left it)
     merge_near_pass_through,
     absorb_short_loops,
     absorb_orphans,

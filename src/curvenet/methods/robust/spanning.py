@@ -1,0 +1,311 @@
+"""Several junctions seen as one region under noise, read from the spanning tree of its points.
+
+A row of junctions a few spacings apart (a comb's teeth leaving its spine, a ladder's rungs on
+a rail, a street with short links, a roof outline with notches) lies within one shell once the
+shell is widened for noise: the shell test flags one region, found as one node of high valence.
+:func:`.paired.split_paired_junctions` parts a region into two junctions by the lines of its
+branches; a row of three or more needs another reading. The minimum spanning tree of the points
+around the region shows it: noise makes only short leaf branches (a sample off the curve hangs
+on its neighbour), so once leaf branches shorter than ``SPANNING.prune`` spacings (plus twice
+the noise) are cut, the tree is the skeleton of the curves, and its vertices with three or more
+branches gather at the junctions. Those within ``SPANNING.cluster`` spacings of one another are
+one junction (an X crossing shows two vertices of three branches close together); a single
+vertex whose branches leave within ``SPANNING.arm_cos`` of one another is the tree hopping
+between two close curves, not a junction.
+
+:func:`split_plan` returns the junctions (cores) of one region when there are at least
+``SPANNING.min_cores`` of them, each ``SPANNING.sep`` spacings from the others, and each of
+valence 3 or more: its share of the region's chain ends (the tree vertex of each end point goes
+to the nearest core along the tree) plus the tree paths to its neighbouring cores. A core of
+valence under 3 (a bend of the spine, or the region's end where the next junction is another
+region) is merged into its nearest neighbour first. :func:`split_multiple_junctions` (a repair
+of :data:`.repairs.ORDER`, the first: before any other repair reads the region) then splits the
+cores off the region one leaf of the core tree at a time (:meth:`.topology.Topology.split_region`),
+each joined to its neighbour by a new chain of the region's points along the tree path between
+them. Noise-free input is left as it is (:func:`.junctions.separate_close_junctions` resolves
+such rows there); a pair is left to :func:`.paired.split_paired_junctions`, whose line-based
+test places two junctions better (measured on the real-dev buildings' jogs under noise 0.2h).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..emst import emst_edges
+from .paired import branch_lines, meet_at_one_point
+from .params import RobustParams, Scales
+from .thresholds import NODES, SPANNING
+from .topology import Topology
+
+__all__ = ["split_multiple_junctions", "split_plan", "Plan", "pruned_tree"]
+
+
+class Plan(NamedTuple):
+    """How one region splits into a row of junctions (the result of :func:`split_plan`).
+
+    Attributes
+    ----------
+    ends : dict of int to list of (int, int)
+        Per core, the region's chain ends ``(chain, side)`` that belong to it.
+    steps : list of (int, int, ndarray, ndarray)
+        In order: the core split off (a leaf of the cores' tree among those left), its
+        neighbour, the new region's points and the new chain's points (ordered from the
+        neighbour, still in the region, to the new region).
+    """
+
+    ends: dict
+    steps: list
+
+
+def pruned_tree(X: np.ndarray, cut: float) -> list[set]:
+    """The minimum spanning tree of the points ``X`` (n, d), as adjacency sets, without its
+    leaf branches shorter than ``cut``.
+
+    A leaf branch runs from a vertex of one tree edge to the first vertex of three or more; it
+    is cut (its vertices lose their edges) when its length is under ``cut``. Up to
+    ``SPANNING.prune_passes`` passes (cutting a branch can leave a short one behind).
+    """
+    n = len(X)
+    adj: list[set] = [set() for _ in range(n)]
+    for a, b in emst_edges(X, k=min(SPANNING.k, n - 1)).tolist():
+        adj[a].add(b)
+        adj[b].add(a)
+    for _ in range(SPANNING.prune_passes):
+        changed = False
+        for leaf in range(n):
+            if len(adj[leaf]) != 1:
+                continue
+            path, length, prev, cur = [leaf], 0.0, -1, leaf
+            while True:
+                nxt = [v for v in adj[cur] if v != prev]
+                if not nxt or len(adj[cur]) > 2:
+                    break
+                v = nxt[0]
+                length += float(np.linalg.norm(X[v] - X[cur]))
+                prev, cur = cur, v
+                if len(adj[cur]) > 2 or length >= cut:
+                    break
+                path.append(cur)
+            if len(adj[cur]) > 2 and length < cut:
+                for p in path:
+                    for v in adj[p]:
+                        adj[v].discard(p)
+                    adj[p] = set()
+                changed = True
+        if not changed:
+            break
+    return adj
+
+
+def _arms_apart(X: np.ndarray, adj: list[set], v: int, reach: float) -> bool:
+    """The branches of vertex ``v`` leave in directions (to their point ``reach`` along the
+    tree, or their last before a fork) pairwise over ``SPANNING.arm_cos`` apart."""
+    dirs = []
+    for s in sorted(adj[v]):
+        prev, cur = v, s
+        length = float(np.linalg.norm(X[s] - X[v]))
+        while length < reach:
+            nxt = [u for u in adj[cur] if u != prev]
+            if len(nxt) != 1:
+                break
+            prev, cur = cur, nxt[0]
+            length += float(np.linalg.norm(X[cur] - X[prev]))
+        d = X[cur] - X[v]
+        dirs.append(d / max(float(np.linalg.norm(d)), np.finfo(float).tiny))
+    D = np.array(dirs)
+    cos = D @ D.T
+    return bool(np.all(cos[np.triu_indices(len(D), 1)] <= SPANNING.arm_cos))
+
+
+def _labels(X: np.ndarray, adj: list[set], sources: dict) -> np.ndarray:
+    """The core of every tree vertex: that of the nearest source vertex along the tree
+    (``sources``: vertex -> core), -1 where none is reachable."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    n = len(X)
+    a = np.array([u for u in range(n) for w in adj[u]], dtype=np.int64)
+    b = np.array([w for u in range(n) for w in adj[u]], dtype=np.int64)
+    w = np.linalg.norm(X[a] - X[b], axis=1) if len(a) else np.zeros(0)
+    G = coo_matrix((w + np.finfo(float).tiny, (a, b)), shape=(n, n)).tocsr()
+    src = np.array(sorted(sources), dtype=np.int64)
+    _, _, nearest = dijkstra(G, directed=False, indices=src, min_only=True, return_predecessors=True)
+    lab = np.full(n, -1, dtype=np.int64)
+    ok = nearest >= 0
+    lab[ok] = [sources[int(s)] for s in nearest[ok].tolist()]
+    return lab
+
+
+def _tree_path(adj: list[set], a: int, b: int) -> list[int] | None:
+    """The vertices of the tree path from ``a`` to ``b`` (None: not connected)."""
+    prev = {a: -1}
+    stack = [a]
+    while stack:
+        u = stack.pop()
+        if u == b:
+            break
+        for w in sorted(adj[u]):
+            if w not in prev:
+                prev[w] = u
+                stack.append(w)
+    if b not in prev:
+        return None
+    out = [b]
+    while out[-1] != a:
+        out.append(prev[out[-1]])
+    return out[::-1]
+
+
+def _cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noise: float) -> list[list[int]]:
+    """The junctions the pruned tree shows inside the region: its vertices of three or more
+    branches, those within ``SPANNING.cluster`` spacings (plus the noise) of one another taken
+    together; a lone vertex whose branches do not leave apart (:func:`_arms_apart`) is none.
+    Each as its vertices, the one nearest their mean first."""
+    bv = np.array([v for v in range(len(X)) if len(adj[v]) > 2 and inside[v]], dtype=np.int64)
+    if len(bv) < SPANNING.min_cores:
+        return []
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(X[bv]).query_pairs(SPANNING.cluster * hl + noise, output_type="ndarray")
+    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(bv), len(bv)))
+    _, lab = connected_components(g, directed=False)
+    out = []
+    for c in range(int(lab.max()) + 1):
+        mem = bv[lab == c]
+        if len(mem) == 1 and not _arms_apart(X, adj, int(mem[0]), SPANNING.arm * hl):
+            continue
+        m = X[mem].mean(axis=0)
+        order = np.argsort(np.linalg.norm(X[mem] - m, axis=1), kind="stable")
+        out.append(mem[order].tolist())
+    return out
+
+
+def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray, ends: list,
+               end_points: np.ndarray) -> Plan | None:
+    """How the region of points ``ids`` splits into a row of junctions (None: it does not).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        All points.
+    tree : scipy.spatial.cKDTree
+        Over ``P``.
+    h : (N,) ndarray
+        Local spacing.
+    noise : float
+        The noise scale.
+    ids : (m,) ndarray of int64
+        The region's points.
+    ends : list of (int, int)
+        The chain ends ``(chain, side)`` at the region.
+    end_points : (len(ends),) ndarray of int64
+        The point of each chain end next to the region.
+
+    Returns
+    -------
+    Plan or None
+    """
+    hl = float(np.median(h[ids]))
+    near = np.unique(np.concatenate(tree.query_ball_point(P[ids], SPANNING.margin * hl)).astype(np.int64))
+    near = np.union1d(near, end_points)
+    X = P[near]
+    adj = pruned_tree(X, SPANNING.prune * hl + SPANNING.prune_noise * noise)
+    inside = np.isin(near, ids)
+    cores = _cores(X, adj, inside, hl, noise)
+    if len(cores) < SPANNING.min_cores:
+        return None
+    lab = _labels(X, adj, {v: k for k, mem in enumerate(cores) for v in mem})
+    at = np.searchsorted(near, end_points)
+    centre = np.array([X[mem[0]] for mem in cores])
+    live = list(range(len(cores)))
+    while True:  # cores of valence under 3 merged into their nearest neighbour
+        nbr = {k: set() for k in live}
+        for u in range(len(X)):
+            for w in adj[u]:
+                if lab[u] >= 0 and lab[w] >= 0 and lab[u] != lab[w]:
+                    nbr[int(lab[u])].add(int(lab[w]))
+        own = np.array([lab[j] if lab[j] >= 0 else
+                        live[int(np.argmin(np.linalg.norm(centre[live] - P[e], axis=1)))]
+                        for j, e in zip(at.tolist(), end_points.tolist())], dtype=np.int64)
+        val = {k: int(np.sum(own == k)) + len(nbr[k]) for k in live}
+        weak = [k for k in live if val[k] < NODES.junction_valence and nbr[k]]
+        if not weak or len(live) < SPANNING.min_cores:
+            break
+        k = min(weak, key=lambda q: (val[q], q))
+        into = min(sorted(nbr[k]), key=lambda q: float(np.linalg.norm(centre[q] - centre[k])))
+        lab[lab == k] = into
+        live.remove(k)
+    if len(live) < SPANNING.min_cores or min(val.values()) < NODES.junction_valence:
+        return None
+    if max(val.values()) > SPANNING.max_valence:  # a hub of many strokes, spread by the noise
+        return None
+    if sum(len(s) for s in nbr.values()) != 2 * (len(live) - 1):  # the cores' graph is a tree
+        return None
+    C = centre[live]
+    gap = np.linalg.norm(C[:, None] - C[None], axis=2)
+    if np.min(gap + np.diag(np.full(len(live), np.inf))) < SPANNING.sep * hl:
+        return None
+    # the core of every region point: that of its tree vertex, else the nearest core
+    owner = lab[np.searchsorted(near, ids)]
+    lost = np.flatnonzero(owner < 0)
+    if len(lost):
+        owner[lost] = np.array(live)[np.argmin(np.linalg.norm(P[ids[lost]][:, None] - C[None], axis=2), axis=1)]
+    steps = []
+    left = set(live)
+    region = ids
+    while len(left) > 1:
+        leaf = min(k for k in left if len(nbr[k] & left) == 1)
+        to = min(nbr[leaf] & left)
+        a, b = cores[to][0], cores[leaf][0]
+        path = _tree_path(adj, a, b)
+        if path is None:
+            return None
+        ra = min(SPANNING.core * hl + noise, SPANNING.core_share * float(np.linalg.norm(X[a] - X[b])))
+        pts = near[path]
+        far = (np.linalg.norm(P[pts] - X[a], axis=1) > ra) & (np.linalg.norm(P[pts] - X[b], axis=1) > ra)
+        seg = pts[far & np.isin(pts, region)]
+        if not len(seg):
+            return None
+        mine = np.isin(region, ids[owner == leaf]) & ~np.isin(region, seg)
+        new_ids = region[mine] if mine.any() else np.array([near[b]], dtype=np.int64)
+        steps.append((leaf, to, new_ids, seg))
+        region = region[~np.isin(region, np.r_[new_ids, seg])]
+        left.discard(leaf)
+    return Plan({k: [e for e, o in zip(ends, own.tolist()) if o == k] for k in live}, steps)
+
+
+def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Every region of valence ``SPANNING.region_valence`` or more that holds a row of
+    junctions (:func:`split_plan`) becomes those junctions, joined by new chains.
+
+    Noisy input only; a region with a chain that has both ends there (a loop) is left as it is.
+    The regions are planned first, then split in region order (a split leaves the other regions
+    as they are).
+    """
+    if sc.clean:
+        return
+    plans = []
+    for r in np.flatnonzero(topo.v >= SPANNING.region_valence).tolist():
+        ids = topo.regions[r]
+        inc = topo.incident(r)
+        if len(ids) < SPANNING.min_points or len({i for i, _ in inc}) != len(inc):
+            continue
+        end_points = np.array([int(topo.end_ids(i, s)[-1]) for i, s in inc], dtype=np.int64)
+        plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), end_points)
+        if plan is None:
+            continue
+        L, _ = branch_lines(topo, sc, [inc])
+        if meet_at_one_point(L, topo.P[ids].mean(axis=0)):  # strokes drawn into one hub
+            continue
+        plans.append((r, plan))
+    for r, plan in plans:
+        ends = {k: list(v) for k, v in plan.ends.items()}
+        for leaf, to, new_ids, seg in plan.steps:
+            rest = topo.regions[r]
+            rest = rest[~np.isin(rest, np.r_[new_ids, seg])]
+            topo.split_region(r, ends[leaf], rest, new_ids, seg)
+            ends[to].append((len(topo.chains) - 1, 0))  # the new chain's end at the rest
