@@ -727,6 +727,21 @@ def test_split_multiple_junctions_leaves_a_pair_to_the_paired_split():
     _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
 
 
+def test_split_multiple_junctions_keeps_a_hub_of_higher_valence():
+    # the row of three again, but the first junction with two branches more (up-left, down):
+    # valence 5 with the segment, over SPANNING.max_valence: a hub spread by the noise, whole
+    topo, r = _row(4.0)
+    net = _Net()
+    net.pts, net.chains, net.regions = topo.P.tolist(), topo.chains, topo.regions
+    extra = net._add(np.r_[_line((-1, 1), (-2, 2), 2), _line((0, -1), (0, -3), 3)])
+    net.regions[r] = np.r_[net.regions[r], extra]
+    net.chain(_line((-3, 3), (-10, 10), 8), (-1, r))
+    net.chain(_line((0, -4), (0, -15), 12), (-1, r))
+    topo = net.topology()
+    assert SPANNING.max_valence < 5
+    _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
+
+
 def test_split_multiple_junctions_leaves_noise_free_input():
     topo, _ = _row(4.0)
     _assert_untouched(R.split_multiple_junctions, topo, 0.0)

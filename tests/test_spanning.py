@@ -68,3 +68,18 @@ def test_split_plan_reads_a_row_of_teeth_but_not_a_crossing():
     outside = np.flatnonzero(~region)
     d, _ = cKDTree(Y[region]).query(Y[outside])
     assert _plan(Y, region, outside[d < 1.5]) is None
+
+
+def test_meet_at_one_point_tells_a_hub_from_parallel_teeth():
+    from curvenet.methods.robust.paired import Lines, meet_at_one_point
+
+    def lines(c, u, lim=0.5):
+        c, u = np.asarray(c, float), np.asarray(u, float)
+        u = u / np.linalg.norm(u, axis=1)[:, None]
+        return Lines(c, u, c - 3 * u, np.full(len(c), lim))  # tips 3 h nearer the middle
+
+    ang = np.radians([8, -8, 172, 188, 90])
+    u = np.c_[np.cos(ang), np.sin(ang)]
+    assert meet_at_one_point(lines(6 * u, u), np.zeros(2))  # five strokes aimed at the origin
+    teeth = lines([[0, 6], [4, 6], [8, 6]], [[0, 1]] * 3)  # parallel, 4 h apart
+    assert not meet_at_one_point(teeth, np.array([4.0, 0.0]))

@@ -4,7 +4,7 @@ A row of junctions a few spacings apart (a comb's teeth leaving its spine, a lad
 a rail, a street with short links, a roof outline with notches) lies within one shell once the
 shell is widened for noise: the shell test flags one region, found as one node of high valence.
 :func:`.paired.split_paired_junctions` parts a region into two junctions by the lines of its
-branches; a row of three or more needs another reading. The minimum spanning tree of the points
+branches (later, for the pairs); a row of three or more needs another reading. The minimum spanning tree of the points
 around the region shows it: noise makes only short leaf branches (a sample off the curve hangs
 on its neighbour), so once leaf branches shorter than ``SPANNING.prune`` spacings (plus twice
 the noise) are cut, the tree is the skeleton of the curves, and its vertices with three or more
@@ -15,16 +15,19 @@ between two close curves, not a junction.
 
 :func:`split_plan` returns the junctions (cores) of one region when there are at least
 ``SPANNING.min_cores`` of them, each ``SPANNING.sep`` spacings from the others, and each of
-valence 3 or more: its share of the region's chain ends (the tree vertex of each end point goes
-to the nearest core along the tree) plus the tree paths to its neighbouring cores. A core of
-valence under 3 (a bend of the spine, or the region's end where the next junction is another
-region) is merged into its nearest neighbour first. :func:`split_multiple_junctions` (a repair
-of :data:`.repairs.ORDER`, the first: before any other repair reads the region) then splits the
-cores off the region one leaf of the core tree at a time (:meth:`.topology.Topology.split_region`),
-each joined to its neighbour by a new chain of the region's points along the tree path between
-them. Noise-free input is left as it is (:func:`.junctions.separate_close_junctions` resolves
-such rows there); a pair is left to :func:`.paired.split_paired_junctions`, whose line-based
-test places two junctions better (measured on the real-dev buildings' jogs under noise 0.2h).
+valence 3 to ``SPANNING.max_valence``: its share of the region's chain ends (the tree vertex of
+each end point goes to the nearest core along the tree) plus the tree paths to its neighbouring
+cores. A core of valence under 3 (a bend of the spine, or the region's end where the next
+junction is another region) is merged into its nearest neighbour first; a core of higher
+valence is a hub of many strokes spread by the noise, and a region whose branches' lines all
+meet one point (:func:`.paired.meet_at_one_point`) is one junction: both are left whole.
+:func:`split_multiple_junctions` (a repair of :data:`.repairs.ORDER`, the first: before any
+other repair reads the region) then splits the cores off the region one leaf of the core tree at
+a time (:meth:`.topology.Topology.split_region`), each joined to its neighbour by a new chain of
+the region's points along the tree path between them. Noise-free input is left as it is
+(:func:`.junctions.separate_close_junctions` resolves such rows there), and so is a pair: the
+later :func:`.paired.split_paired_junctions` keeps an X crossing whole by its through-curve rule,
+which this reading lacks.
 """
 
 from __future__ import annotations

@@ -645,11 +645,12 @@ class Spanning(NamedTuple):
     #: ... leave at least 30 degrees apart (cosine): else the tree hops between close curves
     #: origin: set with the split (issue 25), not tuned
     arm_cos: float = float(np.cos(np.radians(30.0)))
-    #: a region splits into this many junctions or more; two are left to
-    #: :func:`.paired.split_paired_junctions` (its line-based placement is better: with this split
-    #: taking pairs too, real-dev building rotterdam_237D41CC under noise 0.2h fell from curve F1
-    #: 1.00 to 0.89, a jog's node placed 1.9 h off)
-    #: origin: measured with the split (issue 25)
+    #: a region splits into this many junctions or more; a pair is left to
+    #: :func:`.paired.split_paired_junctions`, whose through-curve rule keeps an X crossing whole
+    #: origin: measured with the split (issue 25): with pairs split too, the synthetic crossing
+    #: under noise 0.3h + x3 fell 1.00 -> 0.71 (an X read as two V's) and the eye under noise
+    #: 0.2h 1.00 -> 0.18-0.55 on 4 of 8 samplings (its two close curves), for 7 runs better
+    #: elsewhere (kinds, real-dev, CASSIE under noise) by 0.01-0.04 each
     min_cores: int = 3
     #: each junction of the row has at most this valence (rows of real networks: a comb's, a
     #: street's, a facade's junctions of valence 3 and 4); a core of more is a hub of many
