@@ -24,6 +24,7 @@ import argparse
 import json
 import os
 import shutil
+import signal
 import sys
 import tempfile
 import threading
@@ -137,6 +138,9 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default=None, help="also write the figures as JSON")
     args = ap.parse_args(argv)
     tiles = args.tiles if args.tiles == "auto" else float(args.tiles)
+    # a SIGTERM (a batch system's time limit, kill) unwinds as an exception does, so that the
+    # finally blocks close the cluster and remove the LAZ files (the default handler skips them)
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     folder = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="corridor-"))
     folder.mkdir(parents=True, exist_ok=True)
     fig: dict = {"target_points": args.points, "workers": args.workers}
