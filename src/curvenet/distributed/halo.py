@@ -11,7 +11,7 @@ halo's edge: a false free end, which the tile does not keep).
 from __future__ import annotations
 
 from ..methods.robust import Estimates
-from ..methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, REPAIRS, SHELL, SPACING
+from ..methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, REPAIRS, SHELL, SPACING, SPANNING
 
 __all__ = ["HALO_MARGIN", "interaction_reach", "halo_width"]
 
@@ -28,7 +28,8 @@ def interaction_reach() -> tuple[float, float]:
     (``NODES.walk_far`` spacings, the largest), the chain trim at a node (twice
     ``NODES.span``), the outer shell, the directional links, the junction merge
     (``REPAIRS.merge_len``), the test that drops the points alone in space
-    (``SPACING.isolated`` median spacings, :func:`curvenet.methods.robust.frames.isolated`);
+    (``SPACING.isolated`` median spacings, :func:`curvenet.methods.robust.frames.isolated`),
+    the spanning tree read around a region (``SPANNING.margin``);
     the walk's shell radii widen by ``SHELL.widen`` noise scales per shell radius, so its noise
     term is ``walk_far / shell_outer * shell_outer * widen``.
 
@@ -48,7 +49,7 @@ def interaction_reach() -> tuple[float, float]:
         In noise scales (``NOISE.scale`` times the noise std).
     """
     in_h = max(NODES.walk_far, 2 * NODES.span, DEFAULTS.shell_outer, DEFAULTS.link * LINKS.directional,
-               REPAIRS.merge_len, SPACING.isolated)
+               REPAIRS.merge_len, SPACING.isolated, SPANNING.margin)
     in_noise = max(NODES.walk_far * SHELL.widen, NODES.fit_noise, LINKS.strip_noise, LINKS.gap_noise)
     return float(in_h), float(in_noise)
 
