@@ -277,7 +277,9 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         if not len(seg):
             return None
         mine = np.isin(region, ids[owner == leaf]) & ~np.isin(region, seg)
-        new_ids = region[mine] if mine.any() else np.array([near[b]], dtype=np.int64)
+        if not mine.any():  # (the core's points all on the chains: no region left for it)
+            return None
+        new_ids = region[mine]
         steps.append((leaf, to, new_ids, seg))
         region = region[~np.isin(region, np.r_[new_ids, seg])]
         left.discard(leaf)
