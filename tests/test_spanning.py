@@ -83,20 +83,3 @@ def test_meet_at_one_point_tells_a_hub_from_parallel_teeth():
     assert meet_at_one_point(lines(6 * u, u), np.zeros(2))  # five strokes aimed at the origin
     teeth = lines([[0, 6], [4, 6], [8, 6]], [[0, 1]] * 3)  # parallel, 4 h apart
     assert not meet_at_one_point(teeth, np.array([4.0, 0.0]))
-
-
-def test_branches_apart_tells_converging_curves_from_a_junctions_branches():
-    from curvenet.methods.robust.paired import Lines
-    from curvenet.methods.robust.spanning import Plan, _branches_apart
-
-    def case(a0, a1):  # core 0: branches at angles a0, a1 (degrees); core 1: up and right
-        ang = np.radians([a0, a1, 90.0, 0.0])
-        u = np.c_[np.cos(ang), np.sin(ang)]
-        tip = np.array([[0, 0], [0, 0], [4, 0], [4, 0]], dtype=float) + 2 * u
-        ends = [(i, 1) for i in range(4)]
-        plan = Plan({0: ends[:2], 1: ends[2:]}, [])
-        return _branches_apart(Lines(tip + 4 * u, -u, tip, np.ones(4)), ends, plan)  # u unoriented
-
-    assert case(180.0, 90.0)  # a junction's branches: left and up
-    assert not case(180.0, 172.0)  # two curves converging 8 degrees apart (an eye's arcs)
-    assert case(180.0, 180.0 - np.degrees(np.arccos(SPANNING.arm_cos)) - 1)

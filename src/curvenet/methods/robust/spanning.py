@@ -4,8 +4,7 @@ A row of junctions a few spacings apart (a comb's teeth leaving its spine, a lad
 a rail, a street with short links, a roof outline with notches) lies within one shell once the
 shell is widened for noise: the shell test flags one region, found as one node of high valence.
 :func:`.paired.split_paired_junctions` parts a region into two junctions by the lines of its
-branches (later, for the pairs this reading leaves); a row of three or more needs another
-reading. The minimum spanning tree of the points
+branches (later, for the pairs); a row of three or more needs another reading. The minimum spanning tree of the points
 around the region shows it: noise makes only short leaf branches (a sample off the curve hangs
 on its neighbour), so once leaf branches shorter than ``SPANNING.prune`` spacings (plus twice
 the noise) are cut, the tree is the skeleton of the curves, and its vertices with three or more
@@ -25,14 +24,13 @@ meet one point (:func:`.paired.meet_at_one_point`) is one junction: both are lef
 :func:`split_multiple_junctions` (a repair of :data:`.repairs.ORDER`, the first: before any
 other repair reads the region) then splits the cores off the region one leaf of the core tree at
 a time (:meth:`.topology.Topology.split_region`), each joined to its neighbour by a new chain of
-the region's points along the tree path between them. A pair is split only when the branches
-each of its two junctions takes leave it over ``SPANNING.arm_cos`` apart (:func:`_branches_apart`):
-two curves converging at a small angle (an eye's arcs meeting their node, the arms of a thin X
-crossing) part where the tree branches, a few spacings before their node, and that reading made
-two junctions of one there. Noise-free input is left as it is
+the region's points along the tree path between them. Noise-free input is left as it is
 (:func:`.junctions.separate_close_junctions` resolves such rows there; read here too, uneven
 clean rows of the kinds gained 3 of 24 samplings, but two CASSIE study sketches lost 0.02 curve
-F1 each, 07-1-2 and 10-2-1, whose ground truth merges strokes crossing a few spacings apart).
+F1 each, 07-1-2 and 10-2-1, whose ground truth merges strokes crossing a few spacings apart), and
+so is a pair: the
+later :func:`.paired.split_paired_junctions` keeps an X crossing whole by its through-curve rule,
+which this reading lacks.
 """
 
 from __future__ import annotations
@@ -288,24 +286,6 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     return Plan({k: [e for e, o in zip(ends, own.tolist()) if o == k] for k in live}, steps)
 
 
-def _branches_apart(L, ends: list, plan: Plan) -> bool:
-    """Whether the branches each core of ``plan`` takes leave it pairwise over
-    ``SPANNING.arm_cos`` apart: their lines ``L`` (one per chain end of ``ends``, as
-    :func:`.paired.branch_lines` fits them), directed away from the region. Two curves that
-    converge at a small angle (an eye's arcs meeting their node, the arms of a thin X crossing)
-    part where the tree branches, a few spacings before their node: those branches run nearly
-    parallel. Asked of pairs only: on rows of three or more, under noise 0.3h + x3, the lines of
-    short branches are too rough for it (the kinds' ladder fell 0.69 -> 0.00, streets 0.87 ->
-    0.66 with it), and a row's cores were never two converging curves in the runs measured."""
-    out = np.sign(np.einsum("ij,ij->i", L.c - L.tip, L.u))[:, None] * L.u
-    for own in plan.ends.values():
-        k = [ends.index(e) for e in own]
-        cos = out[k] @ out[k].T
-        if np.any(cos[np.triu_indices(len(k), 1)] > SPANNING.arm_cos):
-            return False
-    return True
-
-
 def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     """Every region of valence ``SPANNING.region_valence`` or more that holds a row of
     junctions (:func:`split_plan`) becomes those junctions, joined by new chains.
@@ -328,8 +308,6 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
             continue
         L, _ = branch_lines(topo, sc, [inc])
         if meet_at_one_point(L, topo.P[ids].mean(axis=0)):  # strokes drawn into one hub
-            continue
-        if len(plan.ends) == 2 and not _branches_apart(L, list(inc), plan):  # converging curves
             continue
         plans.append((r, plan))
     for r, plan in plans:

@@ -645,25 +645,23 @@ class Spanning(NamedTuple):
     #: ... leave at least 30 degrees apart (cosine): else the tree hops between close curves
     #: origin: set with the split (issue 25), not tuned
     arm_cos: float = float(np.cos(np.radians(30.0)))
-    #: a region splits into this many junctions or more; a pair only when each of its two
-    #: junctions' branches leave it over ``arm_cos`` apart (two curves converging at a small
-    #: angle part where the tree branches: an eye's arcs, a thin X crossing)
-    #: origin: measured with the split (issue 25): pairs without that test cost the synthetic
-    #: crossing under noise 0.3h + x3 1.00 -> 0.71 and the eye under noise 0.2h 1.00 -> 0.18-0.55
-    #: (4 of 8 samplings; a core's two branches 5-10 degrees apart); with it, no run of the noisy
-    #: synthetic models (256), real-dev (80), kinds (96) and CASSIE free creations (32) is worse
-    #: than with rows of three or more only, 8 better
-    min_cores: int = 2
+    #: a region splits into this many junctions or more; a pair is left to
+    #: :func:`.paired.split_paired_junctions`, whose through-curve rule keeps an X crossing whole
+    #: origin: measured with the split (issue 25): with pairs split too, the synthetic crossing
+    #: under noise 0.3h + x3 fell 1.00 -> 0.71 (an X read as two V's) and the eye under noise
+    #: 0.2h 1.00 -> 0.18-0.55 on 4 of 8 samplings (its two close curves), for 7 runs better
+    #: elsewhere (kinds, real-dev, CASSIE under noise) by 0.01-0.04 each
+    min_cores: int = 3
     #: each junction of the row has at most this valence (rows of real networks: a comb's, a
     #: street's, a facade's junctions of valence 3 and 4); a core of more is a hub of many
     #: strokes spread by the noise (a real sketch's pole), left whole
     #: origin: measured: CASSIE hat under noise 0.1h and 2% outliers, a hub of 14 strokes read
     #: as 3 cores of valence 6, 3 and 3 (curve F1 0.966 -> 0.929)
     max_valence: int = 4
-    #: the fewest chain ends of such a region: two junctions of valence 3 joined by a segment
-    #: show 3 + 3 - 2
+    #: the fewest chain ends of such a region: three junctions of valence 3 in a row show
+    #: 3 + 3 + 3 - 2 x 2
     #: origin: derived from ``min_cores`` and a junction's valence 3
-    region_valence: int = 4
+    region_valence: int = 5
     #: the fewest points of such a region
     #: origin: set with the split (issue 25), not tuned
     min_points: int = 12
