@@ -4,8 +4,8 @@ A row of junctions a few spacings apart (a comb's teeth leaving its spine, a lad
 a rail, a street with short links, a roof outline with notches) lies within one shell once the
 shell is widened for noise: the shell test flags one region, found as one node of high valence.
 :func:`.paired.split_paired_junctions` parts a region into two junctions by the lines of its
-branches (later, for the pairs); a row of three or more needs another reading. The minimum spanning tree of the points
-around the region shows it: noise makes only short leaf branches (a sample off the curve hangs
+branches (later, for the pairs); a row of three or more needs another reading. The minimum
+spanning tree of the points around the region shows it: noise makes only short leaf branches (a sample off the curve hangs
 on its neighbour), so once leaf branches shorter than ``SPANNING.prune`` spacings (plus twice
 the noise) are cut, the tree is the skeleton of the curves, and its vertices with three or more
 branches gather at the junctions. Those within ``SPANNING.cluster`` spacings of one another are
@@ -28,9 +28,8 @@ the region's points along the tree path between them. Noise-free input is left a
 (:func:`.junctions.separate_close_junctions` resolves such rows there; read here too, uneven
 clean rows of the kinds gained 3 of 24 samplings, but two CASSIE study sketches lost 0.02 curve
 F1 each, 07-1-2 and 10-2-1, whose ground truth merges strokes crossing a few spacings apart), and
-so is a pair: the
-later :func:`.paired.split_paired_junctions` keeps an X crossing whole by its through-curve rule,
-which this reading lacks.
+so is a pair: the later :func:`.paired.split_paired_junctions` keeps an X crossing whole by its
+through-curve rule, which this reading lacks.
 """
 
 from __future__ import annotations
@@ -125,15 +124,21 @@ def _arms_apart(X: np.ndarray, adj: list[set], v: int, reach: float) -> bool:
     return bool(np.all(cos[np.triu_indices(len(D), 1)] <= SPANNING.arm_cos))
 
 
-def _labels(X: np.ndarray, adj: list[set], sources: dict) -> np.ndarray:
-    """The core of every tree vertex: that of the nearest source vertex along the tree
-    (``sources``: vertex -> core), -1 where none is reachable."""
+def _tree_edges(adj: list[set]) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of the tree ``adj``, each in both directions: vertex arrays ``(a, b)``."""
+    a = np.array([u for u in range(len(adj)) for _ in adj[u]], dtype=np.int64)
+    b = np.array([w for u in range(len(adj)) for w in adj[u]], dtype=np.int64)
+    return a, b
+
+
+def _labels(X: np.ndarray, a: np.ndarray, b: np.ndarray, sources: dict) -> np.ndarray:
+    """The core of every vertex of the tree of edges ``(a, b)`` (:func:`_tree_edges`): that of
+    the nearest source vertex along the tree (``sources``: vertex -> core), -1 where none is
+    reachable."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
     n = len(X)
-    a = np.array([u for u in range(n) for w in adj[u]], dtype=np.int64)
-    b = np.array([w for u in range(n) for w in adj[u]], dtype=np.int64)
     w = np.linalg.norm(X[a] - X[b], axis=1) if len(a) else np.zeros(0)
     G = coo_matrix((w + np.finfo(float).tiny, (a, b)), shape=(n, n)).tocsr()
     src = np.array(sorted(sources), dtype=np.int64)
@@ -224,16 +229,17 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     cores = _cores(X, adj, inside, hl, noise)
     if len(cores) < SPANNING.min_cores:
         return None
-    lab = _labels(X, adj, {v: k for k, mem in enumerate(cores) for v in mem})
+    ea, eb = _tree_edges(adj)
+    lab = _labels(X, ea, eb, {v: k for k, mem in enumerate(cores) for v in mem})
     at = np.searchsorted(near, end_points)
     centre = np.array([X[mem[0]] for mem in cores])
     live = list(range(len(cores)))
     while True:  # cores of valence under 3 merged into their nearest neighbour
         nbr = {k: set() for k in live}
-        for u in range(len(X)):
-            for w in adj[u]:
-                if lab[u] >= 0 and lab[w] >= 0 and lab[u] != lab[w]:
-                    nbr[int(lab[u])].add(int(lab[w]))
+        la, lb = lab[ea], lab[eb]
+        cross = (la >= 0) & (lb >= 0) & (la != lb)
+        for u, w in zip(la[cross].tolist(), lb[cross].tolist()):
+            nbr[u].add(w)
         own = np.array([lab[j] if lab[j] >= 0 else
                         live[int(np.argmin(np.linalg.norm(centre[live] - P[e], axis=1)))]
                         for j, e in zip(at.tolist(), end_points.tolist())], dtype=np.int64)
