@@ -742,9 +742,26 @@ def test_split_multiple_junctions_keeps_a_hub_of_higher_valence():
     _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
 
 
-def test_split_multiple_junctions_leaves_noise_free_input():
-    topo, _ = _row(4.0)
-    _assert_untouched(R.split_multiple_junctions, topo, 0.0)
+def test_split_multiple_junctions_parts_a_row_and_a_pair_on_noise_free_input():
+    for teeth in (3, 2):  # on noise-free input a pair is split too
+        topo, r = _row(4.0, teeth=teeth)
+        n_reg = len(topo.regions)
+        assert topo.v[r] >= SPANNING.clean_region_valence and len(topo.regions[r]) >= SPANNING.clean_min_points
+        _run(R.split_multiple_junctions, topo, 0.0)
+        assert len(topo.regions) == n_reg + teeth - 1
+        assert [int(topo.v[q]) for q in [r, *range(n_reg, n_reg + teeth - 1)]] == [3] * teeth
+
+
+def test_split_multiple_junctions_keeps_a_noise_free_pair_crossed_loosely():
+    # the pair again, the second tooth leaning 45 degrees: two strokes crossing one curve at two
+    # angles 4 h apart (a real sketch's loose junction), one junction
+    net = _Net()
+    r = net.region(np.r_[_line((-3, 0), (7, 0), 11), [[0, 1], [0, 2], [0, 3], [5, 1], [6, 2], [7, 3]]])
+    net.chain(_line((-15, 0), (-4, 0), 12), (-1, r))
+    net.chain(_line((0, 15), (0, 4), 12), (-1, r))
+    net.chain(_line((15, 11), (8, 4), 8), (-1, r))
+    net.chain(_line((19, 0), (8, 0), 12), (-1, r))
+    _assert_untouched(R.split_multiple_junctions, net.topology(), 0.0)
 
 
 # ------------------------------------------------------------------------------ the order

@@ -83,3 +83,62 @@ def test_meet_at_one_point_tells_a_hub_from_parallel_teeth():
     assert meet_at_one_point(lines(6 * u, u), np.zeros(2))  # five strokes aimed at the origin
     teeth = lines([[0, 6], [4, 6], [8, 6]], [[0, 1]] * 3)  # parallel, 4 h apart
     assert not meet_at_one_point(teeth, np.array([4.0, 0.0]))
+
+
+def test_meet_at_one_point_each_equals_the_test_one_region_at_a_time():
+    from curvenet.methods.robust.paired import Lines, meet_at_one_point, meet_at_one_point_each
+
+    rng = np.random.default_rng(3)
+    parts, anchors, off = [], [], [0]
+    for j in range(40):  # regions of 3 to 6 branches: half aimed at one point, half scattered
+        m = int(rng.integers(3, 7))
+        ang = rng.uniform(0, 2 * np.pi, m)
+        u = np.c_[np.cos(ang), np.sin(ang)]
+        c = 6 * u + (0 if j % 2 else rng.normal(0, 2.0, (m, 2)))
+        parts.append(Lines(c, u, c - 3 * u, np.full(m, 0.5)))
+        anchors.append(rng.normal(0, 0.5, 2))
+        off.append(off[-1] + m)
+    L = Lines(*(np.concatenate([getattr(p, f) for p in parts]) for f in Lines._fields))
+    got = meet_at_one_point_each(L, np.array(off), np.array(anchors))
+    want = [meet_at_one_point(p, a) for p, a in zip(parts, anchors)]
+    assert got.tolist() == want and 0 < sum(want) < len(want)
+
+
+def test_straight_across_tells_an_x_from_a_comb_s_pair():
+    from curvenet.methods.robust.paired import Lines
+    from curvenet.methods.robust.spanning import Plan, _straight_across
+
+    def case(angles, owner, through=None):  # branches leaving junctions at (0, 0) and (3, 0)
+        ang = np.radians(angles)
+        u = np.c_[np.cos(ang), np.sin(ang)]
+        at = np.array([[0.0, 0.0], [3.0, 0.0]])[owner] if through is None else np.asarray(through)
+        tip = at + 2.5 * u
+        ends = [(i, 1) for i in range(len(angles))]
+        plan = Plan({k: [e for e, o in zip(ends, owner) if o == k] for k in (0, 1)}, [],
+                    {0: np.zeros(2), 1: np.array([3.0, 0.0])})
+        return _straight_across(Lines(tip + 4 * u, u, tip, np.full(len(angles), 0.5)), ends, plan)
+
+    # a comb's pair: the spine through both junctions, two parallel teeth: two junctions
+    assert not case([180.0, 90.0, 90.0, 0.0], [0, 0, 1, 1])
+    # the same with the teeth 45 degrees apart: strokes crossing one curve loosely
+    assert case([180.0, 90.0, 45.0, 0.0], [0, 0, 1, 1])
+    # an X crossing at (1.5, 0) read as two V's (the tree branches on either side of it): each
+    # curve has a half at each junction and crosses the segment at 30 degrees
+    assert case([150.0, 210.0, 30.0, 330.0], [0, 0, 1, 1], through=[1.5, 0.0])
+
+
+def test_branches_apart_tells_converging_curves_from_a_junction_s_branches():
+    from curvenet.methods.robust.paired import Lines
+    from curvenet.methods.robust.spanning import Plan, _branches_apart
+
+    def case(a0, a1):  # core 0: branches at angles a0, a1 (degrees); core 1: up and right
+        ang = np.radians([a0, a1, 90.0, 0.0])
+        u = np.c_[np.cos(ang), np.sin(ang)]
+        tip = np.array([[0, 0], [0, 0], [4, 0], [4, 0]], dtype=float) + 2 * u
+        ends = [(i, 1) for i in range(4)]
+        plan = Plan({0: ends[:2], 1: ends[2:]}, [], {0: np.zeros(2), 1: np.array([4.0, 0.0])})
+        return _branches_apart(Lines(tip + 4 * u, -u, tip, np.ones(4)), ends, plan)  # u unoriented
+
+    assert case(180.0, 90.0)  # a junction's branches: left and up
+    assert not case(180.0, 172.0)  # two curves converging 8 degrees apart (an eye's arcs)
+    assert case(180.0, 180.0 - np.degrees(np.arccos(SPANNING.arm_cos)) - 1)

@@ -13,7 +13,7 @@ One reading is left as one junction: a straight curve passing through both point
 branches crossing it at different angles, a few spacings apart, is strokes meeting loosely
 where one junction was meant (real sketches); branches crossing it in parallel (a ladder's
 rungs, a comb's teeth) are two junctions. And a straight curve with a half in each group
-(:func:`_straight_pairs`) must run along the segment (its direction, the mean of its halves',
+(:func:`straight_pairs`) must run along the segment (its direction, the mean of its halves',
 within ``PAIRED.parallel_cos``): it passes through both points (under heavy noise an X crossing
 otherwise splits into two V's).
 
@@ -36,7 +36,7 @@ from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
 __all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "best_pair",
-           "best_pairs"]
+           "best_pairs", "straight_pairs", "towards_tips", "meet_at_one_point_each", "region_stats"]
 
 
 class Lines(NamedTuple):
@@ -150,6 +150,33 @@ def meet_at_one_point(L: Lines, anchor: np.ndarray) -> bool:
     (:func:`meeting_point`, held near ``anchor``): the branches of one junction."""
     x = meeting_point(L.c, L.u, anchor)
     return bool(_meets_all(L, np.broadcast_to(x, L.c.shape)).all())
+
+
+def meet_at_one_point_each(L: Lines, off: np.ndarray, anchors: np.ndarray) -> np.ndarray:
+    """:func:`meet_at_one_point` of many regions at once (the regions of ``m`` lines together).
+
+    Parameters
+    ----------
+    L : Lines
+        Every region's lines, region after region (as :func:`branch_lines` returns them).
+    off : (R + 1,) ndarray of int64
+        Region ``j``'s lines are ``off[j]:off[j + 1]``.
+    anchors : (R, d) ndarray
+
+    Returns
+    -------
+    (R,) ndarray of bool
+    """
+    nl = np.diff(off)
+    out = np.zeros(len(nl), dtype=bool)
+    for m in np.unique(nl).tolist():
+        js = np.flatnonzero(nl == m)
+        rows = off[js][:, None] + np.arange(m)
+        x = _group_points(Lines(L.c[rows], L.u[rows], L.c[rows], L.lim[rows]), np.ones((len(js), m)), anchors[js])
+        flat = Lines(L.c[rows].reshape(-1, L.c.shape[1]), L.u[rows].reshape(-1, L.c.shape[1]),
+                     L.tip[rows].reshape(-1, L.c.shape[1]), L.lim[rows].reshape(-1))
+        out[js] = _meets_all(flat, np.repeat(x, m, axis=0)).reshape(len(js), m).all(axis=1)
+    return out
 
 
 def _meets_all(L: Lines, x: np.ndarray) -> np.ndarray:
@@ -267,11 +294,11 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     # crossing seen under noise splits into two V's whose points lie off that curve)
     cross = Bb[:, :, None] != Bb[:, None, :]
     # (the curve's direction: the mean of its two halves' directions, each towards its end)
-    ud = _towards_tips(L)
+    ud = towards_tips(L)
     mean = ud[:, :, None, :] - ud[:, None, :, :]  # (R, m, m, d)
     mean = mean / np.maximum(np.linalg.norm(mean, axis=-1), np.finfo(float).tiny)[..., None]
     on_seg = np.abs(np.einsum("rmni,rsi->rsmn", mean, e.reshape(R, S, d))).reshape(R * S, m, m) > PAIRED.parallel_cos
-    good &= ~np.any(np.repeat(_straight_pairs(L, ud), S, axis=0) & cross & ~on_seg, axis=(1, 2))
+    good &= ~np.any(np.repeat(straight_pairs(L, ud), S, axis=0) & cross & ~on_seg, axis=(1, 2))
     cost = np.where(good, cost, np.inf).reshape(R, S)
     k = np.argmin(cost, axis=1)  # the least cost (ties: the first split)
     ok = np.isfinite(cost[np.arange(R), k])
@@ -279,15 +306,15 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     return np.where(ok, k, -1), xa[pick], xb[pick]
 
 
-def _towards_tips(L: Lines) -> np.ndarray:
+def towards_tips(L: Lines) -> np.ndarray:
     """The directions of lines ``L`` (R, m, d), each turned towards its branch's end (the
     fitted directions have either sign): (R, m, d)."""
     return L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
 
 
-def _straight_pairs(L: Lines, ud: np.ndarray) -> np.ndarray:
+def straight_pairs(L: Lines, ud: np.ndarray) -> np.ndarray:
     """Per region, the pairs of lines that are one straight curve through it: (R, m, m) bool for
-    lines ``L`` of shape (R, m, d) (``ud``: their :func:`_towards_tips`), True where the two
+    lines ``L`` of shape (R, m, d) (``ud``: their :func:`towards_tips`), True where the two
     branches face each other (their directions towards their ends within ``PAIRED.parallel_cos``
     of opposite) and each line passes the other's centroid, on average, within the strip or the aim angle ``REPAIRS.merge_tan`` seen over half
     the distance between the centroids (as a line meets a point)."""
@@ -398,7 +425,7 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     L, off = branch_lines(topo, sc, incs)
     nl = np.diff(off)
     single = np.logical_or.reduceat(~(np.linalg.norm(L.u, axis=1) > 0), off[:-1])  # a one-point branch
-    anchors, hr = _region_stats(P, h, [topo.regions[r] for r in cand])
+    anchors, hr = region_stats(P, h, [topo.regions[r] for r in cand])
     found: dict[int, tuple] = {}
     for m in np.unique(nl).tolist():  # the regions of m lines at once
         js = np.flatnonzero((nl == m) & ~single)
@@ -423,7 +450,7 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
                           rid[rest & near_b], seg)
 
 
-def _region_stats(P: np.ndarray, h: np.ndarray, rids: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def region_stats(P: np.ndarray, h: np.ndarray, rids: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Centroid and median spacing (as ``np.median``) of every region's points, all at once.
 
     Parameters

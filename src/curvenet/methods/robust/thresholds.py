@@ -665,6 +665,24 @@ class Spanning(NamedTuple):
     #: the fewest points of such a region
     #: origin: set with the split (issue 25), not tuned
     min_points: int = 12
+    #: on noise-free input a region splits into this many junctions or more: a pair too, when
+    #: each junction's branches leave it over ``arm_cos`` apart (two curves converging at a
+    #: small angle part where the tree branches: an eye's arcs, a thin X crossing) and no
+    #: straight curve crosses the segment between them (an X whose curves pass apart)
+    #: origin: measured (issue 25) on the kinds clean and density x3 (8 samplings; 54 runs) and
+    #: the 48 CASSIE study sketches, clean: no split on clean input 0.584 / 0.8731, rows of
+    #: three 0.610 / 0.8722, pairs too 0.624 / 0.8727 (the synthetic models, real-dev and the
+    #: CASSIE free creations unchanged by either)
+    clean_min_cores: int = 2
+    #: the fewest chain ends of such a region on noise-free input: two junctions of valence 3
+    #: joined by a segment show 3 + 3 - 2
+    #: origin: derived from ``clean_min_cores`` and a junction's valence 3
+    clean_region_valence: int = 4
+    #: the fewest points of such a region on noise-free input (no shell widened for noise: a
+    #: clean row of three valence-3 junctions 3-5 h apart flags 11 points)
+    #: origin: measured (issue 25), as ``clean_min_cores``: 3 or 4 points 0.624 / 0.8727, 6
+    #: 0.623, 8 0.615, 12 (the noisy value) 0.608 / 0.8715
+    clean_min_points: int = 4
     #: the junctions lie at least this many spacings apart (the benchmark's rows: 3 to 5 h)
     #: origin: set with the split (issue 25), not tuned
     sep: float = 2.5
