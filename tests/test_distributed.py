@@ -464,7 +464,7 @@ def test_a_task_runs_the_method_on_its_own_thread(monkeypatch):
         return real(tree, x, **kw)
 
     monkeypatch.setattr(neighbors, "query", spy)
-    P = np.random.default_rng(0).random((500, 3))
+    P = np.random.default_rng(0).random((neighbors.SERIAL_ROWS + 500, 3))  # (fewer: one thread anyway)
     neighbors.knn(P, 4)
     with method_slot():
         neighbors.knn(P, 4)
@@ -506,3 +506,23 @@ def test_a_pass_releases_each_result_on_the_workers_once_fetched():
     finally:
         c.close()
         cluster.close()
+
+
+def test_a_small_query_runs_on_the_calling_thread(monkeypatch):
+    # under SERIAL_ROWS rows the query takes one thread (scipy's thread start costs more than
+    # it saves there); the result is the same
+    from curvenet import neighbors
+
+    seen = []
+    real = neighbors.query
+
+    def spy(tree, x, **kw):
+        seen.append(kw.get("workers"))
+        return real(tree, x, **kw)
+
+    monkeypatch.setattr(neighbors, "query", spy)
+    P = np.random.default_rng(1).random((neighbors.SERIAL_ROWS + 10, 3))
+    d_all, i_all = neighbors.knn(P, 5)
+    d_few, i_few = neighbors.knn(P, 5, rows=np.arange(neighbors.SERIAL_ROWS - 1))
+    assert seen == [-1, 1]
+    assert np.array_equal(i_few, i_all[:neighbors.SERIAL_ROWS - 1]) and np.array_equal(d_few, d_all[:len(d_few)])

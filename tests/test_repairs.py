@@ -764,8 +764,111 @@ def test_split_multiple_junctions_keeps_a_noise_free_pair_crossed_loosely():
     _assert_untouched(R.split_multiple_junctions, net.topology(), 0.0)
 
 
+# ------------------------------------------------------------------------------ split_branched_chains
+split_branched = R.split_branched_chains
+
+
+def _near_scales(topo: Topology, noise: float = 0.0) -> Scales:
+    """Scales with the linked graph of every pair of points within 1.5 h (as the kNN links of
+    evenly spaced samples: each point to the next ones along its curve, and across a junction)."""
+    from scipy.sparse import coo_matrix
+
+    sc = _scales(topo, noise)
+    pairs = cKDTree(topo.P).query_pairs(1.5, output_type="ndarray")
+    N = len(topo.P)
+    g = coo_matrix((np.ones(2 * len(pairs)), (np.r_[pairs[:, 0], pairs[:, 1]], np.r_[pairs[:, 1], pairs[:, 0]])),
+                   shape=(N, N)).tocsr()
+    return dataclasses.replace(sc, indptr=g.indptr.astype(np.int64), indices=g.indices.astype(np.int64))
+
+
+def _missed_t(left_region=True):
+    """A T whose junction at the origin the shell test missed: one chain down a tooth from its
+    tip's region T at (0, 10), through the origin, on along x both ways, its points in the
+    tracer's order (by distance from the tip: the two sides interleave, jumps of 2-3 h). Region
+    R at (8, 0) and (9, 0) ends the right side; region L at (-3, 0), (-4, 0) the left (or no
+    region there)."""
+    net = _Net()
+    T = net.region([[0, 10], [0, 11]])
+    R = net.region([[8, 0], [9, 0]])
+    L = net.region([[-3, 0], [-4, 0]] if left_region else [[-30, 0]])
+    tooth = [[0, y] for y in range(9, -1, -1)]
+    order = [[-1, 0], [1, 0], [-2, 0], [2, 0]] + [[x, 0] for x in range(3, 8)]
+    net.chain(np.array(tooth + order, dtype=float), (T, R))
+    return net.topology(), T, R, L
+
+
+def _run_near(repair, topo, noise=0.0):
+    repair(topo, _near_scales(topo, noise), PRM)
+    topo.check()
+    return topo
+
+
+def test_split_branched_chains_finds_the_junction_the_shell_test_missed():
+    topo, T, R, L = _missed_t()
+    n_reg = len(topo.regions)
+    _run_near(split_branched, topo)
+    assert not topo.alive[0]
+    J = n_reg  # the new junction
+    assert len(topo.regions) == n_reg + 1 and topo.P[topo.regions[J]].tolist() == [[0.0, 0.0]]
+    assert int(topo.v[J]) == 3 and [int(topo.v[q]) for q in (T, R, L)] == [1, 1, 1]
+    far = {}
+    for i, s in topo.incident(J):
+        c = topo.chains[i]
+        assert s == 0 and np.linalg.norm(topo.P[c.ids[0]]) == 1.0  # from the junction outwards
+        far[c.ends[1]] = len(c.ids)
+    assert far == {T: 9, R: 7, L: 2}
+
+
+def test_split_branched_chains_leaves_a_branch_that_reaches_no_region():
+    # the same T without region L: the left side ends in no region (nothing seen there; noise
+    # at a corner makes such a branch)
+    topo, *_ = _missed_t(left_region=False)
+    before = _state(topo)
+    _run_near(split_branched, topo)
+    assert _state(topo) == before
+
+
+def test_split_branched_chains_leaves_a_path_whose_order_jumps():
+    # a straight chain whose order jumps (two samples swapped, as a noisy band's order does):
+    # its tree is a path, no junction
+    net = _Net()
+    A = net.region([[-2, 0], [-1, 0]])
+    B = net.region([[13, 0], [14, 0]])
+    xs = [0, 1, 3, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12]
+    net.chain(np.array([[x, 0] for x in xs], dtype=float), (A, B))
+    topo = net.topology()
+    before = _state(topo)
+    _run_near(split_branched, topo)
+    assert _state(topo) == before
+
+
+def test_split_branched_chains_leaves_two_branches_into_one_region():
+    # a chain's ragged end: it forks 3 h before region B, both forks reaching B (as noise
+    # widens a chain where it enters a junction): no junction
+    net = _Net()
+    A = net.region([[-2, 0], [-1, 0]])
+    B = net.region([[10, 1], [10, -1]])
+    X = [[x, 0] for x in range(8)] + [[8, 1], [8, -1], [9, 1], [9, -1]]
+    net.chain(np.array(X, dtype=float), (A, B))
+    topo = net.topology()
+    before = _state(topo)
+    _run_near(split_branched, topo)
+    assert _state(topo) == before
+    # the control: B's lower point another region C (the forks reach two junctions): a junction
+    # at (7, 0)
+    net = _Net()
+    A = net.region([[-2, 0], [-1, 0]])
+    B = net.region([[10, 1], [11, 1]])
+    C = net.region([[10, -1], [11, -1]])
+    net.chain(np.array(X, dtype=float), (A, B))
+    topo = net.topology()
+    _run_near(split_branched, topo)
+    assert len(topo.regions) == 4 and topo.P[topo.regions[3]].tolist() == [[7.0, 0.0]]
+    assert sorted(topo.chains[i].ends[1] for i, _ in topo.incident(3)) == [A, B, C]
+
+
 # ------------------------------------------------------------------------------ the order
-TESTED = (R.split_multiple_junctions, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
+TESTED = (R.split_multiple_junctions, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
           R.merge_close_junctions, R.split_paired_junctions)
 

@@ -13,6 +13,12 @@ from ._sigint import held
 
 __all__ = ["knn", "build_tree", "locality_order", "query", "one_thread", "query_threads"]
 
+#: Queries of fewer rows than this run on the calling thread: starting scipy's worker threads
+#: costs more than they save there (the repairs query hundreds of small point sets, 0.1-0.3 ms
+#: of thread start each; measured in issue 25: at 10^6 noisy points the branched-chain repair's
+#: 982 small trees took 0.66 s in their queries, most of it thread start and lock waits).
+SERIAL_ROWS = 2048
+
 #: Threads of the neighbour queries in this context (-1: every core; see :func:`one_thread`).
 _THREADS: ContextVar[int] = ContextVar("curvenet_query_threads", default=-1)
 
@@ -91,6 +97,8 @@ def knn(points: np.ndarray, k: int, *, tree: cKDTree | None = None, workers: int
     workers = query_threads() if workers is None else workers
     sel = None if rows is None else np.asarray(rows, dtype=np.int64)
     n_out = n if sel is None else len(sel)
+    if n_out < SERIAL_ROWS:
+        workers = 1
     k = int(min(k, max(n - 1, 0)))
     if k == 0:
         return np.zeros((n_out, 0)), np.zeros((n_out, 0), dtype=index_dtype)

@@ -20,13 +20,14 @@ from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
 from .spanning import split_multiple_junctions
+from .branched import split_branched_chains
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS
 from .topology import Topology
 
 __all__ = ["ORDER", "run_repairs", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
            "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "join_through_pass_regions",
-           "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions"]
+           "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions", "split_branched_chains"]
 
 
 def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> None:
@@ -527,6 +528,7 @@ def _aims_at(P, h, sc, chains, inc, xpos, hub, noise) -> bool:
 #: The repairs in the order :func:`run_repairs` applies them.
 ORDER = (
     split_multiple_junctions,  # (first: the row's region as the shell test left it)
+    split_branched_chains,
     merge_near_pass_through,
     absorb_short_loops,
     absorb_orphans,

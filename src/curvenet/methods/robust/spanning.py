@@ -56,7 +56,7 @@ from .params import RobustParams, Scales
 from .thresholds import NODES, PAIRED, SPANNING
 from .topology import Topology
 
-__all__ = ["split_multiple_junctions", "split_plan", "Plan", "pruned_tree"]
+__all__ = ["split_multiple_junctions", "split_plan", "Plan", "pruned_tree", "tree_cores"]
 
 
 class Plan(NamedTuple):
@@ -79,9 +79,9 @@ class Plan(NamedTuple):
     centres: dict
 
 
-def pruned_tree(X: np.ndarray, cut: float) -> list[set]:
+def pruned_tree(X: np.ndarray, cut: float, keep: np.ndarray | None = None) -> list[set]:
     """The minimum spanning tree of the points ``X`` (n, d), as adjacency sets, without its
-    leaf branches shorter than ``cut``.
+    leaf branches shorter than ``cut`` (a leaf in ``keep``, (n,) bool, stays).
 
     A leaf branch runs from a vertex of one tree edge to the first vertex of three or more; it
     is cut (its vertices lose their edges) when its length is under ``cut``. Up to
@@ -95,7 +95,7 @@ def pruned_tree(X: np.ndarray, cut: float) -> list[set]:
     for _ in range(SPANNING.prune_passes):
         changed = False
         for leaf in range(n):
-            if len(adj[leaf]) != 1:
+            if len(adj[leaf]) != 1 or (keep is not None and keep[leaf]):
                 continue
             path, length, prev, cur = [leaf], 0.0, -1, leaf
             while True:
@@ -184,8 +184,8 @@ def _tree_path(adj: list[set], a: int, b: int) -> list[int] | None:
     return out[::-1]
 
 
-def _cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noise: float,
-           min_cores: int) -> list[list[int]]:
+def tree_cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noise: float,
+               min_cores: int) -> list[list[int]]:
     """The junctions the pruned tree shows inside the region: its vertices of three or more
     branches, those within ``SPANNING.cluster`` spacings (plus the noise) of one another taken
     together; a lone vertex whose branches do not leave apart (:func:`_arms_apart`) is none.
@@ -245,7 +245,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     X = P[near]
     adj = pruned_tree(X, SPANNING.prune * hl + SPANNING.prune_noise * noise)
     inside = np.isin(near, ids)
-    cores = _cores(X, adj, inside, hl, noise, min_cores)
+    cores = tree_cores(X, adj, inside, hl, noise, min_cores)
     if len(cores) < min_cores:
         return None
     ea, eb = _tree_edges(adj)

@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Numeric", "NUMERIC", "Linalg", "LINALG"]
+__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Numeric", "NUMERIC", "Linalg", "LINALG"]
 
 class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
@@ -698,6 +698,44 @@ class Spanning(NamedTuple):
 
 
 SPANNING = Spanning()
+
+
+class Branched(NamedTuple):
+    """Stage 6: a junction the shell test missed, where a chain branches (:mod:`.branched`)."""
+
+    #: a chain whose consecutive points (in chain order) lie over this many spacings apart ...
+    #: origin: set with the repair (issue 25), not tuned: along a path the next point is about
+    #: 1 h away; where a run of points branches the order jumps back 2-3 h (the kinds' comb and
+    #: twigs, clean)
+    jump: float = 1.8
+    #: ... plus this many times the noise is read from its spanning tree
+    #: origin: set with the repair (issue 25), not tuned
+    jump_noise: float = 2.0
+    #: the fewest points of such a chain
+    #: origin: set with the repair (issue 25), not tuned
+    min_points: int = 6
+    #: the tree of the points within this many spacings (plus the noise) of a jump is read first;
+    #: the whole chain's only where it shows a junction (a missed junction lies within its
+    #: shortest branch's length of the jump)
+    #: origin: set with the repair (issue 25): the shell's outer radius (5.5 h) and the spanning
+    #: tree's margin (``SPANNING.margin``)
+    window: float = 6.0
+    #: a branch's region: the one most linked to its last this many points
+    #: origin: set with the repair (issue 25), not tuned
+    tip_points: int = 2
+    #: ... when the branch's last point lies within this many spacings (plus the noise) of it
+    #: (the next sample along the curve); a branch shorter than the tree's cut that reaches no
+    #: region this way is no branch
+    #: origin: set with the repair (issue 25): the branches of the kinds' missed junctions end
+    #: 0.97-1.06 h from their region (clean); a neuron under noise 0.2h showed a one-point
+    #: branch 3.2 h from the region it was linked to (a spurious junction)
+    reach: float = 1.5
+    #: ... plus this many times the noise
+    #: origin: set with the repair (issue 25), not tuned
+    reach_noise: float = 2.0
+
+
+BRANCHED = Branched()
 
 
 class Nodes(NamedTuple):

@@ -1,0 +1,190 @@
+"""A junction the shell test missed, found where a chain branches.
+
+A chain is a connected run of points outside every region, ordered by its distance along the
+linked graph from one end (:func:`.chains.order_chains`): it is one curve segment only when the
+run is a path. Where the shell test misses a junction (a comb's tooth 3 h from the next, a twig
+of 3 h leaving a fork whose shell barely reaches its tip) the run is a tree: its points ordered
+by distance jump from one branch to another (consecutive points over ``BRANCHED.jump`` spacings
+apart, plus the noise), and the curve traced through it zigzags back and forth.
+
+:func:`split_branched_chains` reads such a chain from the minimum spanning tree of its points,
+pruned as :func:`.spanning.pruned_tree` prunes it (leaf branches under ``SPANNING.prune``
+spacings plus twice the noise cut: what noise hangs off a curve; a point linked to a region is
+never cut: a branch of one sample may be all that joins the next junction). The tree of the
+points near the jumps (``BRANCHED.window``) is read first, the whole chain's only where it
+shows a junction. When the whole tree shows exactly one junction
+(:func:`.spanning.tree_cores`: its vertices of three or more branches, clustered, whose branches
+leave apart) and its branches are paths, the chain becomes that junction (a new region of its
+vertices) and one chain per branch, ordered from the junction outwards
+(:meth:`.topology.Topology.branch_chain`). Each branch ends at the region its last
+``BRANCHED.tip_points`` points are most linked to, when its last point lies within
+``BRANCHED.reach`` spacings of it (the next sample); the branches holding the chain's two ends
+may keep the chain's regions there. Left as it is: a chain with a branch that reaches no
+region (noise at a sharp corner hangs such a branch of a few samples: the synthetic corners
+under noise 0.3h + x3 lost an exact network to it), or with two branches into one region (a
+chain's end widened by noise where it enters a junction).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .chains import group_medians, step_lengths
+from .params import RobustParams, Scales
+from .spanning import pruned_tree, tree_cores
+from .thresholds import BRANCHED, NODES, SPANNING
+from .topology import Topology
+
+__all__ = ["split_branched_chains", "branch_plan"]
+
+
+def _arms(adj: list[set], core: set) -> list[list[int]]:
+    """The branches of the tree ``adj`` at the vertex set ``core``: per branch its vertices in
+    order from the core outwards (breadth first; a branch that forks again is returned as it is
+    reached, so the caller checks it is a path)."""
+    out = []
+    seen = set(core)
+    for c in sorted(core):
+        for s in sorted(adj[c]):
+            if s in seen:
+                continue
+            arm, frontier = [], [s]
+            seen.add(s)
+            while frontier:
+                u = frontier.pop(0)
+                arm.append(u)
+                for w in sorted(adj[u]):
+                    if w not in seen:
+                        seen.add(w)
+                        frontier.append(w)
+            out.append(arm)
+    return out
+
+
+def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
+    """How the points ``X`` (n, d) of one chain split at one junction.
+
+    Parameters
+    ----------
+    X : (n, d) ndarray
+    hl : float
+        The chain's spacing.
+    noise : float
+    keep : (n,) ndarray of bool
+        Points linked to a region: a leaf there is a branch reaching that region, never cut.
+
+    Returns
+    -------
+    (core, arms) or None
+        ``core``: the junction's vertices (indices into ``X``); ``arms``: per branch its
+        vertices ordered from the junction outwards (paths of the pruned tree, three or more).
+        None unless the pruned tree shows exactly one junction and its branches are paths.
+    """
+    adj = pruned_tree(X, SPANNING.prune * hl + SPANNING.prune_noise * noise, keep)
+    cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 1)
+    if len(cores) != 1:
+        return None
+    core = set(cores[0])
+    arms = _arms(adj, core)
+    if len(arms) < NODES.junction_valence:
+        return None
+    for arm in arms:  # each a path: every vertex has at most two tree neighbours in its arm
+        inarm = set(arm)
+        if any(len(adj[u] & inarm) > 2 for u in arm):
+            return None
+    return sorted(core), arms
+
+
+def _near_jump_branches(X: np.ndarray, hl: float, noise: float, keep: np.ndarray) -> bool:
+    """Whether the pruned tree of the chain's points near its jumps (within
+    ``BRANCHED.window`` spacings plus the noise of a jump's two points) shows a junction: the
+    cheap test before the whole chain's tree (a long chain under noise jumps where the noise
+    widens it, most often without a branch). Points near the window's edge are kept from the
+    cut (the chain goes on there)."""
+    step = np.linalg.norm(np.diff(X, axis=0), axis=1)
+    at = np.flatnonzero(step > BRANCHED.jump * hl + BRANCHED.jump_noise * noise)
+    ends = X[np.unique(np.r_[at, at + 1])]
+    d = np.min(np.linalg.norm(X[:, None, :] - ends[None, :, :], axis=2), axis=1)
+    w = BRANCHED.window * hl + noise
+    inw = d <= w
+    if inw.all():
+        return True
+    Y = X[inw]
+    edge = d[inw] > w - BRANCHED.reach * hl - BRANCHED.reach_noise * noise
+    adj = pruned_tree(Y, SPANNING.prune * hl + SPANNING.prune_noise * noise, keep[inw] | edge)
+    return len(tree_cores(Y, adj, np.ones(len(Y), dtype=bool), hl, noise, 1)) > 0
+
+
+def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Every open chain whose points, in order, jump by over ``BRANCHED.jump`` spacings (plus
+    the noise) and whose spanning tree shows one junction (:func:`branch_plan`) becomes that
+    junction and one chain per branch (:meth:`.topology.Topology.branch_chain`)."""
+    P, h = topo.P, sc.h
+    # the chains' largest steps and spacings, all at once
+    idx = [i for i, c in enumerate(topo.chains)
+           if topo.alive[i] and not c.closed and len(c.ids) >= BRANCHED.min_points]
+    if not idx:
+        return
+    n = np.array([len(topo.chains[i].ids) for i in idx], dtype=np.int64)
+    flat = np.concatenate([topo.chains[i].ids for i in idx]).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum(n)]
+    step = step_lengths(P, flat)
+    step[off[1:] - 1] = 0.0  # (from a chain's last point to the next chain's first)
+    hl = group_medians(h[flat], n)
+    jumps = np.maximum.reduceat(step, off[:-1]) > BRANCHED.jump * hl + BRANCHED.jump_noise * sc.noise
+    cand = [(idx[j], float(hl[j])) for j in np.flatnonzero(jumps).tolist()]
+    if not cand:
+        return
+    region_of = np.full(len(P), -1, dtype=np.int64)
+    for r, ids in enumerate(topo.regions):
+        region_of[ids] = r
+
+    def linked_region(pts: np.ndarray) -> int:
+        """The region most linked to the points ``pts`` (ties: the lowest; -1: none)."""
+        nb = np.concatenate([sc.indices[sc.indptr[p]:sc.indptr[p + 1]] for p in pts.tolist()])
+        rr = region_of[nb]
+        rr = rr[rr >= 0]
+        return int(np.bincount(rr).argmax()) if len(rr) else -1
+
+    def linked_to_a_region(ids: np.ndarray) -> np.ndarray:
+        """Per point of ``ids``: whether it is linked to a region point."""
+        start = sc.indptr[ids]
+        cnt = sc.indptr[ids + 1] - start
+        first = np.cumsum(cnt) - cnt
+        nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
+        out = np.zeros(len(ids), dtype=bool)
+        out[np.repeat(np.arange(len(ids)), cnt)[region_of[nb] >= 0]] = True
+        return out
+
+    for i, hl in cand:
+        c = topo.chains[i]
+        X = P[c.ids]
+        keep = linked_to_a_region(c.ids)
+        if not _near_jump_branches(X, hl, sc.noise, keep):
+            continue
+        plan = branch_plan(X, hl, sc.noise, keep)
+        if plan is None:
+            continue
+        core, arms = plan
+        first, last = 0, len(c.ids) - 1
+        at = {k: q for q, arm in enumerate(arms) for k in arm}
+        far = []
+        reach = BRANCHED.reach * hl + BRANCHED.reach_noise * sc.noise
+        for q, arm in enumerate(arms):
+            tip = c.ids[arm[-1]]
+            f = linked_region(c.ids[arm[-BRANCHED.tip_points:]])
+            if f >= 0 and np.min(np.linalg.norm(P[topo.regions[f]] - P[tip], axis=1)) > reach:
+                f = -1  # (linked, but the region is no next sample of the branch)
+            if f < 0 and at.get(first) == q:
+                f = c.ends[0]
+            elif f < 0 and at.get(last) == q:
+                f = c.ends[1]
+            if f < 0:
+                break  # a branch that reaches no region: no end seen there (noise at a corner)
+            far.append(f)
+        if len(far) < len(arms):
+            continue
+        known = [f for f in far if f >= 0]
+        if len(set(known)) < len(known):  # two branches into one region: a ragged end, no junction
+            continue
+        topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)
