@@ -29,13 +29,25 @@ from __future__ import annotations
 
 import numpy as np
 
-from .chains import group_medians, step_lengths
+from .chains import flat_steps, group_medians
 from .params import RobustParams, Scales
-from .spanning import pruned_tree, tree_cores
-from .thresholds import BRANCHED, NODES, SPANNING
+from .spanning import prune_cut, pruned_tree, tree_cores
+from .thresholds import BRANCHED, NODES
 from .topology import Topology
 
 __all__ = ["split_branched_chains", "branch_plan"]
+
+
+def _jump(hl: float, noise: float) -> float:
+    """The step between consecutive chain points over which a chain is read: ``BRANCHED.jump``
+    spacings ``hl`` plus ``BRANCHED.jump_noise`` times the noise."""
+    return BRANCHED.jump * hl + BRANCHED.jump_noise * noise
+
+
+def _reach(hl: float, noise: float) -> float:
+    """How near a region a branch's last point lies when it ends there: ``BRANCHED.reach``
+    spacings ``hl`` plus ``BRANCHED.reach_noise`` times the noise."""
+    return BRANCHED.reach * hl + BRANCHED.reach_noise * noise
 
 
 def _arms(adj: list[set], core: set) -> list[list[int]]:
@@ -80,7 +92,7 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
         vertices ordered from the junction outwards (paths of the pruned tree, three or more).
         None unless the pruned tree shows exactly one junction and its branches are paths.
     """
-    adj = pruned_tree(X, SPANNING.prune * hl + SPANNING.prune_noise * noise, keep)
+    adj = pruned_tree(X, prune_cut(hl, noise), keep)
     cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 1)
     if len(cores) != 1:
         return None
@@ -102,7 +114,7 @@ def _near_jump_branches(X: np.ndarray, hl: float, noise: float, keep: np.ndarray
     widens it, most often without a branch). Points near the window's edge are kept from the
     cut (the chain goes on there)."""
     step = np.linalg.norm(np.diff(X, axis=0), axis=1)
-    at = np.flatnonzero(step > BRANCHED.jump * hl + BRANCHED.jump_noise * noise)
+    at = np.flatnonzero(step > _jump(hl, noise))
     ends = X[np.unique(np.r_[at, at + 1])]
     d = np.min(np.linalg.norm(X[:, None, :] - ends[None, :, :], axis=2), axis=1)
     w = BRANCHED.window * hl + noise
@@ -110,8 +122,8 @@ def _near_jump_branches(X: np.ndarray, hl: float, noise: float, keep: np.ndarray
     if inw.all():
         return True
     Y = X[inw]
-    edge = d[inw] > w - BRANCHED.reach * hl - BRANCHED.reach_noise * noise
-    adj = pruned_tree(Y, SPANNING.prune * hl + SPANNING.prune_noise * noise, keep[inw] | edge)
+    edge = d[inw] > w - _reach(hl, noise)
+    adj = pruned_tree(Y, prune_cut(hl, noise), keep[inw] | edge)
     return len(tree_cores(Y, adj, np.ones(len(Y), dtype=bool), hl, noise, 1)) > 0
 
 
@@ -125,13 +137,9 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
            if topo.alive[i] and not c.closed and len(c.ids) >= BRANCHED.min_points]
     if not idx:
         return
-    n = np.array([len(topo.chains[i].ids) for i in idx], dtype=np.int64)
-    flat = np.concatenate([topo.chains[i].ids for i in idx]).astype(np.int64, copy=False)
-    off = np.r_[0, np.cumsum(n)]
-    step = step_lengths(P, flat)
-    step[off[1:] - 1] = 0.0  # (from a chain's last point to the next chain's first)
-    hl = group_medians(h[flat], n)
-    jumps = np.maximum.reduceat(step, off[:-1]) > BRANCHED.jump * hl + BRANCHED.jump_noise * sc.noise
+    flat, off, step = flat_steps(P, [topo.chains[i].ids for i in idx])
+    hl = group_medians(h[flat], np.diff(off))
+    jumps = np.maximum.reduceat(step, off[:-1]) > _jump(hl, sc.noise)
     cand = [(idx[j], float(hl[j])) for j in np.flatnonzero(jumps).tolist()]
     if not cand:
         return
@@ -139,21 +147,26 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
     for r, ids in enumerate(topo.regions):
         region_of[ids] = r
 
-    def linked_region(pts: np.ndarray) -> int:
-        """The region most linked to the points ``pts`` (ties: the lowest; -1: none)."""
-        nb = np.concatenate([sc.indices[sc.indptr[p]:sc.indptr[p + 1]] for p in pts.tolist()])
-        rr = region_of[nb]
+    def links(ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every link of the points ``ids``: the position in ``ids`` of its point and the
+        region of its other point (-1: none)."""
+        start = sc.indptr[ids]
+        cnt = sc.indptr[ids + 1] - start
+        first = np.cumsum(cnt) - cnt
+        nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
+        return np.repeat(np.arange(len(ids)), cnt), region_of[nb]
+
+    def linked_region(ids: np.ndarray) -> int:
+        """The region most linked to the points ``ids`` (ties: the lowest; -1: none)."""
+        rr = links(ids)[1]
         rr = rr[rr >= 0]
         return int(np.bincount(rr).argmax()) if len(rr) else -1
 
     def linked_to_a_region(ids: np.ndarray) -> np.ndarray:
         """Per point of ``ids``: whether it is linked to a region point."""
-        start = sc.indptr[ids]
-        cnt = sc.indptr[ids + 1] - start
-        first = np.cumsum(cnt) - cnt
-        nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
+        own, rr = links(ids)
         out = np.zeros(len(ids), dtype=bool)
-        out[np.repeat(np.arange(len(ids)), cnt)[region_of[nb] >= 0]] = True
+        out[own[rr >= 0]] = True
         return out
 
     for i, hl in cand:
@@ -169,7 +182,7 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
         first, last = 0, len(c.ids) - 1
         at = {k: q for q, arm in enumerate(arms) for k in arm}
         far = []
-        reach = BRANCHED.reach * hl + BRANCHED.reach_noise * sc.noise
+        reach = _reach(hl, sc.noise)
         for q, arm in enumerate(arms):
             tip = c.ids[arm[-1]]
             f = linked_region(c.ids[arm[-BRANCHED.tip_points:]])
@@ -182,9 +195,6 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
             if f < 0:
                 break  # a branch that reaches no region: no end seen there (noise at a corner)
             far.append(f)
-        if len(far) < len(arms):
-            continue
-        known = [f for f in far if f >= 0]
-        if len(set(known)) < len(known):  # two branches into one region: a ragged end, no junction
-            continue
-        topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)
+        else:
+            if len(set(far)) == len(far):  # (else two branches into one region: a ragged end)
+                topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)

@@ -330,6 +330,30 @@ def polylen(X):
     return float(np.linalg.norm(np.diff(X, axis=0), axis=1).sum())
 
 
+def flat_steps(P, id_lists):
+    """The points of many non-empty chains end to end, and the steps along each.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    id_lists : list of (n_j,) ndarray of int, each n_j >= 1
+
+    Returns
+    -------
+    flat : (sum n_j,) ndarray of int64
+        The ids, chain after chain.
+    off : (len(id_lists) + 1,) ndarray of int64
+        Chain ``j``'s ids are ``flat[off[j]:off[j + 1]]``.
+    step : (sum n_j,) ndarray
+        From each point to the next of its chain (0 after a chain's last point).
+    """
+    flat = np.concatenate(id_lists).astype(np.int64, copy=False)
+    off = np.r_[0, np.cumsum([len(ids) for ids in id_lists])].astype(np.int64)
+    step = step_lengths(P, flat)
+    step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
+    return flat, off, step
+
+
 def chain_lengths(P, h, chains):
     """Polyline length (summed per chain, within rounding of :func:`polylen`) and largest
     spacing of every chain; a chain without points gets length 0 and spacing inf."""
@@ -338,10 +362,7 @@ def chain_lengths(P, h, chains):
     hmax = np.full(len(chains), np.inf)
     nz = np.flatnonzero(lens > 0)
     if len(nz):
-        flat = np.concatenate([chains[i].ids for i in nz.tolist()]).astype(np.int64, copy=False)
-        off = np.r_[0, np.cumsum(lens[nz])]
-        step = step_lengths(P, flat)
-        step[off[1:] - 1] = 0.0  # from a chain's last point to the next chain's first
+        flat, off, step = flat_steps(P, [chains[i].ids for i in nz.tolist()])
         length[nz] = np.add.reduceat(step, off[:-1])
         hmax[nz] = np.maximum.reduceat(h[flat], off[:-1])
     return length, hmax

@@ -36,7 +36,7 @@ from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
 __all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "best_pair",
-           "best_pairs", "straight_pairs", "towards_tips", "meet_at_one_point_each", "region_stats"]
+           "best_pairs", "straight_pairs", "towards_tips", "curve_directions", "meet_at_one_point_each", "region_stats"]
 
 
 class Lines(NamedTuple):
@@ -295,8 +295,7 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     cross = Bb[:, :, None] != Bb[:, None, :]
     # (the curve's direction: the mean of its two halves' directions, each towards its end)
     ud = towards_tips(L)
-    mean = ud[:, :, None, :] - ud[:, None, :, :]  # (R, m, m, d)
-    mean = mean / np.maximum(np.linalg.norm(mean, axis=-1), np.finfo(float).tiny)[..., None]
+    mean = curve_directions(ud)
     on_seg = np.abs(np.einsum("rmni,rsi->rsmn", mean, e.reshape(R, S, d))).reshape(R * S, m, m) > PAIRED.parallel_cos
     good &= ~np.any(np.repeat(straight_pairs(L, ud), S, axis=0) & cross & ~on_seg, axis=(1, 2))
     cost = np.where(good, cost, np.inf).reshape(R, S)
@@ -310,6 +309,14 @@ def towards_tips(L: Lines) -> np.ndarray:
     """The directions of lines ``L`` (R, m, d), each turned towards its branch's end (the
     fitted directions have either sign): (R, m, d)."""
     return L.u * np.where(np.einsum("rmi,rmi->rm", L.tip - L.c, L.u) < 0, -1.0, 1.0)[:, :, None]
+
+
+def curve_directions(ud: np.ndarray) -> np.ndarray:
+    """The direction of the curve through each pair of branches: the mean of the two branches'
+    directions, each towards its end (``ud``: (R, m, d), :func:`towards_tips`), normalised:
+    (R, m, m, d) (0 for a branch with itself)."""
+    mean = ud[:, :, None, :] - ud[:, None, :, :]
+    return mean / np.maximum(np.linalg.norm(mean, axis=-1), np.finfo(float).tiny)[..., None]
 
 
 def straight_pairs(L: Lines, ud: np.ndarray) -> np.ndarray:

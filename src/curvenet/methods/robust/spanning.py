@@ -51,12 +51,13 @@ from typing import NamedTuple
 import numpy as np
 
 from ..emst import emst_edges
-from .paired import Lines, branch_lines, meet_at_one_point_each, region_stats, straight_pairs, towards_tips
+from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_each, region_stats, straight_pairs,
+                     towards_tips)
 from .params import RobustParams, Scales
 from .thresholds import NODES, PAIRED, SPANNING
 from .topology import Topology
 
-__all__ = ["split_multiple_junctions", "split_plan", "Plan", "pruned_tree", "tree_cores"]
+__all__ = ["split_multiple_junctions", "split_plan", "Plan", "pruned_tree", "prune_cut", "tree_cores"]
 
 
 class Plan(NamedTuple):
@@ -117,6 +118,12 @@ def pruned_tree(X: np.ndarray, cut: float, keep: np.ndarray | None = None) -> li
         if not changed:
             break
     return adj
+
+
+def prune_cut(hl: float, noise: float) -> float:
+    """The length under which :func:`pruned_tree` cuts a leaf branch: ``SPANNING.prune``
+    spacings ``hl`` plus ``SPANNING.prune_noise`` times the noise."""
+    return SPANNING.prune * hl + SPANNING.prune_noise * noise
 
 
 def _arms_apart(X: np.ndarray, adj: list[set], v: int, reach: float) -> bool:
@@ -243,7 +250,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     near = np.unique(np.concatenate(tree.query_ball_point(P[ids], SPANNING.margin * hl)).astype(np.int64))
     near = np.union1d(near, end_points)
     X = P[near]
-    adj = pruned_tree(X, SPANNING.prune * hl + SPANNING.prune_noise * noise)
+    adj = pruned_tree(X, prune_cut(hl, noise))
     inside = np.isin(near, ids)
     cores = tree_cores(X, adj, inside, hl, noise, min_cores)
     if len(cores) < min_cores:
@@ -347,9 +354,7 @@ def _straight_across(L, ends: list, plan: Plan) -> bool:
     R = Lines(L.c[None], L.u[None], L.tip[None], L.lim[None])
     ud = towards_tips(R)
     straight = straight_pairs(R, ud)[0] & (of[:, None] != of[None, :])
-    mean = ud[0][:, None, :] - ud[0][None, :, :]
-    mean = mean / np.maximum(np.linalg.norm(mean, axis=-1), np.finfo(float).tiny)[..., None]
-    along = np.abs(mean @ e) > PAIRED.parallel_cos
+    along = np.abs(curve_directions(ud)[0] @ e) > PAIRED.parallel_cos
     if np.any(straight & ~along):
         return True
     # a straight curve along the segment: the other branches cross it at two places, junctions
