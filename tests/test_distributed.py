@@ -450,11 +450,10 @@ def test_curves_fitted_by_their_tiles_equal_curves_fitted_once_stitched(tree3d, 
     _assert_same(one, net, h)
 
 
-def test_a_task_runs_the_method_on_its_own_thread(monkeypatch):
-    # a worker has one thread: within a task the neighbour queries and numba's parallel loops
-    # take one thread (and every core again after it)
+def _query_workers(monkeypatch) -> list:
+    """The ``workers`` of every neighbour query from now on, in order (a spy on
+    :func:`curvenet.neighbors.query`)."""
     from curvenet import neighbors
-    from curvenet.distributed.tasks import method_slot
 
     seen = []
     real = neighbors.query
@@ -464,6 +463,16 @@ def test_a_task_runs_the_method_on_its_own_thread(monkeypatch):
         return real(tree, x, **kw)
 
     monkeypatch.setattr(neighbors, "query", spy)
+    return seen
+
+
+def test_a_task_runs_the_method_on_its_own_thread(monkeypatch):
+    # a worker has one thread: within a task the neighbour queries and numba's parallel loops
+    # take one thread (and every core again after it)
+    from curvenet import neighbors
+    from curvenet.distributed.tasks import method_slot
+
+    seen = _query_workers(monkeypatch)
     P = np.random.default_rng(0).random((neighbors.SERIAL_ROWS + 500, 3))  # (fewer: one thread anyway)
     neighbors.knn(P, 4)
     with method_slot():
@@ -513,14 +522,7 @@ def test_a_small_query_runs_on_the_calling_thread(monkeypatch):
     # it saves there); the result is the same
     from curvenet import neighbors
 
-    seen = []
-    real = neighbors.query
-
-    def spy(tree, x, **kw):
-        seen.append(kw.get("workers"))
-        return real(tree, x, **kw)
-
-    monkeypatch.setattr(neighbors, "query", spy)
+    seen = _query_workers(monkeypatch)
     P = np.random.default_rng(1).random((neighbors.SERIAL_ROWS + 10, 3))
     d_all, i_all = neighbors.knn(P, 5)
     d_few, i_few = neighbors.knn(P, 5, rows=np.arange(neighbors.SERIAL_ROWS - 1))

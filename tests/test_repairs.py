@@ -111,9 +111,10 @@ def _run(repair, topo: Topology, noise: float = 0.0) -> Topology:
     return topo
 
 
-def _assert_untouched(repair, topo: Topology, noise: float = 0.0) -> None:
+def _assert_untouched(repair, topo: Topology, noise: float = 0.0, run=_run) -> None:
+    """``repair`` changes nothing (``run``: how it runs, :func:`_run` or :func:`_run_near`)."""
     before = _state(topo)
-    _run(repair, topo, noise)
+    run(repair, topo, noise)
     assert _state(topo) == before
 
 
@@ -823,9 +824,7 @@ def test_split_branched_chains_leaves_a_branch_that_reaches_no_region():
     # the same T without region L: the left side ends in no region (nothing seen there; noise
     # at a corner makes such a branch)
     topo, *_ = _missed_t(left_region=False)
-    before = _state(topo)
-    _run_near(split_branched, topo)
-    assert _state(topo) == before
+    _assert_untouched(split_branched, topo, run=_run_near)
 
 
 def test_split_branched_chains_leaves_a_path_whose_order_jumps():
@@ -837,9 +836,7 @@ def test_split_branched_chains_leaves_a_path_whose_order_jumps():
     xs = [0, 1, 3, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12]
     net.chain(np.array([[x, 0] for x in xs], dtype=float), (A, B))
     topo = net.topology()
-    before = _state(topo)
-    _run_near(split_branched, topo)
-    assert _state(topo) == before
+    _assert_untouched(split_branched, topo, run=_run_near)
 
 
 def test_split_branched_chains_leaves_two_branches_into_one_region():
@@ -851,9 +848,7 @@ def test_split_branched_chains_leaves_two_branches_into_one_region():
     X = [[x, 0] for x in range(8)] + [[8, 1], [8, -1], [9, 1], [9, -1]]
     net.chain(np.array(X, dtype=float), (A, B))
     topo = net.topology()
-    before = _state(topo)
-    _run_near(split_branched, topo)
-    assert _state(topo) == before
+    _assert_untouched(split_branched, topo, run=_run_near)
     # the control: B's lower point another region C (the forks reach two junctions): a junction
     # at (7, 0)
     net = _Net()
