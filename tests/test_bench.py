@@ -243,3 +243,27 @@ def test_study_sketches_are_a_separate_check():
     md = bench.write_markdown(rows, None)
     assert "## Check (CASSIE user-study sketches, 2, 2 mm spacing)" in md
     assert "## CASSIE free creations" not in md  # no per-sketch table of the free creations
+
+
+def test_outlier_table_scores_every_set():
+    from curvenet.synth import realdev
+
+    rd = ["bld_zurich_c0961fd6"] if realdev.available() else []
+    rows = bench.run_outliers(["crossing"], ["comb"], rd)
+    assert [r["group"] for r in rows] == ["synthetic", "kinds", *(["realdev"] if rd else [])]
+    assert {r["dataset"] for r in rows} == {"outliers"}
+    assert {(r["method"], r["condition"]) for r in rows} == {("robust", bench.OUTLIER_CONDITION)}
+    # the same points as the kinds table's run under that condition (its seed), with the outliers
+    ref = bench.run_kinds(["robust"], ["comb"], [bench.OUTLIER_CONDITION])[0]
+    assert rows[1]["N_d"] == ref["N_d"] and rows[1]["curve_f1"] == ref["curve_f1"]
+    n_clean = bench.run_bench(["emst"], ["crossing"], ["clean"])[0]["N_d"]
+    assert rows[0]["N_d"] == n_clean + round(0.02 * n_clean)
+    md = bench.write_markdown(rows, None)
+    assert f"## Outliers ({bench.OUTLIER_CONDITION}, `robust`)" in md
+    line = next(x for x in md.splitlines() if x.startswith("| kinds | 1 |"))
+    f1 = rows[1]["curve_f1"]
+    assert f"{f1:.2f} (comb)" in line
+    assert ("0 of 1" if f1 < bench.OUTLIER_TARGET else "1 of 1") in line.split("|")[5]
+    # nothing of the outlier runs enters the other tables' means
+    assert all(s["dataset"] != "synthetic" or s["condition"] != bench.OUTLIER_CONDITION
+               for s in bench.summarize(rows))
