@@ -107,3 +107,25 @@ def test_order_invariance_random_points():
         assert len(covered) == n_pts
 
     check()
+
+
+def test_edges_as_from_a_coo_graph():
+    """The graph handed to the spanning tree is built as CSR directly: the same tree as through
+    scipy's COO conversion (the code this replaced), ties and duplicates included."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    from curvenet.neighbors import knn
+
+    rng = np.random.default_rng(1)
+    for t in range(120):
+        n, d, k = int(rng.integers(2, 120)), int(rng.integers(2, 4)), int(rng.integers(1, 14))
+        X = np.cumsum(rng.normal(size=(n, d)), 0) if t % 3 else np.round(rng.uniform(0, 5, size=(n, d)))
+        dist, idx = knn(X, k)
+        rows = np.repeat(np.arange(n), idx.shape[1])
+        i, j = np.minimum(rows, idx.ravel()), np.maximum(rows, idx.ravel())
+        w = dist.ravel() + max(float(np.median(dist[:, 0])), 1e-300) * 1e-9
+        uk, first = np.unique(i * n + j, return_index=True)
+        tree = minimum_spanning_tree(coo_matrix((w[first], (uk // n, uk % n)), shape=(n, n)).tocsr()).tocoo()
+        e = np.column_stack([np.minimum(tree.row, tree.col), np.maximum(tree.row, tree.col)]).astype(np.int64)
+        np.testing.assert_array_equal(emst_edges(X, k=k), e[np.lexsort(e.T[::-1])])

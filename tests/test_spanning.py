@@ -142,3 +142,23 @@ def test_branches_apart_tells_converging_curves_from_a_junction_s_branches():
     assert case(180.0, 90.0)  # a junction's branches: left and up
     assert not case(180.0, 172.0)  # two curves converging 8 degrees apart (an eye's arcs)
     assert case(180.0, 180.0 - np.degrees(np.arccos(SPANNING.arm_cos)) - 1)
+
+
+def test_clusters_number_as_connected_components():
+    """The branch vertices' clusters: pairs at most r apart joined, numbered in the order of
+    each cluster's first point, as scipy's connected components of the k-d tree's pairs (the
+    code this replaced); pairs exactly r apart (integer grids) included."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from curvenet.methods.robust.spanning import _clusters
+
+    rng = np.random.default_rng(3)
+    for t in range(400):
+        m, d = int(rng.integers(1, 25)), int(rng.integers(2, 4))
+        Y = rng.uniform(0, 6, size=(m, d)) if t % 2 else np.round(rng.uniform(0, 6, size=(m, d)))
+        r = float(rng.choice([1.0, 1.5, 2.0])) + (0.0 if t % 3 else float(rng.uniform(0, 1)))
+        pairs = cKDTree(Y).query_pairs(r, output_type="ndarray")
+        g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
+        _, lab = connected_components(g, directed=False)
+        np.testing.assert_array_equal(_clusters(Y, r), lab)

@@ -38,7 +38,7 @@ def emst_edges(points: np.ndarray, *, k: int = 12) -> np.ndarray:
     (E, 2) ndarray of int64
         Edges ``(i, j)`` with ``i < j``, sorted.
     """
-    from scipy.sparse import coo_matrix
+    from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import minimum_spanning_tree
 
     n = len(points)
@@ -55,9 +55,13 @@ def emst_edges(points: np.ndarray, *, k: int = 12) -> np.ndarray:
     key = i * n + j
     uk, first = np.unique(key, return_index=True)
     ui, uj = uk // n, uk % n
-    g = coo_matrix((w[first], (ui, uj)), shape=(n, n)).tocsr()
-    t = minimum_spanning_tree(g).tocoo()
-    e = np.column_stack([np.minimum(t.row, t.col), np.maximum(t.row, t.col)]).astype(np.int64)
+    # the keys are sorted and unique: row by row, columns ascending, which is the canonical
+    # CSR layout itself (what a COO matrix of them converts to, without the conversion)
+    g = csr_matrix((w[first], uj, np.searchsorted(ui, np.arange(n + 1))), shape=(n, n))
+    t = minimum_spanning_tree(g)
+    row = np.repeat(np.arange(n), np.diff(t.indptr))
+    col = t.indices
+    e = np.column_stack([np.minimum(row, col), np.maximum(row, col)]).astype(np.int64)
     return e[np.lexsort(e.T[::-1])]
 
 

@@ -482,6 +482,7 @@ def merge_close_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None
     if need:
         X, _ = junction_positions(P, sc, prm, [(chains, topo.incident(r), regions[r]) for r in need])
         pos = dict(zip(need, X))
+    lines: dict = {}  # the branch ends' lines, read once each
     for ci in cand:
         c = chains[ci]
         a, b = c.ends
@@ -495,7 +496,8 @@ def merge_close_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None
             if x_r not in pos:
                 pos[x_r] = junction(P, sc, prm, chains, inc_x, regions[x_r])
             xpos = pos[x_r]
-            if not _aims_at(P, h, sc, chains, inc_y, xpos, v[x_r] >= REPAIRS.hub_valence and doubled[ci], noise):
+            if not _aims_at(P, h, sc, chains, inc_y, xpos, v[x_r] >= REPAIRS.hub_valence and doubled[ci], noise,
+                            lines):
                 continue
             # merge y into x, the short chain included
             pos.pop(x_r, None)
@@ -506,12 +508,26 @@ def merge_close_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None
             break
 
 
-def _aims_at(P, h, sc, chains, inc, xpos, hub, noise) -> bool:
-    """True when every branch ``inc`` (chain, side) aims at ``xpos`` (see merge_close_junctions)."""
+def _end_line(P, h, chains, i, s, noise):
+    """The line of the branch end ``(i, s)`` as :func:`_aims_at` reads it: the end's point, the
+    line's centre and direction (None: under two points) and the spacing at the end."""
+    ids = chains[i].ids if s == 1 else chains[i].ids[::-1]
+    hl = float(h[ids[-1]])
+    E = end_portion(P, h, np.asarray(ids), span=NODES.fit_span + NODES.fit_noise * noise / hl)
+    cc, u = fit_line(E)
+    return E[0], cc, u, hl
+
+
+def _aims_at(P, h, sc, chains, inc, xpos, hub, noise, lines=None) -> bool:
+    """True when every branch ``inc`` (chain, side) aims at ``xpos`` (see merge_close_junctions).
+
+    ``lines``: a dict of the branch ends' lines (:func:`_end_line`) already read, filled here
+    (a chain's points do not change while the junctions merge)."""
+    lines = {} if lines is None else lines
     for i, s in inc:
-        ids = chains[i].ids if s == 1 else chains[i].ids[::-1]
-        E = end_portion(P, h, np.asarray(ids), span=NODES.fit_span + NODES.fit_noise * noise / float(h[ids[-1]]))
-        cc, u = fit_line(E)
+        if (i, s) not in lines:
+            lines[i, s] = _end_line(P, h, chains, i, s, noise)
+        e0, cc, u, hl = lines[i, s]
         if u is None:
             return False
         r = xpos - cc
@@ -519,8 +535,8 @@ def _aims_at(P, h, sc, chains, inc, xpos, hub, noise) -> bool:
         # within the strip, or within the aim angle as seen from the branch end (a fan of
         # curves converging on one node parts a few degrees apart)
         tan = REPAIRS.merge_tan_hub if hub else REPAIRS.merge_tan
-        lim = max(sc.width * float(h[ids[-1]]), LINKS.strip_noise * noise, tan * float(np.linalg.norm(xpos - E[0])))
-        if d > lim or float((E[0] - cc) @ u) * float((xpos - cc) @ u) < 0:
+        lim = max(sc.width * hl, LINKS.strip_noise * noise, tan * float(np.linalg.norm(xpos - e0)))
+        if d > lim or float((e0 - cc) @ u) * float((xpos - cc) @ u) < 0:
             return False
     return True
 

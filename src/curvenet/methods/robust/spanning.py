@@ -191,6 +191,29 @@ def _tree_path(adj: list[set], a: int, b: int) -> list[int] | None:
     return out[::-1]
 
 
+def _clusters(Y: np.ndarray, r: float) -> np.ndarray:
+    """The clusters of the few points ``Y`` (m, d) joined by pairs at most ``r`` apart: a label
+    per point, numbered in the order of each cluster's first point (as
+    ``scipy.sparse.csgraph.connected_components`` numbers them). The branch vertices of one
+    region are a handful: all pairs at once, without a k-d tree or a sparse graph."""
+    D = Y[:, None, :] - Y[None, :, :]
+    near = np.einsum("ijk,ijk->ij", D, D) <= r * r
+    lab = np.full(len(Y), -1, dtype=np.int64)
+    k = 0
+    for s in range(len(Y)):
+        if lab[s] >= 0:
+            continue
+        lab[s] = k
+        stack = [s]
+        while stack:
+            u = stack.pop()
+            for w in np.flatnonzero(near[u] & (lab < 0)).tolist():
+                lab[w] = k
+                stack.append(w)
+        k += 1
+    return lab
+
+
 def tree_cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noise: float,
                min_cores: int) -> list[list[int]]:
     """The junctions the pruned tree shows inside the region: its vertices of three or more
@@ -200,13 +223,7 @@ def tree_cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noi
     bv = np.array([v for v in range(len(X)) if len(adj[v]) > 2 and inside[v]], dtype=np.int64)
     if len(bv) < min_cores:
         return []
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    pairs = cKDTree(X[bv]).query_pairs(SPANNING.cluster * hl + noise, output_type="ndarray")
-    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(bv), len(bv)))
-    _, lab = connected_components(g, directed=False)
+    lab = _clusters(X[bv], SPANNING.cluster * hl + noise)
     out = []
     for c in range(int(lab.max()) + 1):
         mem = bv[lab == c]
@@ -255,10 +272,14 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     cores = tree_cores(X, adj, inside, hl, noise, min_cores)
     if len(cores) < min_cores:
         return None
+    centre = np.array([X[mem[0]] for mem in cores])
+    # the cores kept below are some of these, at these positions, and no two of them may lie
+    # under SPANNING.sep apart: when no two of these do, nothing below can (the same None, sooner)
+    if np.linalg.norm(centre[:, None] - centre[None], axis=2).max() < SPANNING.sep * hl:
+        return None
     ea, eb = _tree_edges(adj)
     lab = _labels(X, ea, eb, {v: k for k, mem in enumerate(cores) for v in mem})
     at = np.searchsorted(near, end_points)
-    centre = np.array([X[mem[0]] for mem in cores])
     live = list(range(len(cores)))
     while True:  # cores of valence under 3 merged into their nearest neighbour
         nbr = {k: set() for k in live}
