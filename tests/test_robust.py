@@ -849,3 +849,18 @@ def test_points_alone_in_space_are_dropped_by_their_neighbourhood_alone(noise):
     clump5 = np.array([-2 * far, -2 * far, 0]) + np.r_[np.eye(4, 3), -np.eye(1, 3)] * 2 * H
     near = np.array([[10, 0.5 * far, 0]])
     assert reconstruct_robust(np.vstack([P, clump5, near])).parameters["isolated_dropped"] == 0
+
+
+def test_twig_near_a_free_end_is_a_fork():
+    """A twig of 4 h leaving a branch 6 h before its free end, 40 degrees off: the whole fork lies
+    in the free end's region, its tip 2.6 h from the path to the branch's end. It is a junction
+    and two free ends (with the fork threshold of 0.6 shell radii, 3.3 h, it was one free end)."""
+    fork = np.array([34.0, 0.0])
+    tip = fork + 4.0 * np.array([np.cos(np.radians(40.0)), np.sin(np.radians(40.0))])
+    P = np.vstack([_seg([0, 0], [40, 0]), _seg(fork, tip)[1:], _seg([0, 0], [0, -30])[1:],
+                   _seg([0, 0], [-30, 0])[1:]])
+    net = reconstruct_robust(P)
+    assert (net.n_nodes, net.n_curves) == (6, 5)
+    for x in (fork, tip, [40.0, 0.0]):
+        assert np.linalg.norm(net.nodes - x, axis=1).min() < 2 * H
+    assert sorted(net.valence.tolist()) == [1, 1, 1, 1, 3, 3]
