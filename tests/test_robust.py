@@ -864,3 +864,22 @@ def test_twig_near_a_free_end_is_a_fork():
     for x in (fork, tip, [40.0, 0.0]):
         assert np.linalg.norm(net.nodes - x, axis=1).min() < 2 * H
     assert sorted(net.valence.tolist()) == [1, 1, 1, 1, 3, 3]
+
+
+@pytest.mark.parametrize("a1, a2, l1, l2", [(25.0, -30.0, 5.5, 6.5), (30.0, -30.0, 5.0, 6.0)])
+def test_terminal_fork_with_short_branches(a1, a2, l1, l2):
+    """A stem ending in a fork of two branches of 5-6.5 h (a neuron's terminal fork): the
+    shell test flags the fork and both branches as one region, and a lone unflagged point in it
+    is traced as a one-point chain to a free end without tip points. On noise-free input that
+    stub goes, the region is a free end again and its hidden fork is found: two free ends at
+    the tips, the junction within a spacing of the fork (before: one free end, or a tip 3 h
+    off)."""
+    t1 = l1 * np.array([np.cos(np.radians(a1)), np.sin(np.radians(a1)), 0.0])
+    t2 = l2 * np.array([np.cos(np.radians(a2)), np.sin(np.radians(a2)), 0.0])
+    P = np.vstack([_seg([-30, 0, 0], [0, 0, 0]), _seg([0, 0, 0], t1)[1:], _seg([0, 0, 0], t2)[1:],
+                   _seg([-30, 0, 0], [-30, 30, 0])[1:], _seg([-30, 0, 0], [-60, 0, 0])[1:]])
+    net = reconstruct_robust(P)
+    assert (net.n_nodes, net.n_curves) == (6, 5)
+    assert sorted(net.valence.tolist()) == [1, 1, 1, 1, 3, 3]
+    for x, tol in ((np.zeros(3), 1.0), (t1, 0.5), (t2, 0.5)):
+        assert np.linalg.norm(net.nodes - x, axis=1).min() < tol * H

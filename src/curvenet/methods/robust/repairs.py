@@ -368,7 +368,11 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
 
     A chain from a junction to a free end, or between two free ends, whose polyline plus the
     extent of its free-end regions is under ``min_spur`` spacings goes; so does a closed loop
-    under twice that. Up to ``REPAIRS.prune_passes`` passes (a dropped spur can leave another).
+    under twice that. On noise-free input also such a chain from a region of valence 2 to a free
+    end without tip points (a stub: a noise-free curve's end is always flagged), which leaves
+    that region a free end (a whole fork with two short branches in one region: the hidden
+    fork of :func:`~.junctions.hidden_fork`). Up to ``REPAIRS.prune_passes`` passes (a dropped
+    spur can leave another).
     """
     P, h, chains, regions = topo.P, sc.h, topo.chains, topo.regions
     # a chain is short only if its polyline is under min_spur (a loop: twice) times its largest
@@ -397,6 +401,14 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
             ext = sum(extent(P, regions[r]) for r in (a, b) if v[r] == 1)
             if length + ext < prm.min_spur * hl:
                 if free_a and free_b or v[a] >= NODES.junction_valence or v[b] >= NODES.junction_valence:
+                    topo.drop(i)
+                    changed = True
+                elif sc.clean and (v[a] == 2 and free_b and not len(regions[b])
+                                   or v[b] == 2 and free_a and not len(regions[a])):
+                    # a stub: on noise-free input every curve's end is flagged (its last
+                    # points see one side in their shells), so a free end without tip points
+                    # is a piece of the region's own curve, traced out of it; without it
+                    # the region is a free end again (and may show a hidden fork)
                     topo.drop(i)
                     changed = True
         if not changed:
