@@ -369,9 +369,9 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     A chain from a junction to a free end, or between two free ends, whose polyline plus the
     extent of its free-end regions is under ``min_spur`` spacings goes; so does a closed loop
     under twice that. On noise-free input also such a chain from a region of valence 2 to a free
-    end without tip points (a stub: a noise-free curve's end is always flagged), which leaves
-    that region a free end (a whole fork with two short branches in one region: the hidden
-    fork of :func:`~.junctions.hidden_fork`). Up to ``REPAIRS.prune_passes`` passes (a dropped
+    end without tip points (a stub: a noise-free curve's end is always flagged) joins that
+    region, which is a free end again (a whole fork with two short branches in one region: the
+    hidden fork of :func:`~.junctions.hidden_fork`). Up to ``REPAIRS.prune_passes`` passes (a dropped
     spur can leave another).
     """
     P, h, chains, regions = topo.P, sc.h, topo.chains, topo.regions
@@ -407,9 +407,9 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
                                    or v[b] == 2 and free_a and not len(regions[a])):
                     # a stub: on noise-free input every curve's end is flagged (its last
                     # points see one side in their shells), so a free end without tip points
-                    # is a piece of the region's own curve, traced out of it; without it
-                    # the region is a free end again (and may show a hidden fork)
-                    topo.drop(i)
+                    # is a piece of the region's own curve, traced out of it: its points join
+                    # the region, which is a free end again (and may show a hidden fork)
+                    topo.absorb_chain(i, a if v[a] == 2 else b)
                     changed = True
         if not changed:
             break
