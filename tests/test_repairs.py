@@ -918,3 +918,35 @@ def test_run_repairs_mends_a_broken_curve():
     assert topo.alive == [True, False]
     assert topo.chains[a].ids.tolist() == ids
     assert topo.v.tolist() == [1, 0, 0, 1]
+
+
+def _close_junctions_with_stub(linked: bool = False):
+    """Junctions A at (0, 0) and B at (4, 0), two branches each, and a one-point chain from A to
+    a free end without tip points at (1, 0), on the segment A-B (a short link traced out of A);
+    ``linked``: A and B joined by a chain already."""
+    net = _Net()
+    A = net.region([[0, 0]])
+    B = net.region([[4, 0]])
+    net.chain(_line((-1, 0), (-6, 0), 6), (A, -1))
+    net.chain(_line((0, 1), (0, 6), 6), (A, -1))
+    net.chain(_line((5, 0), (10, 0), 6), (B, -1))
+    net.chain(_line((4, 1), (4, 6), 6), (B, -1))
+    if linked:
+        net.chain(_line((1, 0.5), (3, 0.5), 3), (A, B))
+    stub = net.chain(_line((1, 0), (1, 0), 1), (A, -1))
+    return net.topology(), A, B, stub
+
+
+def test_tips_to_junctions_gives_a_stub_between_close_junctions_to_the_other():
+    topo, A, B, stub = _close_junctions_with_stub()
+    _run(R.tips_to_junctions, topo)
+    assert sorted(topo.chains[stub].ends) == [A, B]  # the link between the two
+    assert topo.v[A] == 3 and topo.v[B] == 3
+
+
+@pytest.mark.parametrize("noise, linked", [(0.2, False), (0.0, True)])
+def test_tips_to_junctions_leaves_the_stub_under_noise_or_when_linked(noise, linked):
+    # under noise a real tip can lose its flags; a second trace of an existing link is the
+    # region's own (both left to prune_spurs)
+    topo, *_ = _close_junctions_with_stub(linked)
+    _assert_untouched(R.tips_to_junctions, topo, noise=noise)

@@ -128,7 +128,10 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     Where the free end's node would be (:func:`~.nodes.free_end`), the nearest point of a region
     of valence 2 or more within ``link * REPAIRS.tip_gap`` spacings (plus the noise gap) takes
     the free end's region, unless the chain's other end is that very junction (a short spur:
-    left to :func:`prune_spurs`).
+    left to :func:`prune_spurs`). On noise-free input a free end without tip points there
+    (no curve's end) goes to the nearest other junction within that gap when the chain runs
+    straight between the two (:func:`_linked_junction`): a short link between two close
+    junctions (a street grid's, a ladder's), traced out of one of them.
     """
     from scipy.spatial import cKDTree
 
@@ -162,13 +165,49 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     dk[dk > gap * (1 + NUMERIC.rel)] = np.inf
     for j in np.flatnonzero(np.isfinite(dk) & (dk >= gap * (1 - NUMERIC.rel))).tolist():
         dk[j], kk[j] = tree.query(tip[j], distance_upper_bound=float(gap[j]))
-    for (r, i, s, cids), d, k in zip(one, dk.tolist(), kk.tolist()):
+    for j, ((r, i, s, cids), d, k) in enumerate(zip(one, dk.tolist(), kk.tolist())):
         if not np.isfinite(d):
             continue
         t = int(lab[k])
         if topo.chains[i].ends[1 - s] == t:
-            continue  # a short spur of that very junction: left to the pruning
+            # a short spur of that very junction, left to the pruning; or, on noise-free input
+            # and without tip points (no curve's end: see prune_spurs), a short link between two
+            # close junctions traced from one of them: taken by the other one
+            t = _linked_junction(topo, sc, i, r, t, tip[j], float(gap[j]), tree, ids, lab)
+            if t < 0:
+                continue
         topo.absorb(r, t)
+
+
+def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: np.ndarray, gap: float,
+                     tree, ids: np.ndarray, lab: np.ndarray) -> int:
+    """The junction a stub (chain ``i`` from junction ``own`` to the free end ``r`` without tip
+    points, on noise-free input) is a link to: the nearest region point of another junction
+    within ``gap`` of its tip (``tree`` over the junction points ``ids``, labelled ``lab``),
+    when every point of the stub lies within ``sc.width`` spacings of the segment between the
+    two junctions' centres (a link runs straight between them) and no other chain links the two
+    already (the stub would be a second trace of that link); -1 where there is none."""
+    if not sc.clean or len(topo.regions[r]):
+        return -1
+    near = np.asarray(tree.query_ball_point(tip, gap), dtype=np.int64)
+    near = near[lab[near] != own]
+    if not len(near):
+        return -1
+    P = topo.P
+    dn = np.linalg.norm(P[ids[near]] - tip, axis=1)
+    t = int(lab[near[np.lexsort((near, dn))[0]]])
+    if any(topo.chains[j].ends[1 - q] == t for j, q in topo.incident(own) if j != i):
+        return -1  # the two are linked already: the stub is a second trace of that link
+    a, b = P[topo.regions[own]].mean(axis=0), P[topo.regions[t]].mean(axis=0)
+    u = b - a
+    L = float(np.linalg.norm(u))
+    if not L > 0:
+        return -1
+    X = P[topo.chains[i].ids] - a
+    along = np.clip(X @ (u / L), 0.0, L)
+    off = np.linalg.norm(X - along[:, None] * (u / L), axis=1)
+    lim = sc.width * np.median(sc.h[topo.chains[i].ids])
+    return t if bool(np.all(off <= lim)) else -1
 
 
 def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
