@@ -51,6 +51,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..emst import emst_edges
+from .graph import components
 from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_each, region_stats, straight_pairs,
                      towards_tips)
 from .params import RobustParams, Scales
@@ -193,24 +194,12 @@ def _tree_path(adj: list[set], a: int, b: int) -> list[int] | None:
 
 def _clusters(Y: np.ndarray, r: float) -> np.ndarray:
     """The clusters of the few points ``Y`` (m, d) joined by pairs at most ``r`` apart: a label
-    per point, numbered in the order of each cluster's first point (as
-    ``scipy.sparse.csgraph.connected_components`` numbers them). The branch vertices of one
+    per point, numbered in the order of each cluster's first point (:func:`.graph.components`,
+    as ``scipy.sparse.csgraph.connected_components`` numbers them). The branch vertices of one
     region are a handful: all pairs at once, without a k-d tree or a sparse graph."""
     D = Y[:, None, :] - Y[None, :, :]
-    near = np.einsum("ijk,ijk->ij", D, D) <= r * r
-    lab = np.full(len(Y), -1, dtype=np.int64)
-    k = 0
-    for s in range(len(Y)):
-        if lab[s] >= 0:
-            continue
-        lab[s] = k
-        stack = [s]
-        while stack:
-            u = stack.pop()
-            for w in np.flatnonzero(near[u] & (lab < 0)).tolist():
-                lab[w] = k
-                stack.append(w)
-        k += 1
+    pa, pb = np.nonzero(np.triu(np.einsum("ijk,ijk->ij", D, D) <= r * r, 1))
+    lab, _ = components(len(Y), pa, pb, np.ones(len(Y), dtype=bool))
     return lab
 
 
