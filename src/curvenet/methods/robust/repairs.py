@@ -179,6 +179,14 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         topo.absorb(r, t)
 
 
+def _no_curve_end(topo: Topology, sc: Scales, r: int) -> bool:
+    """Whether the free end ``r`` is no curve's end: on noise-free input the last points of a
+    curve always see one side in their shells, so a curve's end is always flagged; a free end
+    without tip points is a stub's, a piece of a region's own curve traced out of it. (Under
+    noise a real tip can lose its flags: False there.)"""
+    return bool(sc.clean) and topo.v[r] == 1 and not len(topo.regions[r])
+
+
 def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: np.ndarray, gap: float,
                      tree, ids: np.ndarray, lab: np.ndarray) -> int:
     """The junction a stub (chain ``i`` from junction ``own`` to the free end ``r`` without tip
@@ -187,7 +195,7 @@ def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: 
     when every point of the stub lies within ``sc.width`` spacings of the segment between the
     two junctions' centres (a link runs straight between them) and no other chain links the two
     already (the stub would be a second trace of that link); -1 where there is none."""
-    if not sc.clean or len(topo.regions[r]):
+    if not _no_curve_end(topo, sc, r):
         return -1
     near = np.asarray(tree.query_ball_point(tip, gap), dtype=np.int64)
     near = near[lab[near] != own]
@@ -442,12 +450,9 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
                 if free_a and free_b or v[a] >= NODES.junction_valence or v[b] >= NODES.junction_valence:
                     topo.drop(i)
                     changed = True
-                elif sc.clean and (v[a] == 2 and free_b and not len(regions[b])
-                                   or v[b] == 2 and free_a and not len(regions[a])):
-                    # a stub: on noise-free input every curve's end is flagged (its last
-                    # points see one side in their shells), so a free end without tip points
-                    # is a piece of the region's own curve, traced out of it: its points join
-                    # the region, which is a free end again (and may show a hidden fork)
+                elif (v[a] == 2 and _no_curve_end(topo, sc, b)) or (v[b] == 2 and _no_curve_end(topo, sc, a)):
+                    # a stub (see _no_curve_end): its points join the region, which is a free
+                    # end again (and may show a hidden fork)
                     topo.absorb_chain(i, a if v[a] == 2 else b)
                     changed = True
         if not changed:
