@@ -219,7 +219,10 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     joining them), is at most the number of chains leaving the region (a junction seen in parts counts its branches twice). The scale giving
     the most candidates, two or more (ties: the first listed), resolves the region: its
     candidates replace it, its other points are freed (the short chains between the
-    junctions). Noisy input is left as it is: noise blurs a junction over more than these
+    junctions). A chain of those freed points that touches ``SPLIT.hold_touches`` or more of
+    the candidates kept and the branches leaving the region (:func:`_junction_left`) holds
+    junctions the scale missed (the shell's radii fall between the samples there): it stays a
+    region of its own, for the spanning tree to split (:mod:`.spanning`). Noisy input is left as it is: noise blurs a junction over more than these
     shells resolve, and they split one (the benchmark's crossings and fans under noise 0.2 h
     and 0.3 h lost their exact topology).
 
@@ -273,7 +276,7 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     best = np.ones(n_reg, dtype=np.int64)
     pick = np.full(n_reg, -1, dtype=np.int64)
     found = []
-    exits = _exits(indptr, indices, flagged, sub, rsub, ka, kb, n_reg)
+    exits, exit_of = _exits(indptr, indices, flagged, sub, rsub, ka, kb, n_reg)
     for k, sc in enumerate(SPLIT.close_scales):
         cand, good, fine = _close_candidates(P, hs, indptr, indices, sub, fa, fb, prm, sc)
         found.append((cand, good))
@@ -295,6 +298,7 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
         return none
     out = flagged.copy()
     sep = np.zeros(N, dtype=bool)  # points of the separated regions
+    hold = np.zeros(N, dtype=bool)  # freed points that still hold a junction (kept as regions)
     for k, (cand, good) in enumerate(found):
         at = ids[pick[r] == k]  # the points of the regions resolved at this scale
         if not len(at):
@@ -303,20 +307,61 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
         keep = at[np.isin(cand[at], good)]
         out[keep] = True
         sep[keep] = True
+        held = _junction_left(indptr, indices, at, cand, good, exit_of)
+        out[held] = True
+        hold[held] = True
     # the separated regions are joined by the fine links only, the others stay as they were;
     # region ids renumbered to follow the lowest point id again
     j = sep[fa] & sep[fb]
-    sl, _ = components(N, fa[j], fb[j], sep)
+    sl, n_sl = components(N, fa[j], fb[j], sep)
+    hl, _ = components(N, *csr_edges(indptr, indices, np.flatnonzero(hold)), hold)
     fl = np.flatnonzero(out)
-    key = np.where(sep[fl], n_reg + sl[fl], reg[fl])
+    key = np.where(sep[fl], n_reg + sl[fl], np.where(hold[fl], n_reg + n_sl + hl[fl], reg[fl]))
     u, first, inv = np.unique(key, return_index=True, return_inverse=True)
     rank = np.empty(len(u), dtype=np.int64)
     rank[np.argsort(first, kind="stable")] = np.arange(len(u))
     reg2 = np.full(N, -1, dtype=reg.dtype)
     reg2[fl] = rank[inv.ravel()]
     close = np.zeros(len(u), dtype=bool)
-    close[reg2[sep]] = True
+    close[reg2[sep | hold]] = True
     return out, reg2, len(u), close
+
+
+def _junction_left(indptr, indices, at, cand, good, exit_of):
+    """The points of ``at`` (regions resolved at one scale) that the resolution would free but
+    that still hold junctions: a chain of them (linked graph) touching ``SPLIT.hold_touches``
+    or more of the candidates kept (labels ``good`` of ``cand``) and the branches leaving the
+    region (groups of ``exit_of``) together. A freed chain is a segment: between two junctions,
+    or from one to a branch leaving; touching three, it holds a junction the scale did not see
+    (left to :func:`.branched.split_branched_chains`, which finds it on the chain), touching
+    four or more, two or more such (a ladder's rail: two rungs between the two junctions
+    kept)."""
+    N = len(cand)
+    freed = np.zeros(N, dtype=bool)
+    freed[at] = ~np.isin(cand[at], good)
+    fs = np.flatnonzero(freed)
+    if not len(fs):
+        return fs
+    ea, eb = csr_edges(indptr, indices, fs)
+    lab, _ = components(N, ea, eb, freed)
+    m = ~freed[eb]
+    ea, eb = ea[m], eb[m]
+    isc = np.isin(cand[eb], good)
+    ise = exit_of[eb] >= 0
+    # what each chain touches: a candidate (its label), or an exit (its group, offset) unless
+    # the exit's points touch a candidate (a segment's unflagged middle, not a branch leaving)
+    xs = np.flatnonzero(exit_of >= 0)
+    xa, xb = csr_edges(indptr, indices, xs)
+    bound = np.zeros(int(exit_of.max()) + 1 if len(xs) else 0, dtype=bool)
+    bound[exit_of[xa[np.isin(cand[xb], good)]]] = True
+    what = np.where(isc, cand[eb], -1)
+    xe = np.flatnonzero(~isc & ise)
+    g = exit_of[eb[xe]]
+    what[xe] = np.where(bound[g], -1, cand.max() + 1 + g)
+    t = what >= 0
+    pairs = np.unique(np.stack([lab[ea[t]], what[t]], axis=1), axis=0)
+    n_touch = np.bincount(pairs[:, 0], minlength=int(lab.max()) + 1) if len(pairs) else np.zeros(int(lab.max()) + 1, int)
+    return fs[n_touch[lab[fs]] >= SPLIT.hold_touches]
 
 
 def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
@@ -380,7 +425,8 @@ def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
 
 def _exits(indptr, indices, flagged, sub, rs, ka, kb, n_reg):
     """How many branches leave each region: its points' linked neighbours outside every region,
-    in groups joined by short links (one group per chain leaving it)."""
+    in groups joined by short links (one group per chain leaving it); and the group of every
+    such neighbour ((N,) int, -1 elsewhere)."""
     N = len(flagged)
     ea, eb = csr_edges(indptr, indices, sub)
     out = ~flagged[eb]
@@ -391,7 +437,7 @@ def _exits(indptr, indices, flagged, sub, rs, ka, kb, n_reg):
     m = pts[ka] & pts[kb]
     lab, _ = components(N, ka[m], kb[m], pts)
     pairs = np.unique(np.stack([region_of[ea[out]], lab[eb[out]]], axis=1), axis=0)
-    return np.bincount(pairs[:, 0], minlength=n_reg)
+    return np.bincount(pairs[:, 0], minlength=n_reg), np.where(pts, lab, -1)
 
 
 def _close_candidates(P, hs, indptr, indices, sub, na, nb_, prm, sc):
