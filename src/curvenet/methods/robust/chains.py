@@ -3,7 +3,8 @@
 The points outside every region fall apart (linked graph) into chains, one per curve segment.
 Each is ordered by geodesic distance from one end and given the regions its two ends touch
 (:func:`order_chains`); a chain touching no region is a closed loop cut open at its
-straightest point or an open piece. The geometric helpers of chains (end portions, lengths,
+straightest point or an open piece, and a chain that runs past a region over a long link is cut
+there (:func:`_passed_regions`). The geometric helpers of chains (end portions, lengths,
 line fits) live here too.
 """
 
@@ -135,8 +136,10 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):
     b = bounds.tolist()
     e0, e1 = ends[:, 0].tolist(), ends[:, 1].tolist()
     chains = [Chain(ids_o[b[ci]:b[ci + 1]], [e0[ci], e1[ci]]) for ci in range(n_chn)]
+    # where a chain runs past a region over a long link, the cut: (chain, position, region)
+    passed = _passed_regions(P, h, reg, ids_o, par_o, bounds, c_reg, c_par, cb, touch & ~free & ~zig, ends)
     if not len(special):
-        return chains
+        return _cut_at(chains, par_o, bounds, passed)
     # the linked graph inside the chains below (their loops are cut open on it)
     inside = (chn[src] >= 0) & (chn[src] == chn[dst])
     inside[inside] = np.isin(chn[src[inside]], special)
@@ -156,7 +159,81 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):
             lp = _loop_or_piece(P, h, g, seg, lin, start=int(pts_c[regs_c == r].min()))
             if lp.closed:
                 chains[ci] = Chain(lp.ids, [r, r])
-    return chains
+    return _cut_at(chains, par_o, bounds, passed)
+
+
+def _passed_regions(P, h, reg, ids_o, par_o, bounds, c_reg, c_par, cb, open_, ends):
+    """Where a chain runs past a region it does not end at: ``(chain, position, region)`` rows,
+    sorted by chain and position (the position: a distance along the chain, as ``par_o``).
+
+    The linked graph can join the two samples on either side of a region of a few points (a
+    right-angle corner's sample with the first samples of a branch leaving it), so the run of
+    points outside the regions goes on past the region instead of ending at it, and the region
+    has too few chain ends to be a junction (a building's notch lost all four corners so). Such
+    a chain is cut there (:func:`_cut_at`): every contact of the region with the chain lies in
+    the chain's middle (beyond ``min(L / 2, CHAINS.end_reach h)`` of both ends), all within
+    ``CHAINS.pass_span`` spacings of one another along it, the region holds at least
+    ``CHAINS.pass_min_points`` points, and among the chain's points there one link (consecutive
+    points whose distance along the chain is their distance in space) is longer than
+    ``CHAINS.pass_jump`` spacings: the chain stepped over the region's points. Only the open
+    chains ``open_`` (with their ends known) are read.
+    """
+    rows = []
+    sizes = np.bincount(reg[reg >= 0]) if (reg >= 0).any() else np.zeros(0, dtype=np.int64)
+    for ci in np.flatnonzero(open_).tolist():
+        lo, hi = bounds[ci], bounds[ci + 1]
+        regs, pars = c_reg[cb[ci]:cb[ci + 1]], c_par[cb[ci]:cb[ci + 1]]
+        par = par_o[lo:hi]
+        L = float(par[-1])
+        hl = float(np.median(h[ids_o[lo:hi]]))
+        reach = min(0.5 * L, CHAINS.end_reach * hl)
+        inner = (pars > reach) & (pars < L - reach)
+        if not inner.any():
+            continue
+        for r in np.unique(regs[inner]).tolist():
+            q = pars[regs == r]
+            if r in (ends[ci, 0], ends[ci, 1]) or sizes[r] < CHAINS.pass_min_points:
+                continue
+            if not inner[regs == r].all() or q.max() - q.min() > CHAINS.pass_span * hl:
+                continue
+            at = np.flatnonzero((par >= q.min()) & (par <= q.max()))
+            if len(at) < 2:
+                continue
+            along = np.diff(par[at])
+            k = int(np.argmax(along))
+            step = float(np.linalg.norm(P[ids_o[lo + at[k + 1]]] - P[ids_o[lo + at[k]]]))
+            if along[k] > CHAINS.pass_jump * hl and abs(step - along[k]) <= NUMERIC.rel_loose * along[k]:
+                rows.append((ci, 0.5 * float(q.min() + q.max()), r))
+    rows.sort()
+    return rows
+
+
+def _cut_at(chains, par_o, bounds, passed):
+    """The chains with each chain of ``passed`` (:func:`_passed_regions`) cut at its positions
+    into pieces ending at the regions passed; its pieces take its place in the list, in order.
+    A cut that would leave a piece without points leaves the chain whole."""
+    if not passed:
+        return chains
+    by = {}
+    for ci, x, r in passed:
+        by.setdefault(ci, []).append((x, r))
+    out = []
+    for ci, ch in enumerate(chains):
+        cuts = by.get(ci)
+        if cuts is None:
+            out.append(ch)
+            continue
+        par = par_o[bounds[ci]:bounds[ci + 1]]
+        ks = [int(np.searchsorted(par, x, side="right")) for x, _ in cuts]
+        if ks[0] < 1 or ks[-1] >= len(ch.ids) or any(b_ <= a_ for a_, b_ in zip(ks, ks[1:])):
+            out.append(ch)
+            continue
+        left, start = ch.ends[0], 0
+        for k, (_, r) in zip(ks, cuts):
+            out.append(Chain(ch.ids[start:k], [left, r]))
+            left, start = r, k
+        out.append(Chain(ch.ids[start:], [left, ch.ends[1]]))
+    return out
 
 
 def _other_end(ci, ends, regs, par, length, hl):

@@ -508,6 +508,20 @@ class Chains(NamedTuple):
     #: second end: a segment of a single sample (points)
     #: origin: benchmark: kinds comb clean 0.375 -> 0.647 with it; 2 points changed no kind (junc25)
     pair_points: int = 1
+    #: a chain that runs past a region it does not end at is cut there (it took a long link
+    #: over the region's few points) when its contacts with the region lie in its middle
+    #: (beyond ``end_reach`` of both ends), within this many h of one another along it ...
+    #: origin: benchmark: kinds outline, 8 clean copies jittered by 1e-6 h (the contacts of a
+    #: building notch's corner regions span 5 h: 3 cut none)
+    pass_span: float = 6.0
+    #: ... and a link of the chain among them is longer than this many h (a sample skipped:
+    #: 1.8 cut a CASSIE guitar chain beside a junction, free creation 0.743 -> 0.730) ...
+    #: origin: benchmark: kinds outline jittered copies 0.812 -> 0.852 with 1.8 and 2.0
+    pass_jump: float = 2.0
+    #: ... and the region holds this many points or more (a lone flagged point beside a gap of a
+    #: sparse curve is no junction: the guitar again)
+    #: origin: benchmark: CASSIE guitar (a one-point region 10 h from any node)
+    pass_min_points: int = 2
 
 
 CHAINS = Chains()
