@@ -137,7 +137,11 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):
     e0, e1 = ends[:, 0].tolist(), ends[:, 1].tolist()
     chains = [Chain(ids_o[b[ci]:b[ci + 1]], [e0[ci], e1[ci]]) for ci in range(n_chn)]
     # where a chain runs past a region over a long link, the cut: (chain, position, region)
-    passed = _passed_regions(P, h, reg, ids_o, par_o, bounds, c_reg, c_par, cb, touch & ~free & ~zig, ends)
+    # (read only on the chains with a contact of a region at neither end: few)
+    other = (c_reg != ends[c_chain, 0]) & (c_reg != ends[c_chain, 1])
+    some = np.zeros(n_chn, dtype=bool)
+    some[c_chain[other]] = True
+    passed = _passed_regions(P, h, reg, ids_o, par_o, bounds, c_reg, c_par, cb, some & touch & ~free & ~zig, ends)
     if not len(special):
         return _cut_at(chains, par_o, bounds, passed)
     # the linked graph inside the chains below (their loops are cut open on it)
