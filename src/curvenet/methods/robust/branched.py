@@ -19,7 +19,10 @@ vertices) and one chain per branch, ordered from the junction outwards
 (:meth:`.topology.Topology.branch_chain`). Each branch ends at the region its last
 ``BRANCHED.tip_points`` points are most linked to, when its last point lies within
 ``BRANCHED.reach`` spacings of it (the next sample); the branches holding the chain's two ends
-may keep the chain's regions there. Left as it is: a chain with a branch that reaches no
+may keep the chain's regions there. On noise-free input a tree of two or more junctions is read
+too (:func:`cores_plan`): each piece of the tree between two of them (a path) becomes a chain
+joining them, the branches leaving end as above (a chain that ran past a building notch's ground
+corner and on up its vertical past the eave corner). Left as it is: a chain with a branch that reaches no
 region (noise at a sharp corner hangs such a branch of a few samples: the synthetic corners
 under noise 0.3h + x3 lost an exact network to it), or with two branches into one region (a
 chain's end widened by noise where it enters a junction).
@@ -107,6 +110,60 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
     return sorted(core), arms
 
 
+def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
+    """How the points ``X`` (n, d) of one chain split at two or more junctions (the same tree
+    as :func:`branch_plan`, which reads one).
+
+    Returns
+    -------
+    (cores, pieces) or None
+        ``cores``: per junction its vertices (indices into ``X``); ``pieces``: per piece of the
+        tree between them ``(vertices, a, b)``, the vertices a path ordered from core ``a``,
+        ``b`` the core at its other end or -1 (a branch leaving). None unless the tree shows two
+        or more junctions, every piece is a path touching one or two of them (at its ends), and
+        every junction has three or more pieces.
+    """
+    adj = pruned_tree(X, prune_cut(hl, noise), keep)
+    cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 2)
+    if len(cores) < 2:
+        return None
+    core_of = {v: k for k, mem in enumerate(cores) for v in mem}
+    seen = set(core_of)
+    pieces = []
+    for k, mem in enumerate(cores):
+        for c in sorted(mem):
+            for s in sorted(adj[c]):
+                if s in seen:
+                    if s in core_of and core_of[s] != k:
+                        return None  # two cores joined by a tree edge: no piece between them
+                    continue
+                path, prev, u = [], c, s
+                while True:  # walk the path away from the core
+                    path.append(u)
+                    seen.add(u)
+                    nxt = [w for w in sorted(adj[u]) if w != prev]
+                    if len(nxt) > 1:
+                        return None  # a branching piece: a junction not read as a core
+                    if not nxt:
+                        pieces.append((path, k, -1))
+                        break
+                    w = nxt[0]
+                    if w in core_of:
+                        if core_of[w] == k:
+                            return None  # a piece that comes back to its own core: a loop
+                        pieces.append((path, k, core_of[w]))
+                        break
+                    prev, u = u, w
+    val = np.zeros(len(cores), dtype=np.int64)
+    for _, a, b in pieces:
+        val[a] += 1
+        if b >= 0:
+            val[b] += 1
+    if val.min() < NODES.junction_valence:
+        return None
+    return [sorted(mem) for mem in cores], pieces
+
+
 def _near_jump_branches(X: np.ndarray, hl: float, noise: float, keep: np.ndarray) -> bool:
     """Whether the pruned tree of the chain's points near its jumps (within
     ``BRANCHED.window`` spacings plus the noise of a jump's two points) shows a junction: the
@@ -177,6 +234,8 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
             continue
         plan = branch_plan(X, hl, sc.noise, keep)
         if plan is None:
+            if sc.clean:
+                _split_at_cores(topo, sc, i, c, X, hl, keep, linked_region)
             continue
         core, arms = plan
         first, last = 0, len(c.ids) - 1
@@ -198,3 +257,40 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
         else:
             if len(set(far)) == len(far):  # (else two branches into one region: a ragged end)
                 topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)
+
+
+def _split_at_cores(topo: Topology, sc: Scales, i: int, c, X: np.ndarray, hl: float, keep: np.ndarray,
+                    linked_region) -> None:
+    """Chain ``i`` (points ``X``) split at the two or more junctions its tree shows
+    (:func:`cores_plan`; noise-free input): each branch leaving ends as in
+    :func:`split_branched_chains` (the region its last points are linked to, the chain's own
+    region at its ends), each piece between two junctions joins them; left as it is when a
+    branch reaches no region or two branches of one junction end in one region."""
+    plan = cores_plan(X, hl, sc.noise, keep)
+    if plan is None:
+        return
+    cores, pieces = plan
+    P = topo.P
+    first, last = 0, len(c.ids) - 1
+    reach = _reach(hl, sc.noise)
+    out = []
+    for path, a, b in pieces:
+        if b >= 0:
+            out.append((c.ids[np.asarray(path)], a, -b - 2))
+            continue
+        tip = c.ids[path[-1]]
+        f = linked_region(c.ids[path[-BRANCHED.tip_points:]])
+        if f >= 0 and np.min(np.linalg.norm(P[topo.regions[f]] - P[tip], axis=1)) > reach:
+            f = -1
+        if f < 0 and first in path:
+            f = c.ends[0]
+        elif f < 0 and last in path:
+            f = c.ends[1]
+        if f < 0:
+            return
+        out.append((c.ids[np.asarray(path)], a, f))
+    for k in range(len(cores)):
+        far = [f for _, a, f in out if a == k and f >= 0]
+        if len(set(far)) != len(far):
+            return
+    topo.branch_chain_cores(i, [c.ids[np.asarray(m)] for m in cores], out)

@@ -280,6 +280,36 @@ class Topology:
         self._changed()
         return nr
 
+    def branch_chain_cores(self, i: int, cores: list[np.ndarray], pieces: list[tuple[np.ndarray, int, int]]) -> None:
+        """Open chain ``i`` branches at several junctions: it dies, each of ``cores`` (point ids)
+        becomes a new region, and each piece ``(ids, a, f)`` a chain from core ``a`` (an index
+        into ``cores``; ``ids`` ordered from it) to ``f``: a region (>= 0), a new empty free-end
+        region (-1), or core ``-f - 2``."""
+        self.drop(i)
+        ea = self._ends_at
+        first = len(self.regions)
+        for core in cores:
+            self.regions.append(np.asarray(core, dtype=np.int64))
+            ea.append([])
+        self.v = np.r_[self.v, np.zeros(len(cores), dtype=self.v.dtype)]
+        for ids, a, f in pieces:
+            na = first + a
+            if f == -1:
+                self.regions.append(np.zeros(0, dtype=np.int64))
+                ea.append([])
+                self.v = np.r_[self.v, 0]
+                f = len(self.regions) - 1
+            elif f < -1:
+                f = first + (-f - 2)
+            self.chains.append(Chain(np.asarray(ids, dtype=np.int64), [na, f]))
+            self.alive.append(True)
+            j = len(self.chains) - 1
+            ea[na].append((j, 0))
+            ea[f].append((j, 1))
+            self.v[na] += 1
+            self.v[f] += 1
+        self._changed()
+
     # ------------------------------------------------------------------------------ checks
     def check(self) -> None:
         """Raise :class:`TopologyError` unless the invariants hold.
