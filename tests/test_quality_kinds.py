@@ -147,15 +147,15 @@ def test_junctions_a_close_scale_misses_stay_a_region(monkeypatch):
     # shell's radii fall between the samples), their rungs then traced as one chain from rail
     # to rail. A chain of freed points touching four or more of the junctions kept and the
     # branches leaving stays a region (split later on its spanning tree). Measured: the clean
-    # sampling 0.72 -> 1.00 (exact); 8 copies jittered by 1e-6 h, mean curve F1 0.77 -> 0.92
-    truth = synth.model("ladder")
+    # sampling 0.72 -> 1.00 (exact); 8 copies jittered by 1e-6 h, mean curve F1 0.77 -> 0.92.
+    # Since split_branched_chains reads chains of several junctions (cores_plan) it recovers
+    # part of that without the rule: clean sampling 0.92 -> 1.00 with it, jittered 0.907 ->
+    # 0.915 (3 copies better, 1 worse)
     now = _score("ladder")
     assert now["exact_topology"] and now["curve_f1"] == 1.0
-    held = np.mean([r["curve_f1"] for r in _jittered_scores("ladder", copies=4)])
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(hold_touches=10**6))
     freed = _score("ladder")
-    assert freed["curve_f1"] < 0.9 and freed["n_nodes_found"] < truth.n_nodes
-    assert held >= np.mean([r["curve_f1"] for r in _jittered_scores("ladder", copies=4)]) + 0.05
+    assert not freed["exact_topology"] and freed["curve_f1"] < 0.95
 
 
 def test_a_chain_that_runs_past_a_corner_region_is_cut_there(monkeypatch):

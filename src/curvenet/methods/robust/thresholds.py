@@ -466,7 +466,9 @@ class Split(NamedTuple):
     #: chain, :func:`.branched.split_branched_chains`), two or more junctions it missed four or
     #: more (a ladder's rail: two rungs between the two junctions kept)
     #: origin: benchmark: kinds clean ladder 0.717 -> 1.000; 3 held a comb's single missed
-    #: junction as its own region, merged later into its neighbour (comb 1.000 -> 0.865)
+    #: junction as its own region, merged later into its neighbour (comb 1.000 -> 0.865); since
+    #: the several-junction reading of branched chains (cores_plan) its share is smaller: ladder
+    #: 0.915 -> 1.000 clean, 8 jittered copies 0.907 -> 0.915
     hold_touches: int = 4
 
 
