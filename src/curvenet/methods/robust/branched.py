@@ -76,7 +76,7 @@ def _arms(adj: list[set], core: set) -> list[list[int]]:
     return out
 
 
-def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
+def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: list[set] | None = None):
     """How the points ``X`` (n, d) of one chain split at one junction.
 
     Parameters
@@ -87,6 +87,9 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
     noise : float
     keep : (n,) ndarray of bool
         Points linked to a region: a leaf there is a branch reaching that region, never cut.
+    adj : list of set, optional
+        The pruned tree of ``X`` (:func:`.spanning.pruned_tree` with these arguments), when
+        already built.
 
     Returns
     -------
@@ -95,7 +98,7 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
         vertices ordered from the junction outwards (paths of the pruned tree, three or more).
         None unless the pruned tree shows exactly one junction and its branches are paths.
     """
-    adj = pruned_tree(X, prune_cut(hl, noise), keep)
+    adj = pruned_tree(X, prune_cut(hl, noise), keep) if adj is None else adj
     cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 1)
     if len(cores) != 1:
         return None
@@ -110,9 +113,9 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
     return sorted(core), arms
 
 
-def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
+def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: list[set] | None = None):
     """How the points ``X`` (n, d) of one chain split at two or more junctions (the same tree
-    as :func:`branch_plan`, which reads one).
+    as :func:`branch_plan`, which reads one; its arguments are that function's).
 
     Returns
     -------
@@ -123,7 +126,7 @@ def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
         or more junctions, every piece is a path touching one or two of them (at its ends), and
         every junction has three or more pieces.
     """
-    adj = pruned_tree(X, prune_cut(hl, noise), keep)
+    adj = pruned_tree(X, prune_cut(hl, noise), keep) if adj is None else adj
     cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 2)
     if len(cores) < 2:
         return None
@@ -232,25 +235,16 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
         keep = linked_to_a_region(c.ids)
         if not _near_jump_branches(X, hl, sc.noise, keep):
             continue
-        plan = branch_plan(X, hl, sc.noise, keep)
+        adj = pruned_tree(X, prune_cut(hl, sc.noise), keep)
+        plan = branch_plan(X, hl, sc.noise, keep, adj)
         if plan is None:
             if sc.clean:
-                _split_at_cores(topo, sc, i, c, X, hl, keep, linked_region)
+                _split_at_cores(topo, sc, i, c, X, hl, keep, adj, linked_region)
             continue
         core, arms = plan
-        first, last = 0, len(c.ids) - 1
-        at = {k: q for q, arm in enumerate(arms) for k in arm}
         far = []
-        reach = _reach(hl, sc.noise)
-        for q, arm in enumerate(arms):
-            tip = c.ids[arm[-1]]
-            f = linked_region(c.ids[arm[-BRANCHED.tip_points:]])
-            if f >= 0 and np.min(np.linalg.norm(P[topo.regions[f]] - P[tip], axis=1)) > reach:
-                f = -1  # (linked, but the region is no next sample of the branch)
-            if f < 0 and at.get(first) == q:
-                f = c.ends[0]
-            elif f < 0 and at.get(last) == q:
-                f = c.ends[1]
+        for arm in arms:
+            f = _branch_end(topo, sc, c, arm, hl, linked_region)
             if f < 0:
                 break  # a branch that reaches no region: no end seen there (noise at a corner)
             far.append(f)
@@ -259,34 +253,38 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
                 topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)
 
 
+def _branch_end(topo: Topology, sc: Scales, c, arm: list[int], hl: float, linked_region) -> int:
+    """The region the branch ``arm`` (positions in chain ``c``, ordered outwards) of a split
+    chain ends at: the region its last ``BRANCHED.tip_points`` points are most linked to, when
+    its last point lies within ``BRANCHED.reach`` spacings of it; else the chain's own region at
+    the end the branch holds; -1 when neither."""
+    P = topo.P
+    tip = c.ids[arm[-1]]
+    f = linked_region(c.ids[arm[-BRANCHED.tip_points:]])
+    if f >= 0 and np.min(np.linalg.norm(P[topo.regions[f]] - P[tip], axis=1)) > _reach(hl, sc.noise):
+        f = -1  # (linked, but the region is no next sample of the branch)
+    if f < 0 and 0 in arm:
+        f = c.ends[0]
+    elif f < 0 and len(c.ids) - 1 in arm:
+        f = c.ends[1]
+    return f
+
+
 def _split_at_cores(topo: Topology, sc: Scales, i: int, c, X: np.ndarray, hl: float, keep: np.ndarray,
-                    linked_region) -> None:
-    """Chain ``i`` (points ``X``) split at the two or more junctions its tree shows
-    (:func:`cores_plan`; noise-free input): each branch leaving ends as in
-    :func:`split_branched_chains` (the region its last points are linked to, the chain's own
-    region at its ends), each piece between two junctions joins them; left as it is when a
-    branch reaches no region or two branches of one junction end in one region."""
-    plan = cores_plan(X, hl, sc.noise, keep)
+                    adj: list[set], linked_region) -> None:
+    """Chain ``i`` (points ``X``, pruned tree ``adj``) split at the two or more junctions its
+    tree shows (:func:`cores_plan`; noise-free input): each branch leaving ends as in
+    :func:`split_branched_chains` (:func:`_branch_end`), each piece between two junctions joins
+    them; left as it is when a branch reaches no region or two branches of one junction end in
+    one region."""
+    plan = cores_plan(X, hl, sc.noise, keep, adj)
     if plan is None:
         return
     cores, pieces = plan
-    P = topo.P
-    first, last = 0, len(c.ids) - 1
-    reach = _reach(hl, sc.noise)
     out = []
     for path, a, b in pieces:
-        if b >= 0:
-            out.append((c.ids[np.asarray(path)], a, -b - 2))
-            continue
-        tip = c.ids[path[-1]]
-        f = linked_region(c.ids[path[-BRANCHED.tip_points:]])
-        if f >= 0 and np.min(np.linalg.norm(P[topo.regions[f]] - P[tip], axis=1)) > reach:
-            f = -1
-        if f < 0 and first in path:
-            f = c.ends[0]
-        elif f < 0 and last in path:
-            f = c.ends[1]
-        if f < 0:
+        f = -b - 2 if b >= 0 else _branch_end(topo, sc, c, path, hl, linked_region)
+        if f == -1:
             return
         out.append((c.ids[np.asarray(path)], a, f))
     for k in range(len(cores)):

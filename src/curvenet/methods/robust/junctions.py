@@ -360,7 +360,7 @@ def _junction_left(indptr, indices, at, cand, good, exit_of):
     what[xe] = np.where(bound[g], -1, cand.max() + 1 + g)
     t = what >= 0
     pairs = np.unique(np.stack([lab[ea[t]], what[t]], axis=1), axis=0)
-    n_touch = np.bincount(pairs[:, 0], minlength=int(lab.max()) + 1) if len(pairs) else np.zeros(int(lab.max()) + 1, int)
+    n_touch = np.bincount(pairs[:, 0], minlength=int(lab.max()) + 1)
     return fs[n_touch[lab[fs]] >= SPLIT.hold_touches]
 
 

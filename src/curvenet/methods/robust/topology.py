@@ -251,33 +251,16 @@ class Topology:
     def branch_chain(self, i: int, core: np.ndarray, arms: list[np.ndarray], far: list[int]) -> int:
         """Open chain ``i`` branches at a junction: it dies, the points ``core`` become a new
         region, and each branch of ``arms`` (ids ordered from the junction outwards) a chain
-        from it to region ``far[k]`` (-1: a new empty free-end region).
+        from it to region ``far[k]`` (-1: a new empty free-end region); the one-junction case of
+        :meth:`branch_chain_cores`.
 
         Returns
         -------
         int
             The new region.
         """
-        self.drop(i)
-        self.regions.append(np.asarray(core, dtype=np.int64))
-        nr = len(self.regions) - 1
-        ea = self._ends_at
-        ea.append([])
-        self.v = np.r_[self.v, 0]
-        for ids, f in zip(arms, far):
-            if f < 0:
-                self.regions.append(np.zeros(0, dtype=np.int64))
-                f = len(self.regions) - 1
-                ea.append([])
-                self.v = np.r_[self.v, 0]
-            self.chains.append(Chain(np.asarray(ids, dtype=np.int64), [nr, f]))
-            self.alive.append(True)
-            j = len(self.chains) - 1
-            ea[nr].append((j, 0))
-            ea[f].append((j, 1))
-            self.v[nr] += 1
-            self.v[f] += 1
-        self._changed()
+        nr = len(self.regions)
+        self.branch_chain_cores(i, [core], [(ids, 0, f) for ids, f in zip(arms, far)])
         return nr
 
     def branch_chain_cores(self, i: int, cores: list[np.ndarray], pieces: list[tuple[np.ndarray, int, int]]) -> None:
