@@ -156,6 +156,8 @@ def main(argv=None) -> int:
         fig.update(tiled_s=wall, tiled_pts_per_s=n / wall, worker_peak_gb=peaks, client_peak_gb=cpeak,
                    tiles=p["tiles"], tile_side=p["tile_side"], halo=p["halo"], spacing=p["spacing"],
                    noise=p["noise"], clean=p["clean"], estimates_points=p["estimates_points"],
+                   estimates_inexact_points=p.get("estimates_inexact_points"),
+                   tiles_prepared=net.stats.get("tiles_prepared"),
                    tile_points_max=net.stats["tile_points_max"], unmatched_ports=net.stats["unmatched_ports"],
                    fitted_on_client=net.stats.get("fitted_here", 0),
                    nodes=net.n_nodes, curves=net.n_curves, passes_s=net.stats["time"])
@@ -165,7 +167,9 @@ def main(argv=None) -> int:
               f"{cpeak:.2f} GB; {net.n_nodes} nodes, {net.n_curves} curves, {net.stats['unmatched_ports']} "
               f"unmatched ports, {net.stats.get('fitted_here', 0)} curves fitted on the client", flush=True)
         print("  passes: " + ", ".join(f"{k} {v:.1f} s" for k, v in net.stats["time"].items()), flush=True)
-        print(f"  estimates over {p['estimates_points']:,} points (exact: {p.get('estimates_exact')}): "
+        print(f"  estimates over {p['estimates_points']:,} points (exact: {p.get('estimates_exact')}, "
+              f"{p.get('estimates_inexact_points')} points inexact; {net.stats.get('tiles_prepared')} tiles "
+              f"went on from the box the estimates prepared): "
               f"spacing {p['spacing']:.4f}, "
               f"noise {p['noise']:.4f}, clean {p['clean']}", flush=True)
         if args.single:

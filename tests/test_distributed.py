@@ -344,13 +344,13 @@ def test_cli_mixed_2d_and_3d_inputs_exit_2(tmp_path):
     assert not (tmp_path / "o.json").exists()
 
 
-def _fails_on_tile_5_1(root, grid, key, halo, est, occ):
+def _fails_on_tile_5_1(root, grid, key, halo, est, occ, prepared):
     """A tile task that fails for good on tile (5, 1) (module level: Dask pickles it)."""
     from curvenet.distributed.tasks import METHOD_LOCK  # noqa: F401  (the real module is loaded)
 
     if tuple(key) == (5, 1):
         raise RuntimeError("disk on fire")
-    return _REAL_RUN_TILE(root, grid, key, halo, est, occ)
+    return _REAL_RUN_TILE(root, grid, key, halo, est, occ, prepared)
 
 
 def test_a_failing_tile_one_line_exit_1_no_output_scratch_removed(tmp_path, monkeypatch, capsys):

@@ -88,3 +88,64 @@ def test_the_sample_alone_would_differ():
     mask = np.array([keys[i] in sample for i in inv.ravel()])
     part = estimate(P[mask])
     assert part.hmed != one.hmed and part.sigma != one.sigma
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.1])
+def test_tiles_go_on_from_the_box_the_estimates_prepared(threads, tmp_path, monkeypatch, noise):
+    """A cloud larger than the sample: each tile's estimate pass prepares its box with the halo
+    of its reconstruction, and the reconstruction goes on from it: the network is the one the
+    tiles give when they read and prepare their boxes again, bit for bit; a halo given smaller
+    than the estimates need prepares nothing (the boxes differ)."""
+    from curvenet.distributed import tasks
+
+    clouds = [synth.sample(synth.model(m), noise=noise, rng=i)[0] + [3.0 * i, 0, 0]
+              for i, m in enumerate(("tree", "torus", "cube", "mug"))]
+    P = np.vstack(clouds)
+    f = tmp_path / "p.npy"
+    np.save(f, P)
+    hmed = estimate(P).hmed
+    monkeypatch.setattr(drun, "ESTIMATE_POINTS", len(P) // 6)
+    a = reconstruct_tiled(f, tiles=40 * hmed, client=threads)
+    assert a.stats["tiles_prepared"] == a.parameters["tiles"] > 1
+    monkeypatch.setattr(tasks, "read_prepared", lambda root, key: None)  # every tile prepares again
+    b = reconstruct_tiled(f, tiles=40 * hmed, client=threads)
+    assert b.stats["tiles_prepared"] == 0
+    assert a == b and a.n_curves > 0  # (nodes, curves, points and input ids, exactly)
+    monkeypatch.undo()
+    monkeypatch.setattr(drun, "ESTIMATE_POINTS", len(P) // 6)
+    written = []
+    monkeypatch.setattr(de, "write_prepared", lambda *args: written.append(args[1]))
+    c = reconstruct_tiled(f, tiles=40 * hmed, client=threads, halo=0.5 * a.parameters["halo"])
+    assert c.stats["tiles_prepared"] == 0 and not written
+
+
+def test_points_reaching_past_their_tile_are_computed_again_exactly(threads, tmp_path, monkeypatch):
+    """Outliers far from the curves reach past their tile's widened box; their values are
+    computed again from the points within their reach, so that the medians are the whole
+    cloud's bit for bit. Control: without that pass the tiles leave points inexact."""
+    rng = np.random.default_rng(5)
+    clouds = [synth.sample(synth.model(m), noise=0.1, rng=i)[0] + [3.0 * i, 0, 0]
+              for i, m in enumerate(("tree", "torus", "cube", "mug"))]
+    P = np.vstack(clouds)
+    lo, hi = P.min(0), P.max(0)
+    P = np.vstack([P, lo + (hi - lo) * rng.random((len(P) // 20, 3)) * [1, 1.5, 1.5]])  # outliers around
+    P = P[rng.permutation(len(P))]
+    f = tmp_path / "p.npy"
+    np.save(f, P)
+    one = estimate(P)
+    monkeypatch.setattr(drun, "ESTIMATE_POINTS", len(P) // 6)
+    net = reconstruct_tiled(f, tiles=40 * one.hmed, client=threads)
+    assert net.parameters["estimates_inexact_points"] == 0 and net.parameters["estimates_exact"]
+    assert (net.parameters["spacing"], net.parameters["noise"]) == (one.hmed, one.sigma)
+    monkeypatch.setattr(de, "tile_fix_values", lambda root, grid, key, radius, tag: _unfixed(root, key, tag))
+    raw = reconstruct_tiled(f, tiles=40 * one.hmed, client=threads)
+    assert raw.parameters["estimates_inexact_points"] > 0 and not raw.parameters["estimates_exact"]
+
+
+def _unfixed(root, key, tag):
+    """The tile's counts as :func:`tile_values` left them (the fix pass switched off)."""
+    from curvenet.distributed.scratch import read_values
+
+    vals = {name: read_values(root, key, f"{tag}-{name}") for name in ("h", "rms")}
+    far = read_values(root, key, f"{tag}-far")
+    return de.TileValues(len(vals["h"]), len(far), {n: de.sparse_counts(v) for n, v in vals.items()})

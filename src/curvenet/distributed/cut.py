@@ -60,6 +60,8 @@ class TilePieces:
         Unit direction of each crossing segment, out of the tile.
     n_points : int
         Points the tile reconstructed (box and halo).
+    prepared : bool
+        The reconstruction went on from the box the estimates' pass prepared.
     """
 
     key: tuple
@@ -68,6 +70,7 @@ class TilePieces:
     ports: np.ndarray | None = None
     tangents: np.ndarray | None = None
     n_points: int = 0
+    prepared: bool = False
 
 
 def cut_network(net: CurveNetwork, grid: TileGrid, key, ids: np.ndarray, occupied) -> TilePieces:

@@ -19,15 +19,17 @@ from __future__ import annotations
 from typing import Callable, NamedTuple
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-from ..methods.robust import Estimates, dedup_applies, dedup_radius, point_estimates
+from ..methods.robust import Estimates, dedup_applies, dedup_radius, point_estimates, prepare
+from ..methods.robust.params import RobustParams
 from ..methods.robust.thresholds import DEFAULTS
 from .grid import TileGrid
-from .scratch import read_values, write_values
+from .scratch import read_tile, read_values, write_prepared, write_values
 from .tasks import method_slot, tile_points
 
-__all__ = ["MEDIAN_BIN_SHIFT", "REACH_FACTOR", "TileValues", "bin_keys", "sparse_counts", "merge_counts",
-           "middle_bins", "median_of", "tile_values", "tile_count_below", "tile_values_in",
+__all__ = ["MEDIAN_BIN_SHIFT", "REACH_FACTOR", "FIX_MAX_SIDES", "TileValues", "bin_keys", "sparse_counts", "merge_counts",
+           "middle_bins", "median_of", "tile_values", "tile_fix_values", "tile_count_below", "tile_values_in",
            "whole_cloud_estimates"]
 
 #: The bins of the first pass: a value's 64 bits shifted right by this many (28 bits kept: sign,
@@ -38,6 +40,11 @@ MEDIAN_BIN_SHIFT: int = 36
 #: tile's widened box: its k-th neighbour distance times this is at most the distance to the
 #: box's edge (2: after the duplicate rule, the neighbours' own neighbourhoods count too).
 REACH_FACTOR: float = 2.0
+#: A point whose values a tile could not compute exactly (its reach past the tile's widened
+#: box) is computed again from the points within its reach, when that reach is at most this
+#: many tile sides (of the tiles that far, only the points within the reach of such a point
+#: are held; a point alone farther from every other is left, and counted inexact).
+FIX_MAX_SIDES: float = 8.0
 
 _NAMES = ("h", "rms", "earlier")
 
@@ -122,25 +129,121 @@ def _margins(P: np.ndarray, grid: TileGrid, key, halo: float, lo: np.ndarray, hi
     return np.minimum(d_lo, d_hi).min(axis=1)
 
 
-def tile_values(root: str, grid: TileGrid, key, halo: float, lo, hi, radius: float | None, tag: str) -> TileValues:
+def tile_values(root: str, grid: TileGrid, key, halo: float, lo, hi, radius: float | None, tag: str,
+                keep: bool = False) -> TileValues:
     """Compute the per-point values of the points tile ``key`` owns (from its box widened by
     ``halo``; the duplicate rule at ``radius`` first, if given), store them in the scratch
-    store under ``tag`` and report their bin counts (see :class:`TileValues`)."""
-    P, _ = tile_points(root, grid, key, halo)
+    store under ``tag`` and report their bin counts (see :class:`TileValues`). ``keep`` (without
+    ``radius``): also store the prepared box (:func:`.scratch.write_prepared`), from which the
+    tile's reconstruction goes on when its halo is ``halo``."""
+    P, ids = tile_points(root, grid, key, halo)
     own = grid.owns(key, P)
-    if len(P) < DEFAULTS.min_points:  # too few to estimate anything: values of no point
+    if len(P) < DEFAULTS.min_points:  # too few to estimate anything: every owned point is
+        # computed again from the points around (its reach unknown: inf), see tile_fix_values
+        n = int(own.sum())
         for name in _NAMES:
-            write_values(root, key, f"{tag}-{name}", np.zeros(0))
-        return TileValues(0, int(own.sum()), {"h": merge_counts([]), "rms": merge_counts([])})
+            write_values(root, key, f"{tag}-{name}", np.full(n, np.nan))
+        write_values(root, key, f"{tag}-far", np.arange(n))
+        write_values(root, key, f"{tag}-far-ids", ids[own])
+        write_values(root, key, f"{tag}-far-points", P[own])
+        write_values(root, key, f"{tag}-far-reach", np.full(n, np.inf))
+        return TileValues(n, n, {"h": merge_counts([]), "rms": merge_counts([])})
     with method_slot():
-        v = point_estimates(P, dedup_radius=radius)
+        if radius is None:
+            prep, v = prepare(P)
+        else:
+            prep, v = None, point_estimates(P, dedup_radius=radius)
+    if keep and prep is not None:
+        write_prepared(root, key, prep, ids)
+    del prep
     mine = own[v.order]
-    margin = _margins(P[v.order[mine]], grid, key, halo, np.asarray(lo, float), np.asarray(hi, float))
-    inexact = int(np.count_nonzero(REACH_FACTOR * v.reach[mine] > margin))
+    rows = v.order[mine]
+    reach = REACH_FACTOR * v.reach[mine]
+    far = np.flatnonzero(reach > _margins(P[rows], grid, key, halo, np.asarray(lo, float), np.asarray(hi, float)))
     vals = {"h": v.h[mine], "rms": v.rms[mine], "earlier": v.earlier[mine]}
     for name in _NAMES:
         write_values(root, key, f"{tag}-{name}", vals[name])
-    return TileValues(int(mine.sum()), inexact, {"h": sparse_counts(vals["h"]), "rms": sparse_counts(vals["rms"])})
+    # the points to compute again (tile_fix_values): where they are among the values, their
+    # global ids, positions and reach
+    write_values(root, key, f"{tag}-far", far)
+    write_values(root, key, f"{tag}-far-ids", ids[rows[far]])
+    write_values(root, key, f"{tag}-far-points", P[rows[far]])
+    write_values(root, key, f"{tag}-far-reach", reach[far])
+    return TileValues(int(mine.sum()), len(far), {"h": sparse_counts(vals["h"]), "rms": sparse_counts(vals["rms"])})
+
+
+def tile_fix_values(root: str, grid: TileGrid, key, radius: float | None, tag: str) -> TileValues:
+    """Compute again, exactly, the values of tile ``key``'s points whose neighbourhood reached
+    past its widened box (in :func:`tile_values`), from every point of the cloud within their
+    reach (read from the tiles around, as far as it takes, up to :data:`FIX_MAX_SIDES` tile
+    sides), rewrite them in the store and report the tile's counts again (``inexact``: the
+    points left, whose reach is farther than that).
+
+    A point's values depend on the points within ``REACH_FACTOR`` times its k-th neighbour
+    distance, and that distance is never larger in the whole cloud than in a part of it: the
+    points within the part's reach hold all of them.
+    """
+    far = read_values(root, key, f"{tag}-far").astype(np.int64)
+    X = read_values(root, key, f"{tag}-far-points").reshape(len(far), grid.dim)
+    xid = read_values(root, key, f"{tag}-far-ids").astype(np.int64)
+    reach = read_values(root, key, f"{tag}-far-reach")
+    unknown = ~np.isfinite(reach)  # (a tile of too few points) bounded by the points around
+    if unknown.any():
+        reach[unknown] = _reach_bound(root, grid, key, X[unknown], FIX_MAX_SIDES * grid.side)
+    fix = reach <= FIX_MAX_SIDES * grid.side
+    vals = {name: read_values(root, key, f"{tag}-{name}") for name in _NAMES}
+    if fix.any():
+        P, ids = _points_near(root, grid, key, X[fix], reach[fix])
+        if len(P) >= DEFAULTS.min_points:
+            with method_slot():
+                v = point_estimates(P, dedup_radius=radius)
+            at = dict(zip(ids[v.order].tolist(), range(len(v.order))))
+            done = np.zeros(len(far), bool)
+            for j in np.flatnonzero(fix):
+                i = at.get(int(xid[j]))
+                if i is None:  # dropped by the duplicate rule here, not in the tile: left as it was
+                    continue
+                for name in _NAMES:
+                    vals[name][far[j]] = getattr(v, name)[i]
+                done[j] = True
+            fix &= done
+            for name in _NAMES:
+                write_values(root, key, f"{tag}-{name}", vals[name])
+        else:
+            fix[:] = False
+    return TileValues(len(vals["h"]), int(np.count_nonzero(~fix)),
+                      {"h": sparse_counts(vals["h"]), "rms": sparse_counts(vals["rms"])})
+
+
+def _reach_bound(root: str, grid: TileGrid, key, X: np.ndarray, r: float) -> np.ndarray:
+    """(m,) ``REACH_FACTOR`` times the k-th neighbour distance of each point of ``X`` (m, d)
+    among the cloud's points within ``r`` of them (never less than in the whole cloud; inf
+    when there are not k)."""
+    P, _ = _points_near(root, grid, key, X, np.full(len(X), r))
+    k = RobustParams().k
+    if len(P) <= k:
+        return np.full(len(X), np.inf)
+    d = cKDTree(P).query(X, k + 1)[0][:, -1]  # (the points themselves are among P)
+    return np.where(d <= r, REACH_FACTOR * d, np.inf)
+
+
+def _points_near(root: str, grid: TileGrid, key, X: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The points (n, d) of the cloud, and their global ids (n,), within ``r[i]`` of some
+    ``X[i]`` ((m, d) points of tile ``key``), read tile by tile (only those kept are held)."""
+    lo, hi = (X - r[:, None]).min(axis=0), (X + r[:, None]).max(axis=0)
+    pts, out_ids = [], []
+    for nb in grid.neighbours(key, float(r.max())):
+        for p, i in read_tile(root, nb):
+            m = np.flatnonzero(((p >= lo) & (p <= hi)).all(axis=1))
+            if not len(m):
+                continue
+            near = cKDTree(p[m]).query_ball_point(X, r, return_sorted=False)
+            keep = m[np.unique(np.concatenate([np.asarray(q, dtype=np.int64) for q in near]))]
+            pts.append(p[keep])
+            out_ids.append(i[keep])
+    if not pts:
+        return np.zeros((0, grid.dim)), np.zeros(0, np.int64)
+    return np.vstack(pts), np.concatenate(out_ids)
 
 
 def tile_count_below(root: str, key, name: str, r: float) -> int:
@@ -157,7 +260,7 @@ def tile_values_in(root: str, key, name: str, lo_key: int, hi_key: int) -> np.nd
 
 
 def whole_cloud_estimates(submit: Callable, gather: Callable, root: str, grid: TileGrid, keys: list, halo: float,
-                          lo, hi) -> tuple[Estimates, int, int]:
+                          lo, hi, keep: bool = False) -> tuple[Estimates, int, int]:
     """The whole cloud's :class:`Estimates`, as :func:`~curvenet.methods.robust.estimate` would
     give on all points, from tasks on its tiles.
 
@@ -176,6 +279,9 @@ def whole_cloud_estimates(submit: Callable, gather: Callable, root: str, grid: T
         How far around its box a tile looks (at least the points' neighbourhood reach).
     lo, hi : (d,) array_like
         The cloud's bounds.
+    keep : bool
+        Store each tile's prepared box (see :func:`tile_values`): ``halo`` is then the halo
+        of the tiles' reconstruction, which goes on from it.
 
     Returns
     -------
@@ -187,7 +293,10 @@ def whole_cloud_estimates(submit: Callable, gather: Callable, root: str, grid: T
     """
 
     def run_pass(radius, tag):
-        res = gather({k: submit(tile_values, root, grid, k, halo, lo, hi, radius, tag) for k in keys})
+        res = gather({k: submit(tile_values, root, grid, k, halo, lo, hi, radius, tag, keep and radius is None)
+                      for k in keys})
+        res.update(gather({k: submit(tile_fix_values, root, grid, k, radius, tag)
+                           for k in keys if res[k].inexact and res[k].n}))  # (n = 0: too few points)
         n = sum(r.n for r in res.values())
         inexact = sum(r.inexact for r in res.values())
         med = {}

@@ -265,18 +265,27 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
 
     est, n_est = gather({"estimates": submit(tasks.estimate_sample, str(root), sample)})["estimates"]
     inexact = 0
+    prepared = False
     if len(sample) < len(keys):
-        # the sample gave the scale; the medians over every tile give the values themselves
-        est, n_est, inexact = whole_cloud_estimates(submit, gather, str(root), grid, keys, halo_width(est), lo, hi)
+        # the sample gave the scale (and the halo); the medians over every tile give the values
+        # themselves. Each tile computes them on its box with the halo of its reconstruction,
+        # prepared once for both (when a halo given is smaller than the estimates need, on the
+        # estimates' box, and the tiles prepare their own again)
+        h0 = halo_width(est)
+        H = h0 if halo is None else float(halo)
+        prepared = H >= h0
+        est, n_est, inexact = whole_cloud_estimates(submit, gather, str(root), grid, keys, H if prepared else h0,
+                                                    lo, hi, keep=prepared)
     est = Estimates(float(est.hmed), float(est.sigma))
-    H = halo_width(est) if halo is None else float(halo)
+    if len(sample) == len(keys):  # (the estimates of one task on every point: the halo from them)
+        H = halo_width(est) if halo is None else float(halo)
     tm["estimate"] = time.perf_counter() - t1
 
     # 4. one task per tile that owns points
     t1 = time.perf_counter()
     occ = frozenset(keys)
-    fut = {key: client.submit(tasks.run_tile, str(root), grid, key, H, est, occ, pure=False, retries=TASK_RETRIES,
-                              key=f"tile-{'_'.join(map(str, key))}-{root.name}") for key in keys}
+    fut = {key: client.submit(tasks.run_tile, str(root), grid, key, H, est, occ, prepared, pure=False,
+                              retries=TASK_RETRIES, key=f"tile-{'_'.join(map(str, key))}-{root.name}") for key in keys}
     _progress(fut.values(), show)
 
     def tile_failed(key, exc):
@@ -287,6 +296,7 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     parts = list(_gather(client, fut, tile_failed).values())
     tm["tiles"] = time.perf_counter() - t1
     n_max = max((p.n_points for p in parts), default=0)
+    n_prepared = sum(p.prepared for p in parts)
 
     # 5. stitch (and, under noise, the fit of the method's stage 8 for the curves that cross a
     #    face: each tile fitted the curves it holds whole)
@@ -312,6 +322,7 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     })
     net.stats.update({"N_n": net.n_nodes, "N_c": net.n_curves, "N_d": n_total,
                       "tile_points_max": n_max,
+                      "tiles_prepared": n_prepared,
                       "time": tm})
     return net
 

@@ -2,8 +2,11 @@
 
 Layout: ``ROOT/t<key>/c<chunk>.pts.npy`` ((n, d) float64 coordinates) and ``.ids.npy`` ((n,)
 int64 global ids), each written under a temporary name and renamed (a task that reruns after
-a lost worker rewrites its files whole). ``ROOT`` is a fresh folder of its own, removed whole
-at the end of the run, whatever the outcome.
+a lost worker rewrites its files whole); ``ROOT/t<key>/v-<name>.npy``, per-point values of the
+whole-cloud estimates; ``ROOT/t<key>/prepared/``, the tile's box with its halo prepared by the
+method (:class:`curvenet.methods.robust.Prepared`, one ``.npy`` a field, written in a temporary
+folder and renamed whole). ``ROOT`` is a fresh folder of its own, removed whole at the end of
+the run, whatever the outcome.
 """
 
 from __future__ import annotations
@@ -16,8 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..methods.robust import Prepared
+from ..methods.robust.frames import Tangents
+
 __all__ = ["SCRATCH_PREFIX", "new_root", "remove_root", "tile_dir", "write_part", "read_tile", "write_values",
-           "read_values"]
+           "read_values", "write_prepared", "read_prepared"]
 
 #: Name prefix of a run's scratch folder (under ``--scratch`` or the system's temporary folder).
 SCRATCH_PREFIX = "curvenet-tiles-"
@@ -101,3 +107,38 @@ def read_values(root, key, name: str) -> np.ndarray:
     """The values stored by :func:`write_values` (an empty array when there are none)."""
     f = tile_dir(root, key) / f"v-{name}.npy"
     return np.load(f) if f.exists() else np.zeros(0)
+
+
+_PREPARED = "prepared"
+_ARRAYS = ("points", "order", "idx", "h")
+
+
+def write_prepared(root, key, prep: Prepared, ids: np.ndarray) -> None:
+    """Store tile ``key``'s prepared cloud (its box with the halo) and the global ids (n,) of
+    the points in their input order (``prep.order`` indexes them)."""
+    d = tile_dir(root, key)
+    d.mkdir(exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f"{_PREPARED}.", suffix=".tmp", dir=d))
+    arrays = {name: getattr(prep, name) for name in _ARRAYS}
+    arrays.update({f"tangents.{name}": a for name, a in prep.tangents._asdict().items()})
+    arrays["ids"] = ids
+    arrays["meta"] = np.array([prep.k, np.nan if prep.spacing is None else prep.spacing])
+    for name, a in arrays.items():
+        np.save(tmp / f"{name}.npy", np.ascontiguousarray(a))
+    try:
+        os.rename(tmp, d / _PREPARED)
+    except OSError:  # written already (a task rerun after a lost worker): the same arrays
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def read_prepared(root, key) -> tuple[Prepared, np.ndarray] | None:
+    """What :func:`write_prepared` stored for tile ``key`` (the prepared cloud and the global
+    ids), or None when nothing is stored."""
+    d = tile_dir(root, key) / _PREPARED
+    if not d.is_dir():
+        return None
+    arrays = {f.name[:-len(".npy")]: np.load(f) for f in d.glob("*.npy")}
+    k, spacing = arrays["meta"]
+    tg = Tangents(*(arrays[f"tangents.{name}"] for name in Tangents._fields))
+    prep = Prepared(*(arrays[name] for name in _ARRAYS), tg, int(k), None if np.isnan(spacing) else float(spacing))
+    return prep, arrays["ids"]

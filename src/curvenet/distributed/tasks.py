@@ -19,7 +19,7 @@ from ..neighbors import one_thread
 from .cut import TilePieces, cut_network, fit_whole_pieces
 from .grid import TileGrid
 from .inputs import Chunk, read_chunk, scan_chunk
-from .scratch import read_tile, write_part
+from .scratch import read_prepared, read_tile, write_part
 
 __all__ = ["scan", "bin_chunk", "estimate_sample", "run_tile", "tile_points", "METHOD_LOCK", "method_slot"]
 
@@ -100,17 +100,28 @@ def estimate_sample(root: str, keys: list) -> tuple[Estimates, int]:
         return estimate(P), int(len(P))
 
 
-def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, occupied) -> TilePieces:
+def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, occupied,
+             prepared: bool = False) -> TilePieces:
     """Reconstruct tile ``key`` with its halo (the default method, the whole cloud's
     estimates) and cut the network at the tile's box (``occupied``: the keys of every tile
     that holds input points, see :func:`.cut.cut_network`). Under noise the pieces that are
     whole curves are fitted here (:func:`.cut.fit_whole_pieces`); the stitching fits the
-    curves that cross a face, once whole."""
-    P, ids = tile_points(root, grid, key, halo)
+    curves that cross a face, once whole. ``prepared``: the estimates' pass stored this box
+    (the same ``halo``) prepared (:func:`.scratch.write_prepared`): the method goes on from
+    it (the same network; when it is not there, the box is read and prepared again)."""
+    got = read_prepared(root, key) if prepared else None
+    if got is None:
+        P, ids = tile_points(root, grid, key, halo)
+        cloud, n = P, len(P)
+    else:
+        cloud, ids = got
+        n = len(cloud.points)
     with method_slot():
-        net = reconstruct_robust(P, estimates=estimates, fit=False)  # fitted below, or once stitched
+        net = reconstruct_robust(cloud, estimates=estimates, fit=False)  # fitted below, or once stitched
+        del cloud
         out = cut_network(net, grid, key, ids, occupied)
-        out.n_points = int(len(P))
+        out.n_points = int(n)
+        out.prepared = got is not None
         if not estimates.clean:  # the method's fit under noise, of the curves this tile holds whole
             out = fit_whole_pieces(out, estimates.sigma)
     return out

@@ -19,8 +19,8 @@ from . import kernels as _k
 from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
-__all__ = ["Neighbours", "Frames", "neighbours", "neighbours_and_distances", "frames", "duplicates", "local_spacing", "tangents",
-           "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "isolated", "lex_order", "pair_distances"]
+__all__ = ["Neighbours", "Tangents", "Frames", "neighbours", "neighbours_and_distances", "frames", "duplicates", "local_spacing", "tangents",
+           "point_tangents", "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "isolated", "lex_order", "pair_distances"]
 
 
 class Neighbours(NamedTuple):
@@ -54,6 +54,34 @@ class Neighbours(NamedTuple):
         """
         I = self.idx if rows is None else self.idx[rows]
         return pair_distances(self.tree.data, rows, I if col is None else I[:, col])
+
+
+class Tangents(NamedTuple):
+    """Stage 2's per-point values before any whole-cloud decision (see :func:`tangents`): a
+    function of each point's neighbours alone, so a tile computes them once, for its estimate
+    and its reconstruction (:class:`.pipeline.Prepared`).
+
+    Attributes
+    ----------
+    t : (N, d) ndarray
+        Unit tangents, before the retry and the vote.
+    lin : (N,) ndarray
+        Linearity.
+    rms : (N,) ndarray
+        Noise estimate of each point (NaN where there is none).
+    gain : (N,) ndarray
+        See :func:`tangents`.
+    """
+
+    t: np.ndarray
+    lin: np.ndarray
+    rms: np.ndarray
+    gain: np.ndarray
+
+
+def point_tangents(P: np.ndarray, nb: Neighbours) -> Tangents:
+    """The :class:`Tangents` of every point of ``P`` (N, d) from its neighbours ``nb``."""
+    return Tangents(*tangents(P, nb.idx, nb.h, order=np.arange(len(P), dtype=np.int64)))
 
 
 class Frames(NamedTuple):
@@ -120,17 +148,18 @@ def pair_distances(P: np.ndarray, rows, I: np.ndarray) -> np.ndarray:
     return np.sqrt(s)
 
 
-def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None) -> Frames:
+def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None, tg: Tangents | None = None) -> Frames:
     """Stage 2: tangents, linearity and the noise level (see :func:`tangents`).
 
     Noise-free input (estimated noise under ``SPACING.dedup_noise`` median spacings) retries the
     tangents near close curves with the smaller margin (:func:`retry_tangents`); under noise
     the vote takes in more neighbours (a tangent thrown across close curves by noise has more
     of its neighbours' to outvote it). ``est``: the whole cloud's median spacing and noise,
-    used instead of those of ``P`` (a tile of a larger cloud decides as the whole).
+    used instead of those of ``P`` (a tile of a larger cloud decides as the whole). ``tg``: the
+    points' :func:`point_tangents`, when already computed.
     """
     idx, h = nb.idx, nb.h
-    t, lin, rms, gain = tangents(P, idx, h, order=np.arange(len(P), dtype=np.int64))
+    t, lin, rms, gain = point_tangents(P, nb) if tg is None else tg
     if est is None:
         sig = median_noise(rms)
         hmed = median_spacing(h)

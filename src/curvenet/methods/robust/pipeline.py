@@ -36,8 +36,9 @@ from ..stages import ROBUST_SHARES, OnStage, report_stage
 from . import kernels as _k
 from .chains import trace_chains
 from .curves import build_curves, drop_spikes, fit_curves
-from .frames import (coincident, dedup_applies, dedup_radius, duplicates, frames, isolated, lex_order, local_spacing,
-                     median_noise, median_spacing, neighbours, neighbours_and_distances, tangents)
+from .frames import (Neighbours, Tangents, coincident, dedup_applies, dedup_radius, duplicates, frames, isolated,
+                     lex_order, local_spacing, median_noise, median_spacing, neighbours, neighbours_and_distances,
+                     point_tangents)
 from .graph import linked_graph
 from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
@@ -46,7 +47,8 @@ from .repairs import run_repairs
 from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
 
-__all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts"]
+__all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts", "Prepared", "prepare",
+           "PointEstimates", "point_estimates"]
 
 
 def reconstruct_robust(
@@ -68,8 +70,9 @@ def reconstruct_robust(
 
     Parameters
     ----------
-    points : (N, 2) or (N, 3) array_like
-        Points sampled along curves, in any order.
+    points : (N, 2) or (N, 3) array_like, or Prepared
+        Points sampled along curves, in any order; or those points with the first stages done
+        (:func:`prepare`, with the same ``spacing`` and ``k``): the same network.
     spacing : float, optional
         Sampling spacing h. Default: estimated per point (see :func:`local_spacing`); the
         median is reported. A given value is used everywhere.
@@ -110,34 +113,46 @@ def reconstruct_robust(
         without node have ``start = end = None``), parameters used and stage timings.
     """
     t0 = time.perf_counter()
-    P0 = as_points(points)
     prm = RobustParams.from_keywords(spacing=spacing, k=k, shell_inner=shell_inner, shell_outer=shell_outer,
                                      link=link, link_width=link_width, min_spur=min_spur, fit=fit,
                                      smoothing=smoothing)
+    prep = points if isinstance(points, Prepared) else None
+    if prep is not None and (prep.k != prm.k or prep.spacing != prm.spacing):
+        raise ValueError(f"the points were prepared with k={prep.k}, spacing={prep.spacing}, not k={prm.k}, "
+                         f"spacing={prm.spacing}")
+    P0 = prep.points if prep is not None else as_points(points)
     # small inputs run the plain-Python kernels: no numba compile or cache load (same results)
     with _k.compiled_for(len(P0)):
-        return _stages(P0, prm, estimates, on_stage, t0)
+        return _stages(P0, prep, prm, estimates, on_stage, t0)
 
 
-def _stages(P0: np.ndarray, prm: RobustParams, estimates: Estimates | None, on_stage: OnStage | None,
-            t0: float) -> CurveNetwork:
-    """The stages in order on the points ``P0`` (N, d) (see :func:`reconstruct_robust`)."""
+def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates: Estimates | None,
+            on_stage: OnStage | None, t0: float) -> CurveNetwork:
+    """The stages in order on the points ``P0`` (N, d) (see :func:`reconstruct_robust`); from
+    stage 2's whole-cloud decisions on when ``prep`` (those points, prepared) is given."""
     tm: dict[str, float] = {}
     N, dim = P0.shape
-    order = _internal_order(P0)
-    P = P0[order]
-    del P0  # (a copy when the input was not float64)
     params_out = prm.report()
     if N < DEFAULTS.min_points:
         params_out["spacing"] = float(prm.spacing) if prm.spacing is not None else None
         return CurveNetwork(np.zeros((0, dim)), [], params_out, {"time": tm})
 
     report_stage(on_stage, ROBUST_SHARES, "neighbors")
-    nb = neighbours(P, prm)  # 1. neighbours and spacing
+    if prep is None:
+        order = _internal_order(P0)
+        P = P0[order]
+        del P0  # (a copy when the input was not float64)
+        nb = neighbours(P, prm)  # 1. neighbours and spacing
+        tg = None  # (computed by stage 2)
+    else:  # (the same tree, over the same points, as stage 1 builds)
+        P, order, tg = prep.points, prep.order, prep.tangents
+        nb = Neighbours(build_tree(P), prep.idx, prep.h)
+        del P0, prep
     tm["neighbors"] = time.perf_counter() - t0
     report_stage(on_stage, ROBUST_SHARES, "graph")
     t1 = time.perf_counter()
-    fr = frames(P, nb, estimates)  # 2. tangents and noise
+    fr = frames(P, nb, estimates, tg)  # 2. tangents and noise
+    del tg
     P, order, nb, fr = _without_duplicates(P, order, nb, fr, prm, estimates)
     params_out["duplicates_dropped"] = int(N - len(P))
     n_kept, h_all = len(P), nb.h
@@ -301,6 +316,85 @@ class PointEstimates(NamedTuple):
     reach: np.ndarray
 
 
+class Prepared(NamedTuple):
+    """A cloud with the method's first stages done: what depends on each point's neighbours
+    alone and on no whole-cloud value (:func:`prepare`). :func:`reconstruct_robust` continues
+    from it; a tile of a tiled run prepares itself once, for the whole-cloud estimates and for
+    its reconstruction.
+
+    Attributes
+    ----------
+    points : (N, d) ndarray of float64
+        The points, in the internal order.
+    order : (N,) ndarray of int64
+        Their input rows.
+    idx : (N, k) ndarray of int32
+        Ids of the k nearest neighbours (self excluded), by ascending distance.
+    h : (N,) ndarray
+        Local spacing (or the given spacing everywhere).
+    tangents : Tangents
+        Stage 2's per-point values before its whole-cloud decisions.
+    k : int
+        Neighbours per point.
+    spacing : float or None
+        The spacing given (None: estimated per point).
+    """
+
+    points: np.ndarray
+    order: np.ndarray
+    idx: np.ndarray
+    h: np.ndarray
+    tangents: Tangents
+    k: int
+    spacing: float | None
+
+
+def _prepare(P0: np.ndarray, prm: RobustParams) -> tuple[Prepared, np.ndarray]:
+    """The :class:`Prepared` cloud of the points ``P0`` (N, d), and its (N, k) neighbour distances."""
+    order = _internal_order(P0)
+    return _prepare_ordered(P0[order], order, prm)
+
+
+def _prepare_ordered(P: np.ndarray, order: np.ndarray, prm: RobustParams) -> tuple[Prepared, np.ndarray]:
+    """:func:`_prepare` of points ``P`` (N, d) already in their internal order (input rows ``order``)."""
+    nb, dist = neighbours_and_distances(P, prm)
+    tg = point_tangents(P, nb)
+    return Prepared(P, order, nb.idx, nb.h, tg, prm.k, prm.spacing), dist
+
+
+def _values(prep: Prepared, dist: np.ndarray) -> PointEstimates:
+    """The :class:`PointEstimates` of a prepared cloud with its neighbour distances (N, k)."""
+    rows = np.arange(len(prep.points))[:, None]
+    earlier = np.where(prep.idx < rows, dist, np.inf).min(axis=1)
+    return PointEstimates(prep.order, prep.h, prep.tangents.rms, earlier, dist[:, -1].copy())
+
+
+def prepare(points, *, spacing: float | None = None, k: int | None = None) -> tuple[Prepared, PointEstimates]:
+    """The points with the method's first stages done, and their per-point values.
+
+    Parameters
+    ----------
+    points : (N, 2) or (N, 3) array_like
+    spacing, k : optional
+        As for :func:`reconstruct_robust` (which must then be given the same).
+
+    Returns
+    -------
+    Prepared
+        ``reconstruct_robust(prepared, ...)`` gives the network ``reconstruct_robust(points,
+        ...)`` gives.
+    PointEstimates
+        What :func:`point_estimates` gives on ``points`` (without the duplicate rule).
+    """
+    P0 = as_points(points)
+    prm = RobustParams.from_keywords(spacing=spacing, k=k)
+    if len(P0) < DEFAULTS.min_points:
+        raise InputError(f"need at least {DEFAULTS.min_points} points to estimate a spacing, got {len(P0)}")
+    with _k.compiled_for(len(P0)):
+        prep, dist = _prepare(P0, prm)
+    return prep, _values(prep, dist)
+
+
 def point_estimates(points, *, dedup_radius: float | None = None, spacing: float | None = None,
                     k: int | None = None) -> PointEstimates:
     """The per-point values of :class:`PointEstimates` on ``points``.
@@ -318,6 +412,8 @@ def point_estimates(points, *, dedup_radius: float | None = None, spacing: float
     -------
     PointEstimates
     """
+    if dedup_radius is None:
+        return prepare(points, spacing=spacing, k=k)[1]
     P0 = as_points(points)
     prm = RobustParams.from_keywords(spacing=spacing, k=k)
     if len(P0) < DEFAULTS.min_points:
@@ -325,15 +421,12 @@ def point_estimates(points, *, dedup_radius: float | None = None, spacing: float
     with _k.compiled_for(len(P0)):
         order = _internal_order(P0)
         P = P0[order]
-        nb, dist = neighbours_and_distances(P, prm)
-        if dedup_radius is not None:
-            keep = ~coincident(nb, dedup_radius)
-            P, order = P[keep], order[keep]
-            nb, dist = neighbours_and_distances(P, prm)
-        rms = tangents(P, nb.idx, nb.h, order=np.arange(len(P), dtype=np.int64))[2]
-    rows = np.arange(len(P))[:, None]
-    earlier = np.where(nb.idx < rows, dist, np.inf).min(axis=1)
-    return PointEstimates(order, nb.h, rms, earlier, dist[:, -1].copy())
+        nb, _ = neighbours_and_distances(P, prm)
+        keep = ~coincident(nb, dedup_radius)
+        del nb
+        # (the kept points keep their order, as the method's duplicate rule keeps it)
+        prep, dist = _prepare_ordered(P[keep], order[keep], prm)
+    return _values(prep, dist)
 
 
 def estimate(points, *, spacing: float | None = None, k: int | None = None) -> Estimates:
