@@ -102,10 +102,19 @@ def write_corridor(folder: Path, n_points: float, file_points: float, seed: int 
     return total, n_spans, files
 
 
-def run_tiled(folder, workers, tiles):
+def run_tiled(folder, workers, tiles, output=None):
+    """The tiled run on a LocalCluster of ``workers`` processes: the network in memory
+    (``reconstruct_tiled``), or, with ``output``, written to that file one curve at a time from
+    the scratch store (``tiled_network``, as ``curvenet reconstruct --tiles`` writes .json and
+    .ply; the time includes the writing). Returns the network (without ``output``; with it, an
+    object with its counts, parameters and stats), the wall time, the workers' and the client's
+    peak memory."""
+    import types
+
     import distributed
 
-    from curvenet.distributed import reconstruct_tiled
+    from curvenet.distributed import reconstruct_tiled, tiled_network
+    from curvenet.io.streamed import write_network_streamed
 
     cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                        dashboard_address=None)
@@ -114,7 +123,13 @@ def run_tiled(folder, workers, tiles):
         pids = list(client.run(os.getpid).values())
         with PeakRSS(pids + [os.getpid()]) as mem:
             t0 = time.perf_counter()
-            net = reconstruct_tiled(str(folder), tiles=tiles, client=client)
+            if output is None:
+                net = reconstruct_tiled(str(folder), tiles=tiles, client=client)
+            else:
+                with tiled_network(str(folder), tiles=tiles, client=client) as stored:
+                    write_network_streamed(stored, output)
+                    net = types.SimpleNamespace(parameters=stored.parameters, stats=stored.stats,
+                                                n_nodes=stored.n_nodes, n_curves=stored.n_curves)
             wall = time.perf_counter() - t0
         peaks = [mem.peak[p] / 2**30 for p in pids]
         client_peak = mem.peak[os.getpid()] / 2**30
@@ -136,6 +151,9 @@ def main(argv=None) -> int:
     ap.add_argument("--one-worker", action="store_true", help="also run the tiled run on one worker")
     ap.add_argument("--keep", default=None, help="write the LAZ files here and keep them")
     ap.add_argument("--json", default=None, help="also write the figures as JSON")
+    ap.add_argument("--output", default=None,
+                    help="write the network to this .json or .ply one curve at a time from the scratch store "
+                         "(the client holds no curve point; the time includes the writing)")
     args = ap.parse_args(argv)
     tiles = args.tiles if args.tiles == "auto" else float(args.tiles)
     # a SIGTERM (a batch system's time limit, kill) unwinds as an exception does, so that the
@@ -151,7 +169,9 @@ def main(argv=None) -> int:
         fig.update(points=n, spans=spans, files=len(files), write_s=time.perf_counter() - t0)
         print(f"corridor: {n} points, {spans} spans, {len(files)} LAZ files, written in {fig['write_s']:.1f} s",
               flush=True)
-        net, wall, peaks, cpeak = run_tiled(folder, args.workers, tiles)
+        net, wall, peaks, cpeak = run_tiled(folder, args.workers, tiles, args.output)
+        if args.output:
+            fig.update(output=args.output, output_bytes=os.path.getsize(args.output))
         p = net.parameters
         fig.update(tiled_s=wall, tiled_pts_per_s=n / wall, worker_peak_gb=peaks, client_peak_gb=cpeak,
                    tiles=p["tiles"], tile_side=p["tile_side"], halo=p["halo"], spacing=p["spacing"],
@@ -186,7 +206,12 @@ def main(argv=None) -> int:
                 one = reconstruct(P)
                 ws = time.perf_counter() - t0
             est = estimate(P)
-            diff = network_difference(one, net, 0.5 * one.parameters["spacing"])
+            tiled = net
+            if args.output:  # (the network written, read back: a .json)
+                from curvenet.io import read_network
+
+                tiled = read_network(args.output)
+            diff = network_difference(one, tiled, 0.5 * one.parameters["spacing"])
             fig.update(single_s=ws, single_peak_gb=mem.peak[os.getpid()] / 2**30, single_pts_per_s=n / ws,
                        throughput_ratio=ws / wall, single_read_s=wread,
                        throughput_ratio_with_read=(ws + wread) / wall, whole_spacing=est.hmed, whole_noise=est.sigma,

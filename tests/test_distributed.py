@@ -312,14 +312,41 @@ def test_cli_tiles_a_folder_of_files_and_writes_the_network(tmp_path):
     scratch.mkdir()
     (scratch / "keep.txt").write_text("the user's")
     out = tmp_path / "net.json"
-    r = _cli(str(folder / "t*.npy"), "-o", out, "--tiles", "20", "--workers", "2", "--scratch", scratch, "-q")
+    ply, vtu = tmp_path / "net.ply", tmp_path / "net.vtu"  # (streamed as .json; .vtu built in memory)
+    r = _cli(str(folder / "t*.npy"), "-o", out, "-o", ply, "-o", vtu, "--tiles", "20", "--workers", "2",
+             "--scratch", scratch, "-q")
     assert r.returncode == 0, r.stderr
     from curvenet.io import read_network
+    from curvenet.io.network_io import network_to_ply
 
     net = read_network(out)
     _assert_same(reconstruct(P), net, 1.0)
     assert net.parameters["halo"] > 0 and net.parameters["tile_side"] == 20
     assert sorted(p.name for p in scratch.iterdir()) == ["keep.txt"]
+    assert ply.read_bytes() == network_to_ply(net)
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(vtu)
+    assert sum(len(c.data) for c in m.cells) == sum(len(c.points) - 1 + c.closed for c in net.curves)
+
+
+def test_the_stored_network_written_piece_by_piece_is_the_network_in_memory(client, tmp_path):
+    """A tiled run's network, its points left in the scratch store, written one curve at a time
+    (.json, .ply): the bytes of the network built in memory; the client holds no curve point
+    (the stored network's curves are plans over the tiles' files)."""
+    from curvenet.distributed import tiled_network
+    from curvenet.io.network_io import network_to_json, network_to_ply
+    from curvenet.io.streamed import write_network_streamed
+
+    P = adversarial_scene(noise=0.1)
+    f = _save(tmp_path, P)
+    with tiled_network(f, tiles=SIDE, client=client) as stored:
+        assert not any(hasattr(p, "points") for p in stored.plans)
+        net = stored.network()
+        assert stored.stats["fitted_here"] > 0  # (curves fitted once joined: spilled by the client)
+        a = write_network_streamed(stored, tmp_path / "a.json")
+        b = write_network_streamed(stored, tmp_path / "b.ply")
+    assert a.read_bytes() == network_to_json(net).encode() and b.read_bytes() == network_to_ply(net)
+    _assert_same(reconstruct(P), net, 1.0)
 
 
 @pytest.mark.parametrize("args,msg", [

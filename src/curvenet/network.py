@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -278,21 +278,7 @@ class CurveNetwork:
     @property
     def betti(self) -> tuple[int, int]:
         """Betti numbers (β0, β1) of the network as a 1-dimensional complex."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import connected_components
-
-        n = len(self.nodes)
-        e = self.edges
-        free_loops = int((e[:, 0] < 0).sum())
-        e = e[e[:, 0] >= 0]
-        if n:
-            g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
-            comps = connected_components(g, directed=False)[0]
-        else:
-            comps = 0
-        b0 = comps + free_loops
-        b1 = len(e) - n + comps + free_loops
-        return int(b0), int(b1)
+        return betti_numbers(len(self.nodes), self.edges)
 
     @property
     def lengths(self) -> np.ndarray:
@@ -378,20 +364,7 @@ class CurveNetwork:
             s = None if c.start is None else int(new_id[c.start])
             e = None if c.end is None else int(new_id[c.end])
             cc = Curve(c.points.copy(), s, e, c.closed, c.indices.copy()) if copy else Curve(c.points, s, e, c.closed, c.indices)
-            if s is None and c.closed and len(cc.points):
-                k = _lexmin(np.round(cc.points, decimals))
-                cc.points = np.roll(cc.points, -k, axis=0)
-                cc.indices = np.roll(cc.indices, -k)
-                rev = cc.reversed()
-                rev.points = np.roll(rev.points, 1, axis=0)
-                rev.indices = np.roll(rev.indices, 1)
-                if _key(rev, decimals) < _key(cc, decimals):
-                    cc = rev
-            elif s is not None and e is not None and (
-                e < s or (e == s and _key(cc.reversed(), decimals) < _key(cc, decimals))
-            ):
-                cc = cc.reversed()
-            curves.append(cc)
+            curves.append(_canonical_curve(cc, decimals))
         curves = [curves[i] for i in _key_order(curves, decimals)]
         return CurveNetwork(self.nodes[order], curves, dict(self.parameters), dict(self.stats))
 
@@ -630,20 +603,75 @@ def _lexmin(p: np.ndarray) -> int:
     return int(np.lexsort(p.T[::-1])[0])
 
 
+def betti_numbers(n: int, edges: np.ndarray) -> tuple[int, int]:
+    """Betti numbers (β0, β1) of a network of ``n`` nodes and curves with end nodes ``edges``
+    ((c, 2), -1 for a loop without node) as a 1-dimensional complex."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    free_loops = int((e[:, 0] < 0).sum())
+    e = e[e[:, 0] >= 0]
+    if n:
+        g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+        comps = connected_components(g, directed=False)[0]
+    else:
+        comps = 0
+    b0 = comps + free_loops
+    b1 = len(e) - n + comps + free_loops
+    return int(b0), int(b1)
+
+
+def needs_points(start: int | None, end: int | None, closed: bool) -> bool:
+    """Whether :func:`_canonical_curve` reads a curve's points to turn it (a free loop, or a
+    loop through one node); otherwise its end node ids alone decide."""
+    return (start is None and closed) or (start is not None and start == end)
+
+
+def _canonical_curve(cc: Curve, decimals: int) -> Curve:
+    """A curve (its node ids already canonical) turned as :meth:`CurveNetwork.canonical` runs
+    it: an open curve from its lower to its higher node id (ties broken by the polyline), a
+    free closed loop from its lexicographically smallest point, in the direction of the smaller
+    key. ``cc`` is changed (a free loop is rolled) or returned when it runs so already."""
+    s, e = cc.start, cc.end
+    if s is None and cc.closed and len(cc.points):
+        k = _lexmin(np.round(cc.points, decimals))
+        cc.points = np.roll(cc.points, -k, axis=0)
+        cc.indices = np.roll(cc.indices, -k)
+        rev = cc.reversed()
+        rev.points = np.roll(rev.points, 1, axis=0)
+        rev.indices = np.roll(rev.indices, 1)
+        if _key(rev, decimals) < _key(cc, decimals):
+            cc = rev
+    elif s is not None and e is not None and (
+        e < s or (e == s and _key(cc.reversed(), decimals) < _key(cc, decimals))
+    ):
+        cc = cc.reversed()
+    return cc
+
+
 def _key_order(curves: list[Curve], decimals: int) -> list[int]:
     """``sorted(range(len(curves)), key=lambda i: _key(curves[i], decimals))``, with the
     polyline part of the key (a tuple of every rounded coordinate: about 100 bytes a point)
-    built only for the curves that share both end nodes with another: the order by end nodes
-    is a stable sort of two integer columns, and only its runs of equal ends need the rest."""
+    built only for the curves that share both end nodes with another (see :func:`order_by_ends`)."""
     ends = np.array([[-1 if c.start is None else c.start, -1 if c.end is None else c.end] for c in curves],
                     dtype=np.int64).reshape(-1, 2)
-    order = np.lexsort((ends[:, 1], ends[:, 0]))  # (stable: ties keep the order of ``curves``)
+    return order_by_ends(ends, lambda i: curves[i].points, decimals)
+
+
+def order_by_ends(ends: np.ndarray, points_of: Callable[[int], np.ndarray], decimals: int) -> list[int]:
+    """The canonical order of curves: by end node ids ``ends`` ((c, 2), -1 for none), then by
+    the rounded polyline among curves with the same ends (``points_of(i)``: curve ``i``'s
+    points, asked for those curves only). The order by end nodes is a stable sort of two
+    integer columns, and only its runs of equal ends need the rest."""
+    order = np.lexsort((ends[:, 1], ends[:, 0]))  # (stable: ties keep the given order)
     out = order.tolist()
     E = ends[order]
     same = np.concatenate([[0], (E[1:] == E[:-1]).all(axis=1).astype(np.int8), [0]])
     runs = np.diff(same)
     for a, b in zip(np.flatnonzero(runs == 1).tolist(), (np.flatnonzero(runs == -1) + 1).tolist()):
-        out[a:b] = sorted(out[a:b], key=lambda i: _key(curves[i], decimals))
+        out[a:b] = sorted(out[a:b], key=lambda i: (int(ends[i, 0]), int(ends[i, 1]),
+                                                   tuple(np.round(points_of(i), decimals).ravel().tolist())))
     return out
 
 

@@ -92,10 +92,11 @@ def _method_parameters(args) -> bool:
 
 
 def _run(args) -> int:
-    from ..distributed import make_client, reconstruct_tiled
+    from ..distributed import make_client, tiled_network
     from ..distributed.inputs import expand_inputs
     from ..errors import FormatError
     from ..io import WRITERS, check_output_path, extension, write_network
+    from ..io.streamed import STREAMED, write_network_streamed
     from .progress import print_summary
 
     inputs = [str(f) for f in expand_inputs([args.input, *args.more_inputs])]
@@ -112,27 +113,35 @@ def _run(args) -> int:
     try:
         if not args.quiet and client.dashboard_link:
             print(f"curvenet: Dask dashboard: {client.dashboard_link}", file=sys.stderr)
-        net = reconstruct_tiled(inputs, tiles=args.tiles, halo=args.halo, client=client, scratch=args.scratch,
-                                columns=args.columns, drop_nonfinite=args.drop_nonfinite, progress=show)
+        with tiled_network(inputs, tiles=args.tiles, halo=args.halo, client=client, scratch=args.scratch,
+                           columns=args.columns, drop_nonfinite=args.drop_nonfinite, progress=show) as stored:
+            # .json and .ply are written one curve at a time from the scratch store (the client
+            # never holds the points); other formats and the surface need the network in memory
+            whole = None
+            written = []
+            for out in args.output:
+                if extension(out) in STREAMED:
+                    write_network_streamed(stored, out, inputs=inputs)
+                else:
+                    whole = stored.network() if whole is None else whole
+                    write_network(whole, out, inputs=inputs)
+                written.append(out)
+            if args.surface:
+                from .cmd_surface import summary, write_surface
+
+                whole = stored.network() if whole is None else whole
+                mesh, seconds = write_surface(whole, args.surface, inputs=inputs)
+                written.extend(args.surface)
     finally:
         cluster = getattr(client, "cluster", None) if args.scheduler in ("processes", "threads") else None
         client.close()
         if cluster is not None:
             cluster.close()
-    written = []
-    for out in args.output:
-        write_network(net, out, inputs=inputs)
-        written.append(out)
-    if args.surface:
-        from .cmd_surface import summary, write_surface
-
-        mesh, seconds = write_surface(net, args.surface, inputs=inputs)
-        written.extend(args.surface)
     if not args.quiet:
         if args.verbose:
-            tm = net.stats.get("time", {})
+            tm = stored.stats.get("time", {})
             print("tiled run: " + ", ".join(f"{k} {v:.2f} s" for k, v in tm.items()), file=sys.stderr)
-        print_summary(net, Path(inputs[0]).stem, written)
+        print_summary(stored, Path(inputs[0]).stem, written)
         if args.surface:
             print("surface: " + summary(mesh, seconds))
         if not written:

@@ -17,8 +17,9 @@ import numpy as np
 from ..methods.robust.curves import fit_curves
 from ..network import Curve, CurveNetwork
 from .grid import TileGrid
+from .scratch import write_pieces
 
-__all__ = ["Piece", "TilePieces", "cut_network", "fit_whole_pieces"]
+__all__ = ["Piece", "TilePieces", "cut_network", "fit_whole_pieces", "store_pieces"]
 
 
 @dataclass
@@ -36,12 +37,16 @@ class Piece:
         port j); None for a closed loop without node, kept whole.
     fitted : bool
         The piece is a whole curve already fitted by its tile (:func:`fit_whole_pieces`).
+    rows : tuple of two int, or None
+        Once stored (:func:`store_pieces`): the rows ``[lo, hi)`` of the tile's stored pieces
+        that hold it (``points`` and ``indices`` are then None).
     """
 
-    points: np.ndarray
-    indices: np.ndarray
+    points: np.ndarray | None
+    indices: np.ndarray | None
     ends: tuple | None
     fitted: bool = False
+    rows: tuple | None = None
 
 
 @dataclass
@@ -177,4 +182,18 @@ def fit_whole_pieces(tile: TilePieces, sigma: float) -> TilePieces:
     pieces = list(tile.pieces)
     for i, c in zip(whole, fitted):
         pieces[i] = Piece(c.points, tile.pieces[i].indices, tile.pieces[i].ends, True)
+    return replace(tile, pieces=pieces)
+
+
+def store_pieces(root, tile: TilePieces) -> TilePieces:
+    """Write the tile's pieces to the scratch store (:func:`.scratch.write_pieces`: their points
+    and ids one after the other) and return the tile with pieces that only say where they are
+    (``rows``): the client then holds no point of the network (see :mod:`.plan`)."""
+    d = tile.nodes.shape[1]
+    sizes = [len(pc.points) for pc in tile.pieces]
+    off = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    P = np.vstack([pc.points for pc in tile.pieces]) if tile.pieces else np.zeros((0, d))
+    ids = np.concatenate([pc.indices for pc in tile.pieces]) if tile.pieces else np.zeros(0, np.int64)
+    write_pieces(root, tile.key, P, ids)
+    pieces = [Piece(None, None, pc.ends, pc.fitted, (int(off[i]), int(off[i + 1]))) for i, pc in enumerate(tile.pieces)]
     return replace(tile, pieces=pieces)

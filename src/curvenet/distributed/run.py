@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Literal
+from typing import Iterator, Literal
 
 import numpy as np
 
@@ -18,10 +19,11 @@ from .grid import TileGrid
 from .estimates import whole_cloud_estimates
 from .halo import halo_width
 from .inputs import expand_inputs, plan_chunks
+from .plan import StoredNetwork
 from .scratch import new_root, remove_root
 from .stitch import stitch
 
-__all__ = ["reconstruct_tiled", "TILE_AUTO_POINTS", "ESTIMATE_POINTS", "TASK_RETRIES", "make_client"]
+__all__ = ["reconstruct_tiled", "tiled_network", "TILE_AUTO_POINTS", "ESTIMATE_POINTS", "TASK_RETRIES", "make_client"]
 
 #: ``tiles="auto"``: the side that gives about this many points a tile, counted as if the
 #: points lay along the longest side of the bounding box (curves: denser tiles are rarer).
@@ -134,7 +136,9 @@ def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: 
     The client reads no point: a first pass bins every input chunk into the tiles of an
     explicit grid (a scratch store), the whole-cloud estimates are computed once and handed
     to every tile, each tile is reconstructed with a halo around its box and cut at the box
-    into pieces and ports, and the pieces are stitched across the faces.
+    into pieces and ports, and the pieces are stitched across the faces. The network is then
+    built in memory (all its curve points: 32 bytes a point); :func:`tiled_network` gives it
+    with its points left on disk, to write it out without holding it.
 
     Parameters
     ----------
@@ -174,6 +178,29 @@ def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: 
     MethodError
         A tile failed for good: the message names the tile and its input files.
     """
+    with tiled_network(inputs, tiles=tiles, halo=halo, origin=origin, client=client, scheduler=scheduler,
+                       workers=workers, scratch=scratch, columns=columns, drop_nonfinite=drop_nonfinite,
+                       stitching=stitching, progress=progress) as stored:
+        return stored.network()
+
+
+@contextmanager
+def tiled_network(inputs, *, tiles: float | Literal["auto"] = "auto", halo: float | None = None,
+                  origin=None, client=None, scheduler: str = "processes", workers: int | None = None,
+                  scratch=None, columns=None, drop_nonfinite: bool = False, stitching: bool = True,
+                  progress: bool = False) -> Iterator[StoredNetwork]:
+    """:func:`reconstruct_tiled`, the network's curve points left in the scratch store.
+
+    A context manager: inside it the :class:`~.plan.StoredNetwork` reads each curve from the
+    store when asked (:func:`curvenet.io.streamed.write_network_streamed` writes it out one
+    curve at a time: the client holds the nodes and a few numbers a curve, whatever N); the
+    store is removed on the way out. The parameters are those of :func:`reconstruct_tiled`.
+
+    Examples
+    --------
+    >>> with tiled_network("scans/", tiles="auto") as net:          # doctest: +SKIP
+    ...     write_network_streamed(net, "network.ply")
+    """
     if tiles != "auto" and not (isinstance(tiles, (int, float)) and np.isfinite(tiles) and tiles > 0):
         raise InputError(f"the tile side must be a positive number or 'auto', got {tiles!r}")
     if halo is not None and not (np.isfinite(halo) and halo > 0):
@@ -186,15 +213,23 @@ def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: 
     root = None
     try:
         root = new_root(scratch)
-        return _run(client, files, chunks, root, tiles, halo, origin, columns, drop_nonfinite, stitching, progress)
+        stored = _run(client, files, chunks, root, tiles, halo, origin, columns, drop_nonfinite, stitching, progress)
+        if own_client:  # (the cluster is not needed to read the store)
+            own_client = False
+            _close(client)
+        yield stored
     finally:
         if root is not None:
             remove_root(root)
         if own_client:
-            cluster = client.cluster
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            _close(client)
+
+
+def _close(client) -> None:
+    cluster = client.cluster
+    client.close()
+    if cluster is not None:
+        cluster.close()
 
 
 def _progress(futures, show: bool):
@@ -301,8 +336,8 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     # 5. stitch (and, under noise, the fit of the method's stage 8 for the curves that cross a
     #    face: each tile fitted the curves it holds whole)
     t1 = time.perf_counter()
-    net = stitch(parts, est.hmed, join=stitching, sigma=None if est.clean else est.sigma)
-    del parts  # (the pieces: as many points again as the network)
+    net = stitch(parts, est.hmed, root, join=stitching, sigma=None if est.clean else est.sigma)
+    del parts
     tm["stitch"] = time.perf_counter() - t1
     tm["total"] = time.perf_counter() - t0
     net.parameters.update({

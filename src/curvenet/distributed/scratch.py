@@ -5,7 +5,9 @@ int64 global ids), each written under a temporary name and renamed (a task that 
 a lost worker rewrites its files whole); ``ROOT/t<key>/v-<name>.npy``, per-point values of the
 whole-cloud estimates; ``ROOT/t<key>/prepared/``, the tile's box with its halo prepared by the
 method (:class:`curvenet.methods.robust.Prepared`, one ``.npy`` a field, written in a temporary
-folder and renamed whole). ``ROOT`` is a fresh folder of its own, removed whole at the end of
+folder and renamed whole); ``ROOT/t<key>/pieces.pts`` and ``.ids``, the tile's pieces of curves,
+one after the other (raw float64 and int64, read back a range of rows at a time). ``ROOT`` is a
+fresh folder of its own, removed whole at the end of
 the run, whatever the outcome.
 """
 
@@ -23,7 +25,7 @@ from ..methods.robust import Prepared
 from ..methods.robust.frames import Tangents
 
 __all__ = ["SCRATCH_PREFIX", "new_root", "remove_root", "tile_dir", "write_part", "read_tile", "write_values",
-           "read_values", "write_prepared", "read_prepared"]
+           "read_values", "write_prepared", "read_prepared", "write_pieces", "read_piece_rows"]
 
 #: Name prefix of a run's scratch folder (under ``--scratch`` or the system's temporary folder).
 SCRATCH_PREFIX = "curvenet-tiles-"
@@ -142,3 +144,28 @@ def read_prepared(root, key) -> tuple[Prepared, np.ndarray] | None:
     tg = Tangents(*(arrays[f"tangents.{name}"] for name in Tangents._fields))
     prep = Prepared(*(arrays[name] for name in _ARRAYS), tg, int(k), None if np.isnan(spacing) else float(spacing))
     return prep, arrays["ids"]
+
+
+def _pieces_path(root, key, what: str) -> Path:
+    return tile_dir(root, key) / f"pieces.{what}"
+
+
+def write_pieces(root, key, points: np.ndarray, ids: np.ndarray) -> None:
+    """Store tile ``key``'s pieces: their points (n, d) float64 and global ids (n,) int64, one
+    piece after the other (raw, so that :func:`read_piece_rows` reads a range of rows alone)."""
+    d = tile_dir(root, key)
+    d.mkdir(exist_ok=True)
+    for what, a, dtype in (("ids", ids, "<i8"), ("pts", points, "<f8")):
+        path = _pieces_path(root, key, what)
+        tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+        np.ascontiguousarray(a, dtype=dtype).tofile(tmp)
+        os.replace(tmp, path)
+
+
+def read_piece_rows(root, key, lo: int, hi: int, dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ``[lo, hi)`` of tile ``key``'s stored pieces: points (hi - lo, dim) and ids (hi - lo,)
+    (read from the files, not mapped: nothing stays in the process once they are dropped)."""
+    n = hi - lo
+    P = np.fromfile(_pieces_path(root, key, "pts"), dtype="<f8", count=n * dim, offset=lo * dim * 8)
+    I = np.fromfile(_pieces_path(root, key, "ids"), dtype="<i8", count=n, offset=lo * 8)
+    return P.reshape(n, dim).astype(np.float64, copy=False), I.astype(np.int64, copy=False)

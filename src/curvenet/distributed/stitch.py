@@ -15,10 +15,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..methods.robust.curves import fit_curves
-from ..network import Curve, CurveNetwork
 from .cut import TilePieces
+from .plan import CurvePlan, PieceStore, Span, StoredNetwork
 
-__all__ = ["PORT_MATCH", "PORT_ANGLE_COS", "stitch"]
+__all__ = ["PORT_MATCH", "PORT_ANGLE_COS", "FIT_BATCH", "stitch"]
 
 #: Ports at most this many median spacings apart may join (the two tiles compute the same
 #: crossing segment, so the same midpoint up to rounding; a node placed a little differently
@@ -26,6 +26,8 @@ __all__ = ["PORT_MATCH", "PORT_ANGLE_COS", "stitch"]
 PORT_MATCH: float = 0.5
 #: ... when their directions are opposite within 30 degrees (cosine).
 PORT_ANGLE_COS: float = float(np.cos(np.radians(30.0)))
+#: The curves fitted here are read, fitted and spilled this many at a time.
+FIT_BATCH: int = 1000
 
 
 def _match_ports(pos: np.ndarray, tan: np.ndarray, tile: np.ndarray, reach: float) -> np.ndarray:
@@ -46,15 +48,19 @@ def _match_ports(pos: np.ndarray, tan: np.ndarray, tile: np.ndarray, reach: floa
     return partner
 
 
-def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma: float | None = None) -> CurveNetwork:
+def stitch(tiles: list[TilePieces], spacing: float, root, *, join: bool = True,
+           sigma: float | None = None) -> StoredNetwork:
     """Join the pieces of every tile into one network (in canonical order).
 
     Parameters
     ----------
     tiles : list of TilePieces
-        In any order (they are sorted by key).
+        In any order (they are sorted by key), their pieces stored in the scratch store
+        (:func:`.cut.store_pieces`).
     spacing : float
         The whole cloud's median spacing (the port match distance is in these units).
+    root : path
+        The scratch store.
     join : bool
         Join ports across tiles (False: every port is a free end; the negative control).
     sigma : float, optional
@@ -64,12 +70,13 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma:
 
     Returns
     -------
-    CurveNetwork
-        ``stats["unmatched_ports"]`` counts the ports without partner; ``stats["fitted_here"]``
-        the curves fitted here.
+    StoredNetwork
+        Its curves are plans over the stored pieces (:mod:`.plan`); ``stats["unmatched_ports"]``
+        counts the ports without partner, ``stats["fitted_here"]`` the curves fitted here.
     """
     tiles = sorted(tiles, key=lambda t: t.key)
     d = next((t.nodes.shape[1] for t in tiles), 3)
+    store = PieceStore(root, [t.key for t in tiles], d)
     node_base = np.cumsum([0] + [len(t.nodes) for t in tiles])
     port_base = np.cumsum([0] + [len(t.ports) for t in tiles])
     nodes = [t.nodes for t in tiles]
@@ -98,57 +105,57 @@ def stitch(tiles: list[TilePieces], spacing: float, *, join: bool = True, sigma:
                         g = int(port_base[ti] + i)
                         owner[g] = (len(pieces), side)
                         e.append(("node", int(loose_node[g])) if partner[g] < 0 else ("port", g))
-            pieces.append(pc)
+            pieces.append((ti, pc))
             ends.append(e)
 
-    curves: list[Curve] = []
+    plans: list[CurvePlan] = []
     done: list[bool] = []  # fitted by its tile (a fitted piece is a whole curve: its walk is itself)
     used = np.zeros(len(pieces), dtype=bool)
     for i, e in enumerate(ends):
         if e is None:
             used[i] = True
-            pc = pieces[i]
-            curves.append(Curve(pc.points, None, None, True, pc.indices))
+            ti, pc = pieces[i]
+            plans.append(CurvePlan([Span(ti, *pc.rows)], None, None, True))
             done.append(pc.fitted)
     for i, e in enumerate(ends):  # chains that start at a node
         if used[i]:
             continue
         for side in (0, 1):
             if e[side][0] == "node":
-                curves.append(_walk(i, side, pieces, ends, owner, partner, used, closed=False))
-                done.append(pieces[i].fitted)
+                plans.append(_walk(i, side, pieces, ends, owner, partner, used, closed=False))
+                done.append(pieces[i][1].fitted)
                 break
     for i in range(len(pieces)):  # what is left are loops of cut nodes only
         if not used[i]:
-            curves.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True))
+            plans.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True))
             done.append(False)
     todo = [] if sigma is None else [i for i, f in enumerate(done) if not f]
-    for i, c in zip(todo, fit_curves([curves[i] for i in todo], sigma)):
-        curves[i] = c
-    net = CurveNetwork(np.vstack(nodes).reshape(-1, d), curves, {}, {})
-    net = net.canonical(copy=False)  # (the curves are new: not held twice)
+    for a in range(0, len(todo), FIT_BATCH):  # (a batch at a time in memory)
+        batch = todo[a:a + FIT_BATCH]
+        for i, c in zip(batch, fit_curves([store.curve(plans[i]) for i in batch], sigma)):
+            plans[i] = store.keep(c)
+    net = StoredNetwork(np.vstack(nodes).reshape(-1, d), plans, store).canonical()
     net.stats["unmatched_ports"] = int(len(loose))
     net.stats["ports"] = int(len(pos))
     net.stats["fitted_here"] = len(todo)
     return net
 
 
-def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> Curve:
+def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> CurvePlan:
     """Follow pieces from piece ``i`` entering at ``side`` through joined ports; drop the port
     midpoints on the way."""
     start = ends[i][side]
-    pts, ids = [], []
+    spans = []
     cur, s_in = i, side
     while True:
         used[cur] = True
-        P, I = pieces[cur].points, pieces[cur].indices
-        if s_in == 1:
-            P, I = P[::-1], I[::-1]
+        ti, pc = pieces[cur]
+        a, b = pc.rows
         lo = 1 if ends[cur][s_in][0] == "port" else 0
         out = ends[cur][1 - s_in]
-        hi = len(P) - (1 if out[0] == "port" else 0)
-        pts.append(P[lo:hi])
-        ids.append(I[lo:hi])
+        hi = (b - a) - (1 if out[0] == "port" else 0)
+        # rows lo..hi of the piece run from its side s_in: backwards from the stored end when 1
+        spans.append(Span(ti, a + lo, a + hi) if s_in == 0 else Span(ti, b - hi, b - lo, True))
         if out[0] == "node":
             end = out
             break
@@ -157,8 +164,6 @@ def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> Curve:
             end = None
             break
         cur, s_in = nxt, s_next
-    # (one piece: its own arrays, no copy)
-    P, I = (pts[0], ids[0]) if len(pts) == 1 else (np.vstack(pts), np.concatenate(ids))
     if closed or start[0] != "node" or end is None:
-        return Curve(P, None, None, True, I)
-    return Curve(P, start[1], end[1], False, I)
+        return CurvePlan(spans, None, None, True)
+    return CurvePlan(spans, start[1], end[1], False)

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..methods.robust import Estimates, estimate, reconstruct_robust
 from ..neighbors import one_thread
-from .cut import TilePieces, cut_network, fit_whole_pieces
+from .cut import TilePieces, cut_network, fit_whole_pieces, store_pieces
 from .grid import TileGrid
 from .inputs import Chunk, read_chunk, scan_chunk
 from .scratch import read_prepared, read_tile, write_part
@@ -124,4 +124,4 @@ def run_tile(root: str, grid: TileGrid, key, halo: float, estimates: Estimates, 
         out.prepared = got is not None
         if not estimates.clean:  # the method's fit under noise, of the curves this tile holds whole
             out = fit_whole_pieces(out, estimates.sigma)
-    return out
+    return store_pieces(root, out)  # (the client gets where the pieces are, not their points)

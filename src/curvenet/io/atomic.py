@@ -170,25 +170,32 @@ def _unlink(tmp) -> None:
 ENCODE_PIECE = 1 << 20
 
 
-def _encoded(data: bytes | str) -> Iterator[bytes]:
-    """The bytes of ``data`` (UTF-8 for ``str``) in pieces of :data:`ENCODE_PIECE` characters."""
+def _encoded(data) -> Iterator[bytes]:
+    """The bytes of ``data`` (UTF-8 for ``str``) in pieces of :data:`ENCODE_PIECE` characters;
+    ``data`` an iterable of ``bytes`` and ``str`` pieces (a streamed document): each in turn."""
     if isinstance(data, str):
         for i in range(0, len(data), ENCODE_PIECE):
             yield data[i:i + ENCODE_PIECE].encode("utf-8")
-    else:
+    elif isinstance(data, (bytes, bytearray, memoryview)):
         yield data
+    else:
+        for piece in data:
+            yield from _encoded(piece)
 
 
-def _write_temp(p: Path, data: bytes | str) -> str:
-    """Write ``data`` (``str`` as UTF-8) to a new temporary file beside ``p`` (synced, with
-    ``p``'s permissions or the default ones); returns its name. Removed again on any error."""
+def _write_temp(p: Path, data) -> tuple[str, bytes]:
+    """Write ``data`` (``str`` as UTF-8; or an iterable of pieces, see :func:`_encoded`) to a
+    new temporary file beside ``p`` (synced, with ``p``'s permissions or the default ones);
+    returns its name and the SHA-256 digest of the bytes written. Removed again on any error."""
     parent = _folder(p)
     tmp = None
+    sha = hashlib.sha256()
     try:
         fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=TEMP_SUFFIX, dir=parent)
         with os.fdopen(fd, "wb") as f:
             for piece in _encoded(data):
                 f.write(piece)
+                sha.update(piece)
             f.flush()
             os.fsync(f.fileno())
         if p.exists():
@@ -201,7 +208,7 @@ def _write_temp(p: Path, data: bytes | str) -> str:
             os.umask(umask)
             os.chmod(tmp, 0o666 & ~umask)
         checkpoint()  # Ctrl-C pressed while writing: no file (see curvenet._sigint)
-        return tmp
+        return tmp, sha.digest()
     except BaseException as exc:
         if tmp is not None:
             _unlink(tmp)
@@ -222,8 +229,9 @@ def atomic_write(path, data, *, inputs=()) -> Path:
     ----------
     path : str or Path
         Target file.
-    data : bytes or str
-        Content; ``str`` is written as UTF-8.
+    data : bytes or str, or an iterable of them
+        Content; ``str`` is written as UTF-8. An iterable (a generator) is written piece by
+        piece as it yields them: a document too large to hold whole.
     inputs : iterable of str or Path
         Input files that must not be overwritten.
 
@@ -241,7 +249,7 @@ def atomic_write(path, data, *, inputs=()) -> Path:
     p = check_output_path(path, inputs=inputs)
     batch = _BATCH.get()
     if batch is None:
-        tmp = _write_temp(p, data)
+        tmp = _write_temp(p, data)[0]
         try:
             os.replace(tmp, p)
         except BaseException as exc:
@@ -251,13 +259,11 @@ def atomic_write(path, data, *, inputs=()) -> Path:
             raise
         return p
     key = p.resolve()
-    sha = hashlib.sha256()
-    for piece in _encoded(data):
-        sha.update(piece)
-    digest = sha.digest()
+    tmp, digest = _write_temp(p, data)
     if key in batch.staged:
+        _unlink(tmp)
         if batch.staged[key][1] != digest:
             raise OutputError(f"{p}: written twice in one run with different contents")
         return p
-    batch.staged[key] = (_write_temp(p, data), digest, p)
+    batch.staged[key] = (tmp, digest, p)
     return p
