@@ -230,11 +230,13 @@ def _reach_bound(root: str, grid: TileGrid, key, X: np.ndarray, r: float) -> np.
 def _points_near(root: str, grid: TileGrid, key, X: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The points (n, d) of the cloud, and their global ids (n,), within ``r[i]`` of some
     ``X[i]`` ((m, d) points of tile ``key``), read tile by tile (only those kept are held)."""
-    lo, hi = (X - r[:, None]).min(axis=0), (X + r[:, None]).max(axis=0)
+    r_max = float(r.max())
+    tx = cKDTree(X)
     pts, out_ids = [], []
-    for nb in grid.neighbours(key, float(r.max())):
+    for nb in grid.neighbours(key, r_max):
         for p, i in read_tile(root, nb):
-            m = np.flatnonzero(((p >= lo) & (p <= hi)).all(axis=1))
+            # within r_max of one of the points (a query against their few), then within each one's own r
+            m = np.flatnonzero(np.isfinite(tx.query(p, distance_upper_bound=r_max * (1 + 1e-9))[0]))
             if not len(m):
                 continue
             near = cKDTree(p[m]).query_ball_point(X, r, return_sorted=False)
