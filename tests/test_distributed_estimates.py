@@ -14,17 +14,35 @@ from curvenet.distributed import run as drun  # noqa: E402
 from curvenet.methods.robust import estimate  # noqa: E402
 
 
-@pytest.mark.parametrize("n", [1, 2, 7, 1000, 1001])
-def test_median_from_bins_is_numpys(n):
+@pytest.mark.parametrize("n", [1, 2, 7, 1000, 1001, 100_000])
+@pytest.mark.parametrize("spread", ["wide", "ties"])
+def test_median_from_bins_is_numpys(n, spread):
     rng = np.random.default_rng(n)
-    v = np.exp(rng.normal(size=n)) * 1e-3
+    v = np.exp(rng.normal(size=n) * (8 if spread == "wide" else 1)) * 1e-3
     v[: n // 3] = v[0]  # ties across a bin
+    if spread == "ties":
+        v[: n // 2] = 0.25  # half the values one value (a spacing on an exact grid)
+    v[rng.random(n) < 0.01] = np.nan  # (not counted)
     parts = np.array_split(rng.permutation(v), 5)
-    keys, counts = de.merge_counts([de.sparse_counts(p) for p in parts])
-    a, b, below, m = de.middle_bins(keys, counts)
-    inside = np.concatenate([p[(de.bin_keys(p) >= a) & (de.bin_keys(p) <= b)] for p in parts])
-    assert m == n and len(inside) < n or n < 10
-    assert de.median_of(inside, below, m) == np.median(v)
+    asked = []
+
+    def count_in(sel, shift):
+        got = [de.sparse_counts(p, shift, sel) for p in parts]
+        asked.append(sum(len(k) for k, _ in got))
+        return de.merge_counts(got)
+
+    def values_in(sel):
+        got = [np.unique(de._within(p, sel), return_counts=True) for p in parts]
+        asked.append(sum(len(k) for k, _ in got))
+        return de.merge_values(got)
+
+    first = de.merge_counts([de.sparse_counts(p) for p in parts])
+    got = de.exact_median(first, count_in, values_in)
+    assert got == np.median(v[np.isfinite(v)])
+    # what the tiles hand over stays small whatever n (the coarse bins: 16 an octave)
+    f = v[np.isfinite(v)]
+    octaves = np.log2(f.max() / f.min()) + 2
+    assert len(first[0]) <= 16 * octaves and max(asked) <= max(64, n // 50)
 
 
 def test_bins_sort_as_the_values():

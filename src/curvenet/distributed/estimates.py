@@ -5,13 +5,15 @@ spacing and the noise estimate of every point, see
 :class:`~curvenet.methods.robust.PointEstimates`), once more after the duplicate rule when it
 drops points. Each per-point value depends on the point's k nearest neighbours alone, so a tile
 with a halo computes it exactly for the points it owns; the medians over all tiles are then
-found without gathering the values: a first pass counts them in fine bins of their bit pattern
-(a non-negative double's bits sort as the double does), a second fetches only the values in the
-one or two bins that hold the middle ranks. The result is the median ``numpy.median`` gives on
-the whole array, bit for bit.
+found without gathering the values, in bounded memory whatever N: the values are counted in
+coarse bins of their bit pattern (a non-negative double's bits sort as the double does), then,
+inside the one or two bins that hold the middle ranks, in finer bins, and last the distinct
+values inside the finest middle bins are fetched with their counts. The result is the median
+``numpy.median`` gives on the whole array, bit for bit.
 
-The tasks (:func:`tile_values`, :func:`tile_count_below`, :func:`tile_values_in`) run on the
-workers; :func:`whole_cloud_estimates` drives them from the client.
+The tasks (:func:`tile_values`, :func:`tile_fix_values`, :func:`tile_count_below`,
+:func:`tile_counts_in`, :func:`tile_values_in`) run on the workers;
+:func:`whole_cloud_estimates` drives them from the client.
 """
 
 from __future__ import annotations
@@ -28,14 +30,15 @@ from .grid import TileGrid
 from .scratch import read_tile, read_values, write_prepared, write_values
 from .tasks import method_slot, tile_points
 
-__all__ = ["MEDIAN_BIN_SHIFT", "REACH_FACTOR", "FIX_MAX_SIDES", "TileValues", "bin_keys", "sparse_counts", "merge_counts",
-           "middle_bins", "median_of", "tile_values", "tile_fix_values", "tile_count_below", "tile_values_in",
+__all__ = ["MEDIAN_SHIFTS", "REACH_FACTOR", "FIX_MAX_SIDES", "TileValues", "bin_keys", "sparse_counts", "merge_counts",
+           "rank_bins", "median_from_counts", "merge_values", "exact_median", "tile_values", "tile_fix_values", "tile_count_below", "tile_values_in",
            "whole_cloud_estimates"]
 
-#: The bins of the first pass: a value's 64 bits shifted right by this many (28 bits kept: sign,
-#: exponent and 16 bits of mantissa, so a bin spans a relative width of 2^-16 and the second
-#: pass fetches about N / 65,536 values per octave the values spread over).
-MEDIAN_BIN_SHIFT: int = 36
+#: The levels of bins: a value's 64 bits shifted right by these many. The first (16 bits kept:
+#: sign, exponent and 4 bits of mantissa, 16 bins an octave) bounds what a tile reports by the
+#: octaves its values span, whatever its size; the second counts, inside the middle bins of the
+#: first, in bins of 2^-20 of a value; inside its middle bins the distinct values are fetched.
+MEDIAN_SHIFTS: tuple[int, ...] = (48, 32)
 #: A tile's value for a point is exact when the point's k nearest neighbours lie inside the
 #: tile's widened box: its k-th neighbour distance times this is at most the distance to the
 #: box's edge (2: after the duplicate rule, the neighbours' own neighbourhoods count too).
@@ -68,20 +71,32 @@ class TileValues(NamedTuple):
     counts: dict
 
 
-def bin_keys(values: np.ndarray) -> np.ndarray:
+def bin_keys(values: np.ndarray, shift: int = MEDIAN_SHIFTS[0]) -> np.ndarray:
     """(n,) uint64: the bin of each non-negative finite value (n,) (order-preserving)."""
     v = np.ascontiguousarray(values, dtype=np.float64) + 0.0  # -0.0 -> 0.0
-    return v.view(np.uint64) >> np.uint64(MEDIAN_BIN_SHIFT)
+    return v.view(np.uint64) >> np.uint64(shift)
 
 
-def sparse_counts(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The bins (m,) uint64, ascending, and how many of the finite ``values`` (n,) fall in each."""
+def _within(values: np.ndarray, sel) -> np.ndarray:
+    """The finite values, and of them those in bins ``[lo, hi]`` at ``shift`` when ``sel`` is
+    ``(shift, lo, hi)`` (None: all)."""
     v = values[np.isfinite(values)]
-    return np.unique(bin_keys(v), return_counts=True)
+    if sel is None:
+        return v
+    shift, lo, hi = sel
+    b = bin_keys(v, shift)
+    return v[(b >= np.uint64(lo)) & (b <= np.uint64(hi))]
+
+
+def sparse_counts(values: np.ndarray, shift: int = MEDIAN_SHIFTS[0], sel=None) -> tuple[np.ndarray, np.ndarray]:
+    """The bins at ``shift`` (m,) uint64, ascending, and how many of the finite ``values`` (n,)
+    (those in ``sel``, see :func:`_within`) fall in each."""
+    return np.unique(bin_keys(_within(values, sel), shift), return_counts=True)
 
 
 def merge_counts(parts) -> tuple[np.ndarray, np.ndarray]:
-    """Sum sparse bin counts ``[(keys, counts), ...]`` into one ``(keys, counts)``."""
+    """Sum sparse counts ``[(keys, counts), ...]`` into one ``(keys, counts)`` (keys ascending;
+    keys may be bins or values)."""
     parts = [p for p in parts if len(p[0])]
     if not parts:
         return np.zeros(0, np.uint64), np.zeros(0, np.int64)
@@ -91,32 +106,63 @@ def merge_counts(parts) -> tuple[np.ndarray, np.ndarray]:
     return uk, np.bincount(inv.ravel(), weights=counts, minlength=len(uk)).astype(np.int64)
 
 
-def middle_bins(keys: np.ndarray, counts: np.ndarray) -> tuple[int, int, int, int]:
-    """Where the middle ranks of the counted values lie.
+def merge_values(parts) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`merge_counts` of ``[(values, counts), ...]`` (float values)."""
+    parts = [p for p in parts if len(p[0])]
+    if not parts:
+        return np.zeros(0), np.zeros(0, np.int64)
+    return merge_counts(parts)
+
+
+def rank_bins(keys: np.ndarray, counts: np.ndarray, ranks) -> tuple[list, int]:
+    """The bin (key) holding each of the 0-based ``ranks`` (ascending) of the counted values,
+    and how many values lie before the first of those bins."""
+    cum = np.cumsum(counts)
+    at = [int(np.searchsorted(cum, r, side="right")) for r in ranks]
+    below = int(cum[at[0] - 1]) if at[0] else 0
+    return [keys[i] for i in at], below
+
+
+def median_from_counts(values: np.ndarray, counts: np.ndarray, below: int, n: int) -> float:
+    """The median of all ``n`` values from the distinct values (ascending) of the middle bins
+    with their counts, and the count ``below`` of values before them: what ``numpy.median``
+    gives on the whole array."""
+    v0, v1 = rank_bins(values, counts, [(n - 1) // 2 - below, n // 2 - below])[0]
+    return float(np.median(np.array([v0, v1], dtype=np.float64)))
+
+
+def exact_median(first, count_in: Callable, values_in: Callable) -> float:
+    """The median of values spread over tiles, from bounded counts.
+
+    Parameters
+    ----------
+    first : (keys, counts)
+        The merged counts at ``MEDIAN_SHIFTS[0]`` of all values.
+    count_in : callable
+        ``count_in(sel, shift)``: the merged counts at ``shift`` of the values in ``sel``
+        (``(shift, lo, hi)``: the bins ``[lo, hi]`` at a coarser shift).
+    values_in : callable
+        ``values_in(sel)``: the merged distinct values in ``sel`` and their counts.
 
     Returns
     -------
-    lo_key, hi_key : int
-        The bins of ranks ``(n - 1) // 2`` and ``n // 2`` (0-based, ascending values).
-    below : int
-        How many values lie in bins before ``lo_key``.
-    n : int
-        How many values there are in all.
+    float
+        0.0 when there is no value.
     """
+    keys, counts = first
     n = int(counts.sum())
-    cum = np.cumsum(counts)
-    i_lo = int(np.searchsorted(cum, (n - 1) // 2, side="right"))
-    i_hi = int(np.searchsorted(cum, n // 2, side="right"))
-    below = int(cum[i_lo - 1]) if i_lo else 0
-    return int(keys[i_lo]), int(keys[i_hi]), below, n
-
-
-def median_of(values_in_bins: np.ndarray, below: int, n: int) -> float:
-    """The median of all ``n`` values, from those in the middle bins (any order) and the count
-    ``below`` of values before them: what ``numpy.median`` gives on the whole array."""
-    v = np.sort(values_in_bins)
-    pair = np.array([v[(n - 1) // 2 - below], v[n // 2 - below]])
-    return float(np.median(pair))
+    if not n:
+        return 0.0
+    ranks = [(n - 1) // 2, n // 2]
+    (lo, hi), below = rank_bins(keys, counts, ranks)
+    sel = (MEDIAN_SHIFTS[0], int(lo), int(hi))
+    for shift in MEDIAN_SHIFTS[1:]:
+        keys, counts = count_in(sel, shift)
+        (lo, hi), b = rank_bins(keys, counts, [r - below for r in ranks])
+        below += b
+        sel = (shift, int(lo), int(hi))
+    vals, cnts = values_in(sel)
+    return median_from_counts(vals, cnts, below, n)
 
 
 def _margins(P: np.ndarray, grid: TileGrid, key, halo: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -253,12 +299,15 @@ def tile_count_below(root: str, key, name: str, r: float) -> int:
     return int(np.count_nonzero(read_values(root, key, name) < r))
 
 
-def tile_values_in(root: str, key, name: str, lo_key: int, hi_key: int) -> np.ndarray:
-    """The stored finite values ``name`` of tile ``key`` whose bin is in ``[lo_key, hi_key]``."""
-    v = read_values(root, key, name)
-    v = v[np.isfinite(v)]
-    b = bin_keys(v)
-    return v[(b >= np.uint64(lo_key)) & (b <= np.uint64(hi_key))]
+def tile_counts_in(root: str, key, name: str, sel, shift: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sparse_counts` at ``shift`` of tile ``key``'s stored values ``name`` in ``sel``."""
+    return sparse_counts(read_values(root, key, name), shift, sel)
+
+
+def tile_values_in(root: str, key, name: str, sel) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct stored finite values ``name`` of tile ``key`` in ``sel``, ascending, and how
+    many times each occurs."""
+    return np.unique(_within(read_values(root, key, name), sel), return_counts=True)
 
 
 def whole_cloud_estimates(submit: Callable, gather: Callable, root: str, grid: TileGrid, keys: list, halo: float,
@@ -303,13 +352,16 @@ def whole_cloud_estimates(submit: Callable, gather: Callable, root: str, grid: T
         inexact = sum(r.inexact for r in res.values())
         med = {}
         for name in ("h", "rms"):
-            bk, cn = merge_counts([r.counts[name] for r in res.values()])
-            if not len(bk):
-                med[name] = 0.0
-                continue
-            a, b, below, m = middle_bins(bk, cn)
-            got = gather({k: submit(tile_values_in, root, k, f"{tag}-{name}", a, b) for k in keys})
-            med[name] = median_of(np.concatenate(list(got.values())), below, m)
+            stored = f"{tag}-{name}"
+
+            def count_in(sel, shift):
+                return merge_counts(gather({k: submit(tile_counts_in, root, k, stored, sel, shift)
+                                            for k in keys}).values())
+
+            def values_in(sel):
+                return merge_values(gather({k: submit(tile_values_in, root, k, stored, sel) for k in keys}).values())
+
+            med[name] = exact_median(merge_counts([r.counts[name] for r in res.values()]), count_in, values_in)
         return Estimates(med["h"], med["rms"]), n, inexact
 
     first, n, inexact = run_pass(None, "a")
