@@ -50,3 +50,22 @@ def test_canonical_is_the_network_canonical(tmp_path):
     assert stored.betti == mem.betti and np.array_equal(stored.edges, mem.edges)
     sizes, s, e, closed = stored.curve_shapes()
     assert sizes.tolist() == [len(c.points) for c in mem.curves] and closed.tolist() == [c.closed for c in mem.curves]
+
+
+def test_order_by_ends_is_the_sort_by_the_whole_key():
+    """The polyline order compares a prefix first: the order of the sort by every coordinate,
+    with curves that tie on the prefix, short curves and equal curves among them."""
+    from curvenet import network
+
+    rng = np.random.default_rng(2)
+    pts = []
+    for i in range(300):
+        m = int(rng.integers(1, 8))
+        p = rng.integers(0, 2, size=(m, 3)).astype(float)  # many ties
+        if i % 7 == 0 and pts:
+            p = np.vstack([pts[-1][:4], p])  # the same first points as another
+        pts.append(p)
+    ends = rng.integers(-1, 2, size=(300, 1)).repeat(2, axis=1)
+    got = network.order_by_ends(ends, lambda i: pts[i], 6)
+    want = sorted(range(300), key=lambda i: (int(ends[i, 0]), int(ends[i, 1]), tuple(np.round(pts[i], 6).ravel().tolist())))
+    assert got == want

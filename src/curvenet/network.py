@@ -670,8 +670,30 @@ def order_by_ends(ends: np.ndarray, points_of: Callable[[int], np.ndarray], deci
     same = np.concatenate([[0], (E[1:] == E[:-1]).all(axis=1).astype(np.int8), [0]])
     runs = np.diff(same)
     for a, b in zip(np.flatnonzero(runs == 1).tolist(), (np.flatnonzero(runs == -1) + 1).tolist()):
-        out[a:b] = sorted(out[a:b], key=lambda i: (int(ends[i, 0]), int(ends[i, 1]),
-                                                   tuple(np.round(points_of(i), decimals).ravel().tolist())))
+        out[a:b] = _by_polyline(out[a:b], points_of, decimals)
+    return out
+
+
+#: The polyline order compares the first this many rounded coordinates first; only curves
+#: whose first ones tie are compared whole (a key of every coordinate is about 100 bytes a point).
+KEY_PREFIX: int = 12
+
+
+def _by_polyline(ids: list[int], points_of: Callable[[int], np.ndarray], decimals: int) -> list[int]:
+    """``sorted(ids, key=<the tuple of every rounded coordinate of curve i>)``, the same order:
+    sorted by the first :data:`KEY_PREFIX` coordinates (a tuple that differs there differs so
+    in the whole, and a shorter one is a prefix of itself), then the runs that tie there by the
+    whole tuple (both sorts stable)."""
+    head = {i: tuple(np.round(points_of(i).ravel()[:KEY_PREFIX], decimals).tolist()) for i in ids}
+    out = sorted(ids, key=head.__getitem__)
+    j = 0
+    while j < len(out):
+        k = j + 1
+        while k < len(out) and head[out[k]] == head[out[j]]:
+            k += 1
+        if k - j > 1 and len(head[out[j]]) == KEY_PREFIX:  # (shorter: the whole tuples, equal)
+            out[j:k] = sorted(out[j:k], key=lambda i: tuple(np.round(points_of(i), decimals).ravel().tolist()))
+        j = k
     return out
 
 

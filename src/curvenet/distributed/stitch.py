@@ -26,8 +26,9 @@ __all__ = ["PORT_MATCH", "PORT_ANGLE_COS", "FIT_BATCH", "stitch"]
 PORT_MATCH: float = 0.5
 #: ... when their directions are opposite within 30 degrees (cosine).
 PORT_ANGLE_COS: float = float(np.cos(np.radians(30.0)))
-#: The curves fitted here are read, fitted and spilled this many at a time.
-FIT_BATCH: int = 1000
+#: The curves fitted here are read, fitted and spilled a batch of at most this many points
+#: at a time (the fit holds several arrays a point).
+FIT_BATCH: int = 1 << 17
 
 
 def _match_ports(pos: np.ndarray, tan: np.ndarray, tile: np.ndarray, reach: float) -> np.ndarray:
@@ -130,8 +131,7 @@ def stitch(tiles: list[TilePieces], spacing: float, root, *, join: bool = True,
             plans.append(_walk(i, 0, pieces, ends, owner, partner, used, closed=True))
             done.append(False)
     todo = [] if sigma is None else [i for i, f in enumerate(done) if not f]
-    for a in range(0, len(todo), FIT_BATCH):  # (a batch at a time in memory)
-        batch = todo[a:a + FIT_BATCH]
+    for batch in _batches(todo, [plans[i].size for i in todo], FIT_BATCH):  # (a batch at a time in memory)
         for i, c in zip(batch, fit_curves([store.curve(plans[i]) for i in batch], sigma)):
             plans[i] = store.keep(c)
     net = StoredNetwork(np.vstack(nodes).reshape(-1, d), plans, store).canonical()
@@ -139,6 +139,20 @@ def stitch(tiles: list[TilePieces], spacing: float, root, *, join: bool = True,
     net.stats["ports"] = int(len(pos))
     net.stats["fitted_here"] = len(todo)
     return net
+
+
+def _batches(items: list, sizes: list, limit: int):
+    """``items`` in consecutive batches of at most ``limit`` in total size (one item a batch
+    when it is larger alone)."""
+    batch, n = [], 0
+    for it, m in zip(items, sizes):
+        if batch and n + m > limit:
+            yield batch
+            batch, n = [], 0
+        batch.append(it)
+        n += m
+    if batch:
+        yield batch
 
 
 def _walk(i, side, pieces, ends, owner, partner, used, *, closed) -> CurvePlan:
