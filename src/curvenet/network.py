@@ -355,10 +355,7 @@ class CurveNetwork:
             this network's (a curve turned round or a loop rolled gets new ones), so that a
             large network built only to be put in order is not held twice.
         """
-        r = np.round(self.nodes, decimals)
-        order = np.lexsort(r.T[::-1]) if len(r) else np.zeros(0, dtype=np.int64)
-        new_id = np.empty(len(order), dtype=np.int64)
-        new_id[order] = np.arange(len(order))
+        order, new_id = canonical_node_order(self.nodes, decimals)
         curves = []
         for c in self.curves:
             s = None if c.start is None else int(new_id[c.start])
@@ -620,6 +617,16 @@ def betti_numbers(n: int, edges: np.ndarray) -> tuple[int, int]:
     b0 = comps + free_loops
     b1 = len(e) - n + comps + free_loops
     return int(b0), int(b1)
+
+
+def canonical_node_order(nodes: np.ndarray, decimals: int) -> tuple[np.ndarray, np.ndarray]:
+    """The canonical order of nodes (n, d), by their coordinates rounded to ``decimals``: the
+    (n,) order and the (n,) new id of each node."""
+    r = np.round(nodes, decimals)
+    order = np.lexsort(r.T[::-1]) if len(r) else np.zeros(0, dtype=np.int64)
+    new_id = np.empty(len(order), dtype=np.int64)
+    new_id[order] = np.arange(len(order))
+    return order, new_id
 
 
 def needs_points(start: int | None, end: int | None, closed: bool) -> bool:

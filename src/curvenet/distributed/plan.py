@@ -18,7 +18,8 @@ from typing import Iterator
 
 import numpy as np
 
-from ..network import Curve, CurveNetwork, _canonical_curve, betti_numbers, needs_points, order_by_ends
+from ..network import (Curve, CurveNetwork, _canonical_curve, betti_numbers, canonical_node_order, needs_points,
+                       order_by_ends)
 from .scratch import read_piece_rows
 
 __all__ = ["Span", "CurvePlan", "PieceStore", "StoredNetwork", "SPILL", "CANONICAL_DECIMALS"]
@@ -180,10 +181,7 @@ class StoredNetwork:
         curves and points: the curves whose turn depends on their points, loops, are read and
         spilled turned; the others are turned by their plan)."""
         decimals = CANONICAL_DECIMALS
-        r = np.round(self.nodes, decimals)
-        order = np.lexsort(r.T[::-1]) if len(r) else np.zeros(0, dtype=np.int64)
-        new_id = np.empty(len(order), dtype=np.int64)
-        new_id[order] = np.arange(len(order))
+        order, new_id = canonical_node_order(self.nodes, decimals)
         plans = []
         for p in self.plans:
             s = None if p.start is None else int(new_id[p.start])

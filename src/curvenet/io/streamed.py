@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import Curve, _jsonable
-from .atomic import atomic_write, check_output_path
+from .atomic import atomic_write
 from .polylines import inner_counts, polyline_ids, polyline_segments
 
 __all__ = ["STREAMED", "CurveSource", "write_network_streamed", "json_pieces", "ply_pieces"]
@@ -66,8 +66,7 @@ def write_network_streamed(net: CurveSource, path, *, inputs: Iterable = ()) -> 
     ext = Path(path).suffix.lower()
     if ext not in STREAMED:
         raise FormatError(f"{path}: a network is written piece by piece to {' or '.join(STREAMED)} only, not {ext!r}")
-    check_output_path(path, inputs=inputs)
-    pieces = json_pieces(net) if ext == ".json" else ply_pieces(net)
+    pieces = json_pieces(net) if ext == ".json" else ply_pieces(net)  # (atomic_write checks the path first)
     return atomic_write(path, pieces, inputs=inputs)
 
 
