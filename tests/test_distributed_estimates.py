@@ -24,25 +24,49 @@ def test_median_from_bins_is_numpys(n, spread):
         v[: n // 2] = 0.25  # half the values one value (a spacing on an exact grid)
     v[rng.random(n) < 0.01] = np.nan  # (not counted)
     parts = np.array_split(rng.permutation(v), 5)
-    asked = []
+    counted, fetched = [], []
 
     def count_in(sel, shift):
         got = [de.sparse_counts(p, shift, sel) for p in parts]
-        asked.append(sum(len(k) for k, _ in got))
+        counted.append(max(len(k) for k, _ in got))
         return de.merge_counts(got)
 
     def values_in(sel):
         got = [np.unique(de._within(p, sel), return_counts=True) for p in parts]
-        asked.append(sum(len(k) for k, _ in got))
+        fetched.append(sum(len(k) for k, _ in got))
         return de.merge_values(got)
 
     first = de.merge_counts([de.sparse_counts(p) for p in parts])
     got = de.exact_median(first, count_in, values_in)
     assert got == np.median(v[np.isfinite(v)])
-    # what the tiles hand over stays small whatever n (the coarse bins: 16 an octave)
+    # what the tiles hand over stays small whatever n: the coarse bins 16 an octave, then at
+    # most two bins split in 2^8 a level, then the few distinct values of the finest bins
     f = v[np.isfinite(v)]
     octaves = np.log2(f.max() / f.min()) + 2
-    assert len(first[0]) <= 16 * octaves and max(asked) <= max(64, n // 50)
+    levels = np.diff(de.MEDIAN_SHIFTS)
+    assert len(first[0]) <= 16 * octaves
+    assert len(counted) == len(levels) and all(-b <= 8 for b in levels) and max(counted) <= 2 << 8
+    assert max(fetched) <= 64
+
+
+def test_what_a_tile_hands_over_is_bounded_when_the_middle_bin_is_crowded():
+    # a million distinct values inside one coarse bin: each level still splits the middle bins
+    # in at most 2^8 (one level of 2^16 had every tile hand over tens of thousands of counts)
+    rng = np.random.default_rng(3)
+    v = 1.0 + rng.random(1_000_000) * 0.01
+    parts = np.array_split(v, 4)
+    counted = []
+
+    def count_in(sel, shift):
+        got = [de.sparse_counts(p, shift, sel) for p in parts]
+        counted.append(max(len(k) for k, _ in got))
+        return de.merge_counts(got)
+
+    def values_in(sel):
+        return de.merge_values([np.unique(de._within(p, sel), return_counts=True) for p in parts])
+
+    assert de.exact_median(de.merge_counts([de.sparse_counts(p) for p in parts]), count_in, values_in) == np.median(v)
+    assert max(counted) <= 2 << 8
 
 
 def test_bins_sort_as_the_values():

@@ -36,9 +36,12 @@ __all__ = ["MEDIAN_SHIFTS", "REACH_FACTOR", "FIX_MAX_SIDES", "TileValues", "bin_
 
 #: The levels of bins: a value's 64 bits shifted right by these many. The first (16 bits kept:
 #: sign, exponent and 4 bits of mantissa, 16 bins an octave) bounds what a tile reports by the
-#: octaves its values span, whatever its size; the second counts, inside the middle bins of the
-#: first, in bins of 2^-20 of a value; inside its middle bins the distinct values are fetched.
-MEDIAN_SHIFTS: tuple[int, ...] = (48, 32)
+#: octaves its values span, whatever its size; each next level splits the one or two middle
+#: bins of the level before into 2^8, so that a tile reports at most 512 counts a level
+#: (one level of 2^16 had each tile report up to 131,072 counts: 13 million on the client at
+#: 10^8 points); inside the last level's middle bins (2^-20 of a value) the distinct values
+#: are fetched.
+MEDIAN_SHIFTS: tuple[int, ...] = (48, 40, 32)
 #: A tile's value for a point is exact when the point's k nearest neighbours lie inside the
 #: tile's widened box: its k-th neighbour distance times this is at most the distance to the
 #: box's edge (2: after the duplicate rule, the neighbours' own neighbourhoods count too).
