@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..network import Curve, _jsonable
+from . import extension
 from .atomic import atomic_write
 from .polylines import inner_counts, polyline_ids, polyline_segments
 
@@ -64,7 +65,7 @@ def write_network_streamed(net: CurveSource, path, *, inputs: Iterable = ()) -> 
     FormatError
         Another extension (see :data:`STREAMED`).
     """
-    ext = Path(path).suffix.lower()
+    ext = extension(path)
     if ext not in STREAMED:
         raise FormatError(f"{path}: a network is written piece by piece to {' or '.join(STREAMED)} only, not {ext!r}")
     pieces = json_pieces(net) if ext == ".json" else ply_pieces(net)  # (atomic_write checks the path first)
