@@ -14,16 +14,10 @@ from curvenet.distributed import run as drun  # noqa: E402
 from curvenet.methods.robust import estimate  # noqa: E402
 
 
-@pytest.mark.parametrize("n", [1, 2, 7, 1000, 1001, 100_000])
-@pytest.mark.parametrize("spread", ["wide", "ties"])
-def test_median_from_bins_is_numpys(n, spread):
-    rng = np.random.default_rng(n)
-    v = np.exp(rng.normal(size=n) * (8 if spread == "wide" else 1)) * 1e-3
-    v[: n // 3] = v[0]  # ties across a bin
-    if spread == "ties":
-        v[: n // 2] = 0.25  # half the values one value (a spacing on an exact grid)
-    v[rng.random(n) < 0.01] = np.nan  # (not counted)
-    parts = np.array_split(rng.permutation(v), 5)
+def _median_of_parts(parts):
+    """:func:`exact_median` over ``parts`` (as over tiles): the median, the first level's merged
+    counts, and per later level the most counts one part handed over, per fetch the distinct
+    values all parts handed over."""
     counted, fetched = [], []
 
     def count_in(sel, shift):
@@ -37,7 +31,19 @@ def test_median_from_bins_is_numpys(n, spread):
         return de.merge_values(got)
 
     first = de.merge_counts([de.sparse_counts(p) for p in parts])
-    got = de.exact_median(first, count_in, values_in)
+    return de.exact_median(first, count_in, values_in), first, counted, fetched
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 1000, 1001, 100_000])
+@pytest.mark.parametrize("spread", ["wide", "ties"])
+def test_median_from_bins_is_numpys(n, spread):
+    rng = np.random.default_rng(n)
+    v = np.exp(rng.normal(size=n) * (8 if spread == "wide" else 1)) * 1e-3
+    v[: n // 3] = v[0]  # ties across a bin
+    if spread == "ties":
+        v[: n // 2] = 0.25  # half the values one value (a spacing on an exact grid)
+    v[rng.random(n) < 0.01] = np.nan  # (not counted)
+    got, first, counted, fetched = _median_of_parts(np.array_split(rng.permutation(v), 5))
     assert got == np.median(v[np.isfinite(v)])
     # what the tiles hand over stays small whatever n: the coarse bins 16 an octave, then at
     # most two bins split in 2^8 a level, then the few distinct values of the finest bins
@@ -54,18 +60,8 @@ def test_what_a_tile_hands_over_is_bounded_when_the_middle_bin_is_crowded():
     # in at most 2^8 (one level of 2^16 had every tile hand over tens of thousands of counts)
     rng = np.random.default_rng(3)
     v = 1.0 + rng.random(1_000_000) * 0.01
-    parts = np.array_split(v, 4)
-    counted = []
-
-    def count_in(sel, shift):
-        got = [de.sparse_counts(p, shift, sel) for p in parts]
-        counted.append(max(len(k) for k, _ in got))
-        return de.merge_counts(got)
-
-    def values_in(sel):
-        return de.merge_values([np.unique(de._within(p, sel), return_counts=True) for p in parts])
-
-    assert de.exact_median(de.merge_counts([de.sparse_counts(p) for p in parts]), count_in, values_in) == np.median(v)
+    got, _, counted, _ = _median_of_parts(np.array_split(v, 4))
+    assert got == np.median(v)
     assert max(counted) <= 2 << 8
 
 
