@@ -105,6 +105,10 @@ def reconstruct(
             params[key] = _scaled(params[key], k)
     if on_stage is not None and "on_stage" in inspect.signature(fn).parameters:
         params = {**params, "on_stage": on_stage}
+    if compile_pending(len(pts), method=name):  # a first run: its kernels compiled on all cores at once
+        from .methods.robust.warmup import precompile
+
+        precompile()
     t0 = time.perf_counter()
     net = fn(inner, **params)
     _back_to_units(net, name, shift, k)

@@ -479,7 +479,7 @@ def end_portion(P, h, ids, span, m=None):
     if m is None:
         hl = float(h[ids[-1]])
         # arc length summed backwards from the end, only as far as needed (compiled kernel)
-        m = max(int(_k.end_count(P, np.asarray(ids, dtype=np.int64), span * hl)), min(ENDS.min_points, n))
+        m = max(int(_k.end_count(P, np.ascontiguousarray(ids, dtype=np.int64), span * hl)), min(ENDS.min_points, n))
     return P[ids[: -m - 1: -1]]
 
 

@@ -36,7 +36,7 @@ from . import chains, frames, graph, heap, linalg, nodes, shell
 from .nodes import JunctionParams
 
 __all__ = [
-    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
+    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compiled_only", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
     "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS", "PAR_MIN", "spacing", "shell_groups", "csr_union",
     "components", "chain_order", "chain_ends", "end_count", "end_counts", "tangents", "linked_edges",
     "short_links", "junction_nodes", "trim_ends", "untangle", "noisy_tangents", "strand_cuts",
@@ -202,6 +202,9 @@ def compiled_version(f):
 
 _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 
+# the kernels that run compiled inside compiled_only (None: outside it, compiled_for decides)
+_ONLY: contextvars.ContextVar = contextvars.ContextVar("curvenet_robust_only", default=None)
+
 
 @contextmanager
 def compiled_for(n: int, min_points: int | None = None, cached: tuple = ()):
@@ -217,6 +220,18 @@ def compiled_for(n: int, min_points: int | None = None, cached: tuple = ()):
         yield use
     finally:
         _COMPILED.reset(token)
+
+
+@contextmanager
+def compiled_only(names):
+    """Run exactly the kernels ``names`` compiled in the enclosed block, every other one in plain
+    Python, whatever the number of points and numba's cache (same results either way). For the
+    warm-up that compiles a share of the kernels (:mod:`curvenet.methods.robust.warmup`)."""
+    token = _ONLY.set(frozenset(names) if HAVE_NUMBA else frozenset())
+    try:
+        yield
+    finally:
+        _ONLY.reset(token)
 
 
 def _cache_index(name: str) -> str | None:
@@ -305,13 +320,21 @@ def compile_pending(n: int) -> bool:
 
 
 def compiled_active() -> bool:
-    """True when the kernels run compiled here (numba there, see :func:`compiled_for`)."""
+    """True when the kernels run compiled here (numba there, see :func:`compiled_for`; inside
+    :func:`compiled_only`, when some do)."""
+    only = _ONLY.get()
+    if only is not None:
+        return bool(only)
     return HAVE_NUMBA and _COMPILED.get()
 
 
 def _kernel(name: str):
-    """The version of the kernel ``name`` that runs here (see :func:`compiled_for`)."""
+    """The version of the kernel ``name`` that runs here (see :func:`compiled_for` and
+    :func:`compiled_only`)."""
     k = KERNELS[name]
+    only = _ONLY.get()
+    if only is not None:
+        return k.compiled if name in only else k.plain
     return k.compiled if compiled_active() else k.plain
 
 
