@@ -10,6 +10,7 @@ change of a threshold cannot keep a test green by accident.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
 from curvenet.methods.robust.params import RobustParams, Scales
-from curvenet.methods.robust.thresholds import DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
+from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
 from curvenet.methods.robust.topology import Topology
 
 PRM = RobustParams()
@@ -843,6 +844,47 @@ def test_split_branched_chains_leaves_a_branch_that_reaches_no_region():
     # at a corner makes such a branch)
     topo, *_ = _missed_t(left_region=False)
     _assert_untouched(split_branched, topo, run=_run_near)
+
+
+def _t_with_free_left(left, right_end=8):
+    """The T of :func:`_missed_t` whose left side is the points ``left`` (x coordinates, in the
+    tracer's interleaved order with the right side) and ends in no region; its right side runs
+    to region R at ``right_end``."""
+    net = _Net()
+    T = net.region([[0, 10], [0, 11]])
+    R = net.region([[right_end, 0], [right_end + 1, 0]])
+    net.region([[-30, 0]])
+    tooth = [[0, y] for y in range(9, -1, -1)]
+    right = [[x, 0] for x in range(1, right_end)]
+    order = [p for pair in itertools.zip_longest([[x, 0] for x in left], right) for p in pair if p is not None]
+    net.chain(np.array(tooth + order, dtype=float), (T, R))
+    return net.topology(), T, R
+
+
+def test_split_branched_chains_makes_a_free_branch_of_a_sampled_branch_without_region():
+    # the left side 4 samples long (4 h >= min_spur) and sampled every h: a free branch (a twig
+    # whose tip no shell saw), its tip a new free end
+    topo, T, R = _t_with_free_left([-1, -2, -3, -4])
+    n_reg = len(topo.regions)
+    _run_near(split_branched, topo)
+    assert not topo.alive[0]
+    J = n_reg
+    assert topo.P[topo.regions[J]].tolist() == [[0.0, 0.0]] and int(topo.v[J]) == 3
+    far = {}
+    for i, s in topo.incident(J):
+        far[topo.chains[i].ends[1]] = topo.P[topo.chains[i].ids].tolist()
+    assert set(far) == {T, R, n_reg + 1}
+    assert far[n_reg + 1] == [[-1.0, 0.0], [-2.0, 0.0], [-3.0, 0.0], [-4.0, 0.0]]
+    assert len(topo.regions[n_reg + 1]) == 0 and int(topo.v[n_reg + 1]) == 1  # the new free end
+
+
+def test_split_branched_chains_leaves_a_short_or_sparse_branch_without_region():
+    # under min_spur (2 samples, 2 h: the corner noise of the test above) or too few samples
+    # for its length (2 samples over 3.5 h: a hop across a gap): left as it is
+    assert PRM.min_spur > 2 and 2 < BRANCHED.free_fill * 3.5
+    for left in ([-1, -2], [-1.75, -3.5]):
+        topo, *_ = _t_with_free_left(left)
+        _assert_untouched(split_branched, topo, run=_run_near)
 
 
 def test_split_branched_chains_leaves_a_path_whose_order_jumps():

@@ -22,10 +22,13 @@ vertices) and one chain per branch, ordered from the junction outwards
 may keep the chain's regions there. On noise-free input a tree of two or more junctions is read
 too (:func:`cores_plan`): each piece of the tree between two of them (a path) becomes a chain
 joining them, the branches leaving end as above (a chain that ran past a building notch's ground
-corner and on up its vertical past the eave corner). Left as it is: a chain with a branch that reaches no
-region (noise at a sharp corner hangs such a branch of a few samples: the synthetic corners
-under noise 0.3h + x3 lost an exact network to it), or with two branches into one region (a
-chain's end widened by noise where it enters a junction).
+corner and on up its vertical past the eave corner). A branch of the one-junction reading that
+reaches no region is a free branch, its tip a new free end, when it is a sampled curve of
+``min_spur`` spacings or more (:func:`_free_branch`: a twig a few spacings from a junction
+under noise, whose tip no shell saw as an end). Left as it is: a chain with a shorter or sparser
+branch that reaches no region (noise at a sharp corner hangs such a branch of a few samples: the
+synthetic corners under noise 0.3h + x3 lost an exact network to it), or with two branches into
+one region (a chain's end widened by noise where it enters a junction).
 """
 
 from __future__ import annotations
@@ -245,12 +248,28 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
         far = []
         for arm in arms:
             f = _branch_end(topo, sc, c, arm, hl, linked_region)
-            if f < 0:
-                break  # a branch that reaches no region: no end seen there (noise at a corner)
-            far.append(f)
+            if f < 0 and not _free_branch(X, core, arm, arms, hl, prm):
+                break  # a branch that reaches no region, too short or too sparse to be a curve
+            far.append(f)  # (-1: a free branch, its tip a new free end)
         else:
-            if len(set(far)) == len(far):  # (else two branches into one region: a ragged end)
+            ended = [f for f in far if f >= 0]
+            if len(set(ended)) == len(ended):  # (else two branches into one region: a ragged end)
                 topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)
+
+
+def _free_branch(X: np.ndarray, core: list[int], arm: list[int], arms: list[list[int]], hl: float,
+                 prm: RobustParams) -> bool:
+    """Whether the branch ``arm`` (positions in ``X``, ordered outwards from the junction
+    ``core``; one of its branches ``arms``) that reaches no region is a free branch all the
+    same: its polyline from the core's centroid is at least ``min_spur`` spacings ``hl`` long,
+    it holds at least ``BRANCHED.free_fill`` samples per spacing of that length, and every
+    branch of the junction holds ``BRANCHED.free_arm_points`` samples or more (see
+    :class:`.thresholds.Branched`)."""
+    if min(len(a) for a in arms) < BRANCHED.free_arm_points:
+        return False
+    pts = np.r_[X[np.asarray(core)].mean(axis=0)[None], X[np.asarray(arm)]]
+    length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+    return length >= prm.min_spur * hl and len(arm) >= BRANCHED.free_fill * length / hl
 
 
 def _branch_end(topo: Topology, sc: Scales, c, arm: list[int], hl: float, linked_region) -> int:
