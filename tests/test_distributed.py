@@ -555,3 +555,24 @@ def test_a_small_query_runs_on_the_calling_thread(monkeypatch):
     d_few, i_few = neighbors.knn(P, 5, rows=np.arange(neighbors.SERIAL_ROWS - 1))
     assert seen == [-1, 1]
     assert np.array_equal(i_few, i_all[:neighbors.SERIAL_ROWS - 1]) and np.array_equal(d_few, d_all[:len(d_few)])
+
+
+def test_a_first_tiled_run_compiles_the_kernels_once_on_this_machine(client, scene_clean, tmp_path, monkeypatch):
+    # on a LocalCluster whose tiles will compile numba kernels, the client compiles them first
+    # (warmup.precompile, shared out over the cores; its note before), not every worker at once
+    from curvenet.distributed import run
+
+    P, one = scene_clean
+    f = _save(tmp_path, P)
+    calls = []
+    monkeypatch.setattr(run, "precompile", lambda: calls.append("compile"))
+    monkeypatch.setattr(run, "compile_pending", lambda n: calls.append(n) or True)
+    net = reconstruct_tiled(f, tiles=SIDE, origin=(0.0, 0.0), client=client, on_compile=lambda: calls.append("note"))
+    assert calls[1:] == ["note", "compile"] and 0 < calls[0] < len(P)  # (the largest tile's count)
+    assert "compile" in net.stats["time"]
+    calls.clear()
+    monkeypatch.setattr(run, "compile_pending", lambda n: False)  # the kernels in the cache: nothing
+    net = reconstruct_tiled(f, tiles=SIDE, origin=(0.0, 0.0), client=client, on_compile=lambda: calls.append("note"))
+    assert calls == [] and "compile" not in net.stats["time"]
+    # workers that are not this machine's (a client of a running scheduler) compile for themselves
+    assert run._workers_here(client) and not run._workers_here(type("Remote", (), {"cluster": None})())

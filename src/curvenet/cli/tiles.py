@@ -97,7 +97,7 @@ def _run(args) -> int:
     from ..errors import FormatError
     from ..io import WRITERS, check_output_path, extension, write_network
     from ..io.streamed import STREAMED, write_network_streamed
-    from .progress import print_summary
+    from .progress import COMPILE_NOTE, print_summary
 
     inputs = [str(f) for f in expand_inputs([args.input, *args.more_inputs])]
     for out in args.output:  # fail on a bad output before any work
@@ -113,8 +113,10 @@ def _run(args) -> int:
     try:
         if not args.quiet and client.dashboard_link:
             print(f"curvenet: Dask dashboard: {client.dashboard_link}", file=sys.stderr)
+        note = None if args.quiet else (lambda: print(f"curvenet: {COMPILE_NOTE}", file=sys.stderr))
         with tiled_network(inputs, tiles=args.tiles, halo=args.halo, client=client, scratch=args.scratch,
-                           columns=args.columns, drop_nonfinite=args.drop_nonfinite, progress=show) as stored:
+                           columns=args.columns, drop_nonfinite=args.drop_nonfinite, progress=show,
+                           on_compile=note) as stored:
             # .json and .ply are written one curve at a time from the scratch store (the client
             # never holds the points); other formats and the surface need the network in memory
             whole = None

@@ -13,6 +13,8 @@ import numpy as np
 from .._sigint import checkpoint
 from ..errors import CurvenetError, InputError, MethodError, require
 from ..methods.robust import Estimates
+from ..methods.robust.kernels.registry import compile_pending
+from ..methods.robust.warmup import precompile
 from ..network import CurveNetwork
 from . import tasks
 from .grid import TileGrid
@@ -130,7 +132,7 @@ def _input_error(label, exc):
 def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: float | None = None,
                       origin=None, client=None, scheduler: str = "processes", workers: int | None = None,
                       scratch=None, columns=None, drop_nonfinite: bool = False, stitching: bool = True,
-                      progress: bool = False) -> CurveNetwork:
+                      progress: bool = False, on_compile=None) -> CurveNetwork:
     """Reconstruct a curve network tile by tile on Dask (the default method).
 
     The client reads no point: a first pass bins every input chunk into the tiles of an
@@ -163,6 +165,12 @@ def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: 
         Join the pieces across tile faces (False only for tests: every port stays a free end).
     progress : bool
         Show Dask's progress bar of each pass (on a terminal).
+    on_compile : callable, optional
+        Called (no argument) before the kernels' first compile, when this run makes it: on a
+        LocalCluster whose tiles will compile numba kernels (none in numba's cache yet), they are
+        compiled once here, shared out over the cores (:func:`curvenet.methods.robust.warmup.precompile`),
+        before any worker needs them; for a progress note. (Workers elsewhere compile for
+        themselves on their first tile.)
 
     Returns
     -------
@@ -180,7 +188,7 @@ def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: 
     """
     with tiled_network(inputs, tiles=tiles, halo=halo, origin=origin, client=client, scheduler=scheduler,
                        workers=workers, scratch=scratch, columns=columns, drop_nonfinite=drop_nonfinite,
-                       stitching=stitching, progress=progress) as stored:
+                       stitching=stitching, progress=progress, on_compile=on_compile) as stored:
         return stored.network()
 
 
@@ -188,7 +196,7 @@ def reconstruct_tiled(inputs, *, tiles: float | Literal["auto"] = "auto", halo: 
 def tiled_network(inputs, *, tiles: float | Literal["auto"] = "auto", halo: float | None = None,
                   origin=None, client=None, scheduler: str = "processes", workers: int | None = None,
                   scratch=None, columns=None, drop_nonfinite: bool = False, stitching: bool = True,
-                  progress: bool = False) -> Iterator[StoredNetwork]:
+                  progress: bool = False, on_compile=None) -> Iterator[StoredNetwork]:
     """:func:`reconstruct_tiled`, the network's curve points left in the scratch store.
 
     A context manager: inside it the :class:`~.plan.StoredNetwork` reads each curve from the
@@ -213,7 +221,8 @@ def tiled_network(inputs, *, tiles: float | Literal["auto"] = "auto", halo: floa
     root = None
     try:
         root = new_root(scratch)
-        stored = _run(client, files, chunks, root, tiles, halo, origin, columns, drop_nonfinite, stitching, progress)
+        stored = _run(client, files, chunks, root, tiles, halo, origin, columns, drop_nonfinite, stitching, progress,
+                      on_compile)
         if own_client:  # (the cluster is not needed to read the store)
             own_client = False
             _close(client)
@@ -239,7 +248,17 @@ def _progress(futures, show: bool):
         progress(list(futures), notebook=False)
 
 
-def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_nonfinite, stitching, show):
+def _workers_here(client) -> bool:
+    """Whether the workers of ``client`` run on this machine and read its numba cache: a
+    LocalCluster's (its processes inherit this environment). Workers elsewhere compile for
+    themselves, each on its first tile, as before."""
+    from distributed import LocalCluster
+
+    return isinstance(getattr(client, "cluster", None), LocalCluster)
+
+
+def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_nonfinite, stitching, show,
+         on_compile=None):
     tm = {}
     t0 = time.perf_counter()
     # 1. scan: counts, dimension, bounds (offsets of whole-read files follow)
@@ -285,6 +304,15 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
             tile_files.setdefault(key, set()).add(chunks[i].path)
     keys = sorted(tile_count)
     tm["bin"] = time.perf_counter() - t1
+
+    # the kernels' first compile: once, shared out over this machine's cores, before any
+    # worker needs them (else every worker of a LocalCluster compiles all of them at once)
+    t1 = time.perf_counter()
+    if _workers_here(client) and compile_pending(max(tile_count.values(), default=0)):
+        if on_compile is not None:
+            on_compile()
+        precompile()
+        tm["compile"] = time.perf_counter() - t1
 
     # 3. the whole-cloud estimates: from whole tiles spread over the cloud (all of it when it
     #    is small), then, for a larger cloud, exactly from every tile (see .estimates)
