@@ -412,13 +412,13 @@ imported = time.perf_counter() - t
 first_call = {}
 shared = {"seconds": 0.0}
 if sys.argv[3] == "serial":  # the compile as before warmup: each kernel on its first use, one core
-    W.precompile = lambda processes=None: None
+    W.precompile = lambda processes=None, names=None: None
 else:
     _precompile = W.precompile
 
-    def precompile(processes=None):
+    def precompile(processes=None, names=None):
         t = time.perf_counter()
-        _precompile(processes)
+        _precompile(processes, names)
         shared["seconds"] += time.perf_counter() - t
 
     W.precompile = precompile

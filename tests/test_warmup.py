@@ -81,7 +81,7 @@ def test_an_unknown_kernel_name_is_refused(capsys):
 
 def test_the_first_run_starts_with_the_shared_compile(monkeypatch):
     calls = []
-    monkeypatch.setattr(warmup, "precompile", lambda processes=None: calls.append(processes))
+    monkeypatch.setattr(warmup, "precompile", lambda processes=None, names=None: calls.append(names))
     R = sys.modules["curvenet.reconstruct"]  # (the module: the package's name is the function)
 
     pts = synth.sample(synth.model("cube"), rng=0)[0]
@@ -90,7 +90,69 @@ def test_the_first_run_starts_with_the_shared_compile(monkeypatch):
     assert calls == []
     monkeypatch.setattr(R, "compile_pending", lambda n, method="auto": True)
     curvenet.reconstruct(pts)
-    assert calls == [None]
+    assert calls == [warmup.COMMON]  # (the kernels of noisy input wait for their first use)
+    calls.clear()
+    curvenet.reconstruct(pts, method="emst")  # another method: no compile of the robust kernels
+    assert calls == []
+
+
+def test_the_groups_split_the_kernels():
+    assert set(warmup.COMMON) | set(warmup.NOISY_ONLY) == set(KR.KERNELS)
+    assert not set(warmup.COMMON) & set(warmup.NOISY_ONLY)
+    assert set(KR.COMPILE_MARKERS) <= set(warmup.COMMON)
+
+
+def test_a_noise_free_run_calls_no_kernel_of_noisy_input(monkeypatch):
+    # (else a noise-free first run would wait for their compile)
+    called = set()
+    kernel = KR._kernel
+    monkeypatch.setattr(KR, "_kernel", lambda name: called.add(name) or kernel(name))
+    clean, noisy = warmup.warm_clouds()
+    with KR.compiled_only([]):  # (plain kernels: nothing compiles)
+        curvenet.reconstruct(clean)
+    assert called and not called & set(warmup.NOISY_ONLY), sorted(called & set(warmup.NOISY_ONLY))
+    with KR.compiled_only([]):
+        curvenet.reconstruct(noisy)
+    assert set(warmup.NOISY_ONLY) <= called
+
+
+def test_the_kernels_of_noisy_input_compile_together_on_first_use(monkeypatch):
+    calls = []
+    monkeypatch.setattr(warmup, "precompile", lambda processes=None, names=None: calls.append(names))
+    cached = {"now": False}
+    monkeypatch.setattr(KR, "_in_cache", lambda names: cached["now"])
+    warmup.on_first_use("tangents")  # a kernel every run calls: compiled before the run
+    assert calls == []
+    warmup.on_first_use("strand_cuts")
+    assert calls == [warmup.NOISY_ONLY]
+    cached["now"] = True
+    warmup.on_first_use("noisy_tangents")  # in the cache now: loaded, nothing compiled
+    assert calls == [warmup.NOISY_ONLY]
+
+
+def test_the_first_use_hook_runs_before_a_kernel_s_first_compiled_call(monkeypatch):
+    # a stand-in for a compiled kernel that has not run yet in this process (no signatures)
+    def fake(*args):
+        return "ran"
+
+    fake.signatures = []
+    k = KR.KERNELS["end_count"]
+    monkeypatch.setattr(KR, "KERNELS", {**KR.KERNELS, "end_count": KR.Kernel(k.plain, fake, ())})
+    monkeypatch.setattr(KR, "compiled_active", lambda: True)
+    monkeypatch.setattr(KR, "HAVE_NUMBA", True)
+    seen = []
+    with KR.first_use_hook(seen.append):
+        assert KR._run("end_count", ()) == "ran"
+        assert seen == ["end_count"]
+        with KR.compiled_only(["end_count"]):  # the warm-up's own runs: no hook
+            KR._run("end_count", ())
+        assert seen == ["end_count"]
+        fake.signatures = ["loaded"]  # it ran once: no hook any more
+        KR._run("end_count", ())
+        assert seen == ["end_count"]
+    fake.signatures = []
+    KR._run("end_count", ())  # outside the block: no hook
+    assert seen == ["end_count"]
 
 
 def _cached(cache, names):

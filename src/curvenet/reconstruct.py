@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import inspect
 import time
@@ -105,12 +106,17 @@ def reconstruct(
             params[key] = _scaled(params[key], k)
     if on_stage is not None and "on_stage" in inspect.signature(fn).parameters:
         params = {**params, "on_stage": on_stage}
-    if compile_pending(len(pts), method=name):  # a first run: its kernels compiled on all cores at once
-        from .methods.robust.warmup import precompile
+    hook = contextlib.nullcontext()
+    if name == "robust":  # a first run: its kernels compiled on all cores at once (warmup)
+        from .methods.robust.kernels.registry import first_use_hook
+        from .methods.robust.warmup import COMMON, on_first_use, precompile
 
-        precompile()
+        if compile_pending(len(pts), method=name):
+            precompile(names=COMMON)
+        hook = first_use_hook(on_first_use)  # (the kernels of noisy input: when first needed)
     t0 = time.perf_counter()
-    net = fn(inner, **params)
+    with hook:
+        net = fn(inner, **params)
     _back_to_units(net, name, shift, k)
     net.parameters.setdefault("method", name)
     net.parameters["method"] = name

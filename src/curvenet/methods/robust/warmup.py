@@ -9,7 +9,9 @@ one included: each process runs the method on two small built-in clouds
 (:func:`warm_clouds`, one noise-free and one noisy, which between them call every kernel) with
 the kernels of its share compiled and every other kernel in plain Python
 (:func:`~.kernels.registry.compiled_only`). The kernels land in numba's disk cache, where the
-run that follows loads them. Nothing here changes a result: a kernel gives the same bits
+run that follows loads them. A first run compiles the kernels every run calls (:data:`COMMON`)
+before it starts, and those of noisy input only (:data:`NOISY_ONLY`) when it first needs one of
+them (:func:`on_first_use`): a noise-free first run does not wait for them. Nothing here changes a result: a kernel gives the same bits
 compiled or not.
 
 ``python -m curvenet.methods.robust.warmup NAME ...`` compiles the kernels ``NAME`` (the
@@ -29,7 +31,8 @@ import numpy as np
 
 from .kernels import registry
 
-__all__ = ["COMPILE_SECONDS", "MAX_PROCESSES", "SPACING", "NOISE", "warm_clouds", "shares", "warm", "precompile"]
+__all__ = ["COMPILE_SECONDS", "MAX_PROCESSES", "SPACING", "NOISE", "NOISY_ONLY", "COMMON", "warm_clouds", "shares",
+           "warm", "precompile", "on_first_use"]
 
 #: Seconds numba took to compile each kernel on its first call, at the first run on this
 #: project's 2-core reference machine (``python benchmarks/startup.py --part compile``,
@@ -42,6 +45,16 @@ COMPILE_SECONDS = {
     "spacing": 0.97, "trim_ends": 0.82, "envelope_solve": 0.69, "components": 0.67, "end_counts": 0.49,
     "untangle": 0.45, "csr_union": 0.43, "short_links": 0.39, "vote_agreement": 0.21, "end_count": 0.1,
 }
+
+#: The kernels that only noisy input calls (the strand test's noisy tangents and link cuts, the
+#: curve fit's solve; the tangent vote runs on noise-free input too): about 22 s of the
+#: compile's 55 (:data:`COMPILE_SECONDS`). A run compiles them, shared out, on the first call
+#: of one of them (:func:`on_first_use`), so a noise-free first run does not wait for them.
+NOISY_ONLY = ("noisy_tangents", "strand_cuts", "envelope_solve")
+
+#: The other kernels: those a run on enough points calls whatever its input (and ``untangle``,
+#: which some call), compiled before the run when it will compile (:func:`precompile`).
+COMMON = tuple(k for k in registry.KERNELS if k not in NOISY_ONLY)
 
 #: weight of a kernel that :data:`COMPILE_SECONDS` does not list
 DEFAULT_SECONDS = 1.0
@@ -147,8 +160,9 @@ def _child_env() -> dict:
     return env
 
 
-def precompile(processes: int | None = None) -> None:
-    """Compile every kernel into numba's disk cache, :func:`shares` of them in parallel.
+def precompile(processes: int | None = None, names: Iterable[str] | None = None) -> None:
+    """Compile the kernels ``names`` (default: all) into numba's disk cache, :func:`shares` of
+    them in parallel.
 
     The heaviest share is compiled in this process, each other one by a child process
     (``python -m curvenet.methods.robust.warmup``, numba's cache settings inherited from the
@@ -161,11 +175,13 @@ def precompile(processes: int | None = None) -> None:
     processes : int, optional
         Processes in all (this one included); default: the cores this process may use, at most
         :data:`MAX_PROCESSES`.
+    names : iterable of str, optional
+        Kernel names (:data:`~.kernels.registry.KERNELS`); default: all of them.
     """
     if not registry.HAVE_NUMBA:
         return
     n = min(_cores(), MAX_PROCESSES) if processes is None else max(1, int(processes))
-    mine, *others = shares(n)
+    mine, *others = shares(n, names)
     children = []
     env = _child_env()
     for share in others:
@@ -184,6 +200,14 @@ def precompile(processes: int | None = None) -> None:
                 child.kill()
                 child.wait()
                 raise
+
+
+def on_first_use(name: str) -> None:
+    """The hook a run installs (:func:`~.kernels.registry.first_use_hook`): before the first
+    compiled call of a kernel of :data:`NOISY_ONLY`, when numba's cache lacks one of them, they
+    are compiled together, shared out over the cores (:func:`precompile`)."""
+    if name in NOISY_ONLY and not registry._in_cache(NOISY_ONLY):
+        precompile(names=NOISY_ONLY)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -36,7 +36,7 @@ from . import chains, frames, graph, heap, linalg, nodes, shell
 from .nodes import JunctionParams
 
 __all__ = [
-    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compiled_only", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
+    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compiled_only", "first_use_hook", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
     "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS", "PAR_MIN", "spacing", "shell_groups", "csr_union",
     "components", "chain_order", "chain_ends", "end_count", "end_counts", "tangents", "linked_edges",
     "short_links", "junction_nodes", "trim_ends", "untangle", "noisy_tangents", "strand_cuts",
@@ -205,6 +205,9 @@ _COMPILED = contextvars.ContextVar("curvenet_robust_compiled", default=True)
 # the kernels that run compiled inside compiled_only (None: outside it, compiled_for decides)
 _ONLY: contextvars.ContextVar = contextvars.ContextVar("curvenet_robust_only", default=None)
 
+# called with a kernel's name before its first compiled run in this process (see first_use_hook)
+_FIRST_USE: contextvars.ContextVar = contextvars.ContextVar("curvenet_robust_first_use", default=None)
+
 
 @contextmanager
 def compiled_for(n: int, min_points: int | None = None, cached: tuple = ()):
@@ -232,6 +235,19 @@ def compiled_only(names):
         yield
     finally:
         _ONLY.reset(token)
+
+
+@contextmanager
+def first_use_hook(hook):
+    """Call ``hook(name)`` in the enclosed block before a kernel runs compiled for the first time
+    in this process (numba then loads or compiles it), outside the block that holds Ctrl-C, and
+    not inside :func:`compiled_only` (the warm-up's own runs). For the shared compile of the
+    kernels that only some inputs call (:func:`curvenet.methods.robust.warmup.on_first_use`)."""
+    token = _FIRST_USE.set(hook)
+    try:
+        yield
+    finally:
+        _FIRST_USE.reset(token)
 
 
 def _cache_index(name: str) -> str | None:
@@ -356,6 +372,10 @@ def _threads_for(name: str, n: int):
 def _run(name: str, args: tuple, n: int = 0):
     """Run the kernel ``name`` on ``args`` (its groups appended), ``n`` points for
     :func:`_threads_for`; Ctrl-C waits for it (see curvenet._sigint)."""
+    hook = _FIRST_USE.get()
+    if hook is not None and _ONLY.get() is None and compiled_active() and not getattr(
+            KERNELS[name].compiled, "signatures", None):
+        hook(name)
     with held(), _threads_for(name, n):
         return _kernel(name)(*args, *KERNELS[name].groups)
 
