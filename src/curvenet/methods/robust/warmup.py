@@ -206,7 +206,7 @@ def on_first_use(name: str) -> None:
     """The hook a run installs (:func:`~.kernels.registry.first_use_hook`): before the first
     compiled call of a kernel of :data:`NOISY_ONLY`, when numba's cache lacks one of them, they
     are compiled together, shared out over the cores (:func:`precompile`)."""
-    if name in NOISY_ONLY and not registry._in_cache(NOISY_ONLY):
+    if name in NOISY_ONLY and not registry.in_cache(NOISY_ONLY):
         precompile(names=NOISY_ONLY)
 
 

@@ -36,7 +36,7 @@ from . import chains, frames, graph, heap, linalg, nodes, shell
 from .nodes import JunctionParams
 
 __all__ = [
-    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compiled_only", "first_use_hook", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
+    "Kernel", "KERNELS", "HAVE_NUMBA", "compiled_for", "compiled_only", "first_use_hook", "in_cache", "compile_pending", "compiled_active", "NUMBA_MIN_POINTS",
     "NUMBA_MIN_POINTS_NOISY", "STRAND_KERNELS", "PAR_MIN", "spacing", "shell_groups", "csr_union",
     "components", "chain_order", "chain_ends", "end_count", "end_counts", "tangents", "linked_edges",
     "short_links", "junction_nodes", "trim_ends", "untangle", "noisy_tangents", "strand_cuts",
@@ -295,6 +295,12 @@ def _loads_from_cache(dispatcher) -> bool | None:
     except Exception:  # an unreadable index: numba would compile
         return False
     return any(len(key) > 1 and key[1] == magic for key in index)
+
+
+def in_cache(names) -> bool:
+    """Whether numba's disk cache holds every kernel of ``names`` for this numba and source
+    (see :func:`_in_cache`)."""
+    return _in_cache(names)
 
 
 def _index_newer_than_source(name: str) -> bool:
