@@ -11,8 +11,8 @@ the kernels of its share compiled and every other kernel in plain Python
 (:func:`~.kernels.registry.compiled_only`). The kernels land in numba's disk cache, where the
 run that follows loads them. A first run compiles the kernels every run calls (:data:`COMMON`)
 before it starts, and those of noisy input only (:data:`NOISY_ONLY`) when it first needs one of
-them (:func:`on_first_use`): a noise-free first run does not wait for them. Nothing here changes a result: a kernel gives the same bits
-compiled or not.
+them (:func:`on_first_use`): a noise-free first run does not wait for them. Nothing here
+changes a result: a kernel gives the same bits compiled or not.
 
 ``python -m curvenet.methods.robust.warmup NAME ...`` compiles the kernels ``NAME`` (the
 processes that :func:`precompile` starts).
