@@ -564,12 +564,19 @@ def test_a_first_tiled_run_compiles_the_kernels_once_on_this_machine(client, sce
 
     P, one = scene_clean
     f = _save(tmp_path, P)
+    from curvenet.methods.robust import warmup
+
     calls = []
-    monkeypatch.setattr(run, "precompile", lambda: calls.append("compile"))
+    monkeypatch.setattr(run, "precompile", lambda names=None: calls.append(names))
     monkeypatch.setattr(run, "compile_pending", lambda n: calls.append(n) or True)
     net = reconstruct_tiled(f, tiles=SIDE, origin=(0.0, 0.0), client=client, on_compile=lambda: calls.append("note"))
-    assert calls[1:] == ["note", "compile"] and 0 < calls[0] < len(P)  # (the largest tile's count)
+    # (a noise-free scene: the kernels of noisy input are left out)
+    assert calls[1:] == ["note", warmup.COMMON] and 0 < calls[0] < len(P)  # (the largest tile's count)
     assert "compile" in net.stats["time"]
+    calls.clear()
+    monkeypatch.setattr(run, "noise_free", lambda sigma, hmed: False)  # as the estimates of a noisy cloud
+    reconstruct_tiled(f, tiles=SIDE, origin=(0.0, 0.0), client=client, on_compile=lambda: calls.append("note"))
+    assert calls[1:] == ["note", warmup.COMMON, warmup.NOISY_ONLY]
     calls.clear()
     monkeypatch.setattr(run, "compile_pending", lambda n: False)  # the kernels in the cache: nothing
     net = reconstruct_tiled(f, tiles=SIDE, origin=(0.0, 0.0), client=client, on_compile=lambda: calls.append("note"))

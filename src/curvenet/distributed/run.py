@@ -14,7 +14,8 @@ from .._sigint import checkpoint
 from ..errors import CurvenetError, InputError, MethodError, require
 from ..methods.robust import Estimates
 from ..methods.robust.kernels.registry import compile_pending
-from ..methods.robust.warmup import precompile
+from ..methods.robust.frames import noise_free
+from ..methods.robust.warmup import COMMON, NOISY_ONLY, precompile
 from ..network import CurveNetwork
 from . import tasks
 from .grid import TileGrid
@@ -307,11 +308,13 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
 
     # the kernels' first compile: once, shared out over this machine's cores, before any
     # worker needs them (else every worker of a LocalCluster compiles all of them at once)
+    # (those every run calls here; those of noisy input only once the estimates say noisy)
     t1 = time.perf_counter()
-    if _workers_here(client) and compile_pending(max(tile_count.values(), default=0)):
+    compiling = _workers_here(client) and compile_pending(max(tile_count.values(), default=0))
+    if compiling:
         if on_compile is not None:
             on_compile()
-        precompile()
+        precompile(names=COMMON)
         tm["compile"] = time.perf_counter() - t1
 
     # 3. the whole-cloud estimates: from whole tiles spread over the cloud (all of it when it
@@ -343,6 +346,10 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     if len(sample) == len(keys):  # (the estimates of one task on every point: the halo from them)
         H = halo_width(est) if halo is None else float(halo)
     tm["estimate"] = time.perf_counter() - t1
+    if compiling and not noise_free(est.sigma, est.hmed):  # (a noisy cloud: its own kernels too)
+        t1 = time.perf_counter()
+        precompile(names=NOISY_ONLY)
+        tm["compile"] += time.perf_counter() - t1
 
     # 4. one task per tile that owns points
     t1 = time.perf_counter()
