@@ -392,13 +392,6 @@ def _steps(xyz: Path, out: Path, env: dict) -> None:
 
 
 # ------------------------------------------------------------------------------ first run
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return os.cpu_count() or 1
-
-
 _FIRST = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
@@ -459,6 +452,8 @@ def first_run(n: int, tmp: Path) -> dict:
     ``curvenet.methods.robust.warmup.precompile``), then with that switched off (each kernel
     compiled on its first use, one after the other: the first call of each kernel is its
     compile), then with the cache filled."""
+    from curvenet.methods.robust.warmup import cores
+
     P = cloud(n)
     floor = knn_floor(P)
     print(f"reference: k=16 cKDTree query on the {len(P):,} points {floor:.3f} s")
@@ -480,7 +475,7 @@ def first_run(n: int, tmp: Path) -> dict:
               f"({res['warm'] / floor:.2f} x query): {ratio:.2f} x warm, target {FIRST_RUN_TARGET}: {flag}; "
               f"same network: {res['same']}, {res['nodes']:,} nodes")
         if res["precompile"]:
-            print(f"    of which the shared compile (warmup.precompile, {_cores()} cores): {res['precompile']:.2f} s; "
+            print(f"    of which the shared compile (warmup.precompile, {cores()} cores): {res['precompile']:.2f} s; "
                   "the kernels of this process's share are timed on the warm-up clouds, the others loaded")
         ks = sorted(res["kernels"].items(), key=lambda kv: -kv[1])
         print(f"    first call of each kernel ({sum(res['kernels'].values()):.2f} s in all): "

@@ -574,7 +574,7 @@ def test_a_first_tiled_run_compiles_the_kernels_once_on_this_machine(client, sce
     assert calls[1:] == ["note", warmup.COMMON] and 0 < calls[0] < len(P)  # (the largest tile's count)
     assert "compile" in net.stats["time"]
     calls.clear()
-    monkeypatch.setattr(run, "noise_free", lambda sigma, hmed: False)  # as the estimates of a noisy cloud
+    monkeypatch.setattr(run.Estimates, "clean", property(lambda self: False))  # as the estimates of a noisy cloud
     reconstruct_tiled(f, tiles=SIDE, origin=(0.0, 0.0), client=client, on_compile=lambda: calls.append("note"))
     assert calls[1:] == ["note", warmup.COMMON, warmup.NOISY_ONLY]
     calls.clear()

@@ -186,3 +186,29 @@ def test_precompile_runs_the_shares_in_parallel_processes(tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
     assert _cached(cache, ["end_count", "csr_union", "components"]) == [True, True, False]
+
+
+def test_an_interrupted_precompile_kills_its_children(monkeypatch):
+    # Ctrl-C during this process's own share: every child is killed, none waited for first
+    class Child:
+        made = []
+
+        def __init__(self, *a, **k):
+            self.killed = False
+            Child.made.append(self)
+
+        def kill(self):
+            self.killed = True
+
+        def wait(self):
+            assert self.killed, "waited for a child that was not killed"
+
+    def interrupted(names):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(KR, "HAVE_NUMBA", True)
+    monkeypatch.setattr(warmup.subprocess, "Popen", Child)
+    monkeypatch.setattr(warmup, "warm", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        warmup.precompile(processes=3)
+    assert len(Child.made) == 2 and all(c.killed for c in Child.made)

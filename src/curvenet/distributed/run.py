@@ -14,7 +14,6 @@ from .._sigint import checkpoint
 from ..errors import CurvenetError, InputError, MethodError, require
 from ..methods.robust import Estimates
 from ..methods.robust.kernels.registry import compile_pending
-from ..methods.robust.frames import noise_free
 from ..methods.robust.warmup import COMMON, NOISY_ONLY, precompile
 from ..network import CurveNetwork
 from . import tasks
@@ -346,7 +345,7 @@ def _run(client, files, chunks, root: Path, tiles, halo, origin, columns, drop_n
     if len(sample) == len(keys):  # (the estimates of one task on every point: the halo from them)
         H = halo_width(est) if halo is None else float(halo)
     tm["estimate"] = time.perf_counter() - t1
-    if compiling and not noise_free(est.sigma, est.hmed):  # (a noisy cloud: its own kernels too)
+    if compiling and not est.clean:  # (a noisy cloud: its own kernels too)
         t1 = time.perf_counter()
         precompile(names=NOISY_ONLY)
         tm["compile"] += time.perf_counter() - t1

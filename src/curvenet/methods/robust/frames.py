@@ -20,7 +20,7 @@ from .params import Estimates, RobustParams
 from .thresholds import DEFAULTS, NUMERIC, SPACING, TANGENTS
 
 __all__ = ["Neighbours", "Tangents", "Frames", "neighbours", "neighbours_and_distances", "frames", "duplicates", "local_spacing", "tangents",
-           "point_tangents", "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "isolated", "lex_order", "pair_distances", "noise_free"]
+           "point_tangents", "retry_tangents", "vote_tangents", "noisy_tangents", "coincident", "isolated", "lex_order", "pair_distances"]
 
 
 class Neighbours(NamedTuple):
@@ -165,17 +165,11 @@ def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None, tg: Tang
         hmed = median_spacing(h)
     else:
         sig, hmed = float(est.sigma), float(est.hmed)
-    clean = noise_free(sig, hmed)
+    clean = Estimates(hmed, sig).clean
     if clean:
         t, lin = retry_tangents(P, idx, h, t, lin, gain)
     t, lin = vote_tangents(t, lin, idx, m=min(TANGENTS.vote_m if clean else TANGENTS.vote_m_noisy, idx.shape[1]))
     return Frames(t, lin, sig, hmed, bool(clean))
-
-
-def noise_free(sigma: float, hmed: float) -> bool:
-    """Whether input of noise ``sigma`` and median spacing ``hmed`` counts as noise-free: the
-    noise under ``SPACING.dedup_noise`` median spacings (:func:`frames` decides so)."""
-    return bool(sigma < SPACING.dedup_noise * hmed)
 
 
 def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:

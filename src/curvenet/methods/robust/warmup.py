@@ -32,7 +32,7 @@ import numpy as np
 from .kernels import registry
 
 __all__ = ["COMPILE_SECONDS", "MAX_PROCESSES", "SPACING", "NOISE", "NOISY_ONLY", "COMMON", "warm_clouds", "shares",
-           "warm", "precompile", "on_first_use"]
+           "warm", "cores", "precompile", "on_first_use"]
 
 #: Seconds numba took to compile each kernel on its first call, at the first run on this
 #: project's 2-core reference machine (``python benchmarks/startup.py --part compile``,
@@ -139,7 +139,7 @@ def warm(names: Iterable[str]) -> None:
             reconstruct_robust(P)
 
 
-def _cores() -> int:
+def cores() -> int:
     """The cores this process may run on."""
     try:
         return len(os.sched_getaffinity(0))
@@ -180,7 +180,7 @@ def precompile(processes: int | None = None, names: Iterable[str] | None = None)
     """
     if not registry.HAVE_NUMBA:
         return
-    n = min(_cores(), MAX_PROCESSES) if processes is None else max(1, int(processes))
+    n = min(cores(), MAX_PROCESSES) if processes is None else max(1, int(processes))
     mine, *others = shares(n, names)
     children = []
     env = _child_env()
@@ -192,14 +192,14 @@ def precompile(processes: int | None = None, names: Iterable[str] | None = None)
             pass
     try:
         warm(mine)
-    finally:
         for child in children:
-            try:
-                child.wait()
-            except BaseException:  # Ctrl-C while waiting: no child left behind
-                child.kill()
-                child.wait()
-                raise
+            child.wait()
+    except BaseException:  # Ctrl-C (or a failure) here: no child left behind, none waited for
+        for child in children:
+            child.kill()
+        for child in children:
+            child.wait()
+        raise
 
 
 def on_first_use(name: str) -> None:
