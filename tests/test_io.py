@@ -211,8 +211,9 @@ def test_json_fast_and_plain_writers_agree(monkeypatch, net):
 
 
 def test_atomic_write_encodes_text_in_pieces(tmp_path, monkeypatch):
-    """A ``str`` is written (and hashed, inside all_or_nothing) encoded a few characters at a
-    time: the file holds its UTF-8 bytes, multi-byte characters across piece boundaries too."""
+    """A ``str`` is written encoded a few characters at a time: the file holds its UTF-8 bytes,
+    multi-byte characters across piece boundaries too; inside all_or_nothing a second write of
+    the same path is compared with the first by its bytes (no temporary file left after)."""
     from curvenet.io import atomic
     from curvenet.io.atomic import all_or_nothing
 
@@ -227,3 +228,4 @@ def test_atomic_write_encodes_text_in_pieces(tmp_path, monkeypatch):
             with pytest.raises(OutputError):
                 atomic_write(tmp_path / "b.txt", text + "!")
         assert (tmp_path / "b.txt").read_bytes() == text.encode("utf-8")
+        assert sorted(q.name for q in tmp_path.iterdir()) == ["a.txt", "b.txt"]

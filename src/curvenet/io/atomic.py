@@ -8,7 +8,6 @@ the block ends without error, and every temporary file is removed otherwise.
 from __future__ import annotations
 
 import contextvars
-import hashlib
 import os
 import tempfile
 from contextlib import contextmanager
@@ -114,20 +113,20 @@ def check_outputs(outputs, *, inputs=()) -> None:
 
 
 class _Batch:
-    """Temporary files written and waiting for their renames: target -> (temporary, digest)."""
+    """Temporary files written and waiting for their renames: target -> (temporary, target)."""
 
     def __init__(self):
-        self.staged: dict[Path, tuple[str, bytes, Path]] = {}
+        self.staged: dict[Path, tuple[str, Path]] = {}
 
     def discard(self) -> None:
-        for tmp, _, _ in self.staged.values():
+        for tmp, _ in self.staged.values():
             _unlink(tmp)
         self.staged.clear()
 
     def commit(self) -> None:
         checkpoint()  # a signal before the renames: no file changes
         finishing()  # a signal from here on: every file changes, and the run ends as done
-        for key, (tmp, _, p) in list(self.staged.items()):
+        for key, (tmp, p) in list(self.staged.items()):
             try:
                 os.replace(tmp, p)
             except OSError as exc:
@@ -183,19 +182,27 @@ def _encoded(data) -> Iterator[bytes]:
             yield from _encoded(piece)
 
 
-def _write_temp(p: Path, data) -> tuple[str, bytes]:
+def _same_bytes(a: str, b: str) -> bool:
+    """Whether the files ``a`` and ``b`` hold the same bytes (read back, not a digest)."""
+    import filecmp
+
+    try:
+        return filecmp.cmp(a, b, shallow=False)
+    except OSError as exc:
+        raise OutputError(f"{b}: cannot read back a temporary output ({exc.strerror or exc})") from None
+
+
+def _write_temp(p: Path, data) -> str:
     """Write ``data`` (``str`` as UTF-8; or an iterable of pieces, see :func:`_encoded`) to a
     new temporary file beside ``p`` (synced, with ``p``'s permissions or the default ones);
-    returns its name and the SHA-256 digest of the bytes written. Removed again on any error."""
+    returns its name. Removed again on any error."""
     parent = _folder(p)
     tmp = None
-    sha = hashlib.sha256()
     try:
         fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=TEMP_SUFFIX, dir=parent)
         with os.fdopen(fd, "wb") as f:
             for piece in _encoded(data):
                 f.write(piece)
-                sha.update(piece)
             f.flush()
             os.fsync(f.fileno())
         if p.exists():
@@ -208,7 +215,7 @@ def _write_temp(p: Path, data) -> tuple[str, bytes]:
             os.umask(umask)
             os.chmod(tmp, 0o666 & ~umask)
         checkpoint()  # Ctrl-C pressed while writing: no file (see curvenet._sigint)
-        return tmp, sha.digest()
+        return tmp
     except BaseException as exc:
         if tmp is not None:
             _unlink(tmp)
@@ -249,7 +256,7 @@ def atomic_write(path, data, *, inputs=()) -> Path:
     p = check_output_path(path, inputs=inputs)
     batch = _BATCH.get()
     if batch is None:
-        tmp = _write_temp(p, data)[0]
+        tmp = _write_temp(p, data)
         try:
             os.replace(tmp, p)
         except BaseException as exc:
@@ -259,11 +266,13 @@ def atomic_write(path, data, *, inputs=()) -> Path:
             raise
         return p
     key = p.resolve()
-    tmp, digest = _write_temp(p, data)
+    tmp = _write_temp(p, data)
     if key in batch.staged:
+        # (rare: compared when it happens, so that no write pays for a digest of its bytes)
+        same = _same_bytes(tmp, batch.staged[key][0])
         _unlink(tmp)
-        if batch.staged[key][1] != digest:
+        if not same:
             raise OutputError(f"{p}: written twice in one run with different contents")
         return p
-    batch.staged[key] = (tmp, digest, p)
+    batch.staged[key] = (tmp, p)
     return p
