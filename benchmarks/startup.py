@@ -142,6 +142,7 @@ def network(n: int, cache: Path, fit: bool | None = None):
     import curvenet
 
     net = curvenet.reconstruct(P) if fit is None else curvenet.reconstruct(P, fit=fit)
+    cache.mkdir(parents=True, exist_ok=True)  # (a --cache folder that is not there yet)
     save_network(net, path)
     return net, P
 

@@ -26,6 +26,12 @@ point-to-mesh distance; the largest of the two largest is the Hausdorff distance
 seconds on a shared machine; ``ref`` is the k=16 cKDTree query of the network's own curve points
 measured just before each model, the ratio ``time / ref`` being the figure to compare between
 runs. ``--markdown PATH`` writes the table of every model run (docs/surfacing-table.md).
+
+A model of ``surfaces`` with an opening (the vase's mouth, the saddle's border) is surfaced a
+second time with its opening given, as a designer would name it (``surface(...,
+open_curves=...)``, ``curvenet surface --open``): the reconstructed curves that lie along the true
+boundary curves (:attr:`curvenet.synth.surfaces.SurfaceModel.open_curves`, every point within
+:data:`OPEN_MATCH` h of them); its row is the model's name with "(opening given)".
 """
 
 from __future__ import annotations
@@ -53,6 +59,19 @@ QUICK = {"synth": ["cube", "mug"], "free": ["architecture-2"], "study": [], "sur
 SURFACE_DENSITY = 150
 #: Half-height of the band around the mug's mid-height where the radius is measured.
 MUG_BAND = 0.05
+#: A reconstructed curve is on the true boundary when all its points lie within this many h of
+#: the true boundary curves (the reconstruction's node offsets are well under 1 h there).
+OPEN_MATCH = 1.0
+
+
+def open_ids(model, net, h: float) -> list[int]:
+    """The curves of ``net`` (reconstructed) along the boundary curves of ``model``'s truth."""
+    from scipy.spatial import cKDTree
+
+    if not model.open_curves:
+        return []
+    tree = cKDTree(np.vstack([model.network.curves[i].points for i in model.open_curves]))
+    return [i for i, c in enumerate(net.curves) if len(c.points) and tree.query(c.points)[0].max() <= OPEN_MATCH * h]
 
 
 def networks(kind: str, names, source: str, cache: Path | None):
@@ -218,20 +237,28 @@ def main(argv=None) -> int:
         sel = set(QUICK[kind]) if args.quick else names
         if args.quick and not sel:
             continue
+        runs = []
         for name, net in networks(kind, sel, args.network, cache):
+            runs.append((name, name, net, ()))
+            if kind == "surfaces":
+                model = surfaces.surface_model(name)
+                ids = open_ids(model, net, synth.h_of(model.network))
+                if ids:
+                    runs.append((f"{name} (opening given)", name, net, ids))
+        for label, name, net, open_curves in runs:
             ref = reference_seconds(net)
             t0 = time.perf_counter()
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", SurfaceCheckWarning)  # printed below
-                mesh = surface(net)
+                mesh = surface(net, open_curves=open_curves)
             dt = time.perf_counter() - t0
             ck = mesh.checks
             sx = ck.self_intersecting_faces
-            print(f"{kind:8} {name:16} {net.n_nodes:4d} {net.n_curves:4d} {mesh.n_patches:5d} "
+            print(f"{kind:8} {label:16} {net.n_nodes:4d} {net.n_curves:4d} {mesh.n_patches:5d} "
                   f"{len(mesh.triangles):7d} {sx if sx is not None else '-':>5} {ck.non_manifold_edges:4d} "
                   f"{ck.boundary_loops:3d} {ck.genus if ck.genus is not None else '-':>5} "
                   f"{len(ck.overlaps):3d} {dt:6.1f} {dt / ref:6.0f}", flush=True)
-            row = {"set": kind, "model": name, "nodes": net.n_nodes, "curves": net.n_curves,
+            row = {"set": kind, "model": label, "nodes": net.n_nodes, "curves": net.n_curves,
                    "patches": mesh.n_patches, "boundary_loops": ck.boundary_loops, "self_x": sx,
                    "non_manifold": ck.non_manifold_edges, "genus": ck.genus, "time": dt, "ref": ref}
             tot["models"] += 1
@@ -243,7 +270,7 @@ def main(argv=None) -> int:
             tot["time"] += dt
             tot["faces"] += len(mesh.triangles)
             if not ck.ok:
-                bad.append(f"{name}: {ck.warning()}")
+                bad.append(f"{label}: {ck.warning()}")
             if kind == "surfaces":
                 model = surfaces.surface_model(name)
                 d = both_ways(model, mesh, synth.h_of(model.network))

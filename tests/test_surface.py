@@ -484,6 +484,36 @@ def test_cli_surface_obj_ply_png(tmp_path):
     assert bad.returncode == 2 and "unknown mesh extension" in bad.stderr and "\n" == bad.stderr[-1]
 
 
+def test_cli_surface_open_leaves_the_named_rim_open(tmp_path):
+    """``--open`` names the curves of an opening: the prism's top outline bounds its side walls
+    only (no lid), and trimesh reads an open mesh whose one boundary loop is that outline; an id
+    the network does not have is one line on stderr, exit 2, no file."""
+    trimesh = pytest.importorskip("trimesh")
+    net = prism(L_OUTLINE)
+    top = [3 * i + 1 for i in range(len(L_OUTLINE))]  # (k + i, k + i + 1): the outline at height 1
+    src = tmp_path / "net.json"
+    src.write_text(json.dumps(net.to_dict()))
+    obj = tmp_path / "m.obj"
+    ids = ",".join(map(str, top[:2])) + f",{top[2]}-{top[2]}," + ",".join(map(str, top[3:]))
+    r = subprocess.run([sys.executable, "-m", "curvenet.cli", "surface", str(src), "-o", str(obj), "--open", ids],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "7 patches" in r.stdout and "closed" not in r.stdout
+    tm = trimesh.load(obj, process=False, force="mesh")
+    assert not tm.is_watertight
+    edges = tm.edges_sorted
+    uniq, count = np.unique(edges, axis=0, return_counts=True)
+    rim = uniq[count == 1]
+    assert len(rim) > 0 and np.allclose(tm.vertices[np.unique(rim)][:, 2], 1.0)
+    bad = subprocess.run([sys.executable, "-m", "curvenet.cli", "surface", str(src), "-o", str(tmp_path / "b.obj"),
+                          "--open", "1,99"], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "no curve 99 to leave open" in bad.stderr
+    assert bad.stderr.count("\n") == 1 and not (tmp_path / "b.obj").exists()
+    bad = subprocess.run([sys.executable, "-m", "curvenet.cli", "surface", str(src), "-o", str(tmp_path / "b.obj"),
+                          "--open", "4-1"], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "not a list of curve ids" in bad.stderr and not (tmp_path / "b.obj").exists()
+
+
 def test_png_not_blank(meshes):
     pytest.importorskip("matplotlib")
     from io import BytesIO

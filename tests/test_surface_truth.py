@@ -133,3 +133,50 @@ def test_surface_eval_quick_runs_and_writes_the_table(tmp_path):
     assert cells[4] == "9 (9)" and cells[5] == "1 (1)"
     mean, largest = (float(x) for x in cells[9].split("/"))
     assert mean <= 0.5 and largest <= 3.0
+
+
+def _rim(net: CurveNetwork) -> list[int]:
+    """The curves of the vase's mouth: the parallel at the top."""
+    top = max(float(c.points[:, 2].max()) for c in net.curves)
+    return [i for i, c in enumerate(net.curves) if np.allclose(c.points[:, 2], top)]
+
+
+def test_open_curves_leave_the_vase_open():
+    """The vase and a capped can are the same network: the mouth gets a lid unless its curves are
+    named open, and then the surface is open there (one boundary loop, along those curves) and
+    within issue 24's targets of the true surface, both ways."""
+    from scipy.spatial import cKDTree
+
+    from curvenet.surfacing import surface
+
+    m = surfaces.surface_model("vase")
+    h = m.network.parameters["h"]
+    net = every_tenth(m.network)
+    rim = _rim(net)
+    assert len(rim) == 4 and m.open_curves == tuple(rim)
+    capped = surface(net, target_edge=3 * h)
+    assert capped.n_patches == m.patches + 1 and len(capped.boundary_edges()) == 0
+    assert (m.distance(capped.vertices) / h).max() > 5.0  # the lid, far from the true surface
+    mesh = surface(net, target_edge=3 * h, open_curves=rim)
+    assert mesh.n_patches == m.patches and mesh.checks.boundary_loops == m.boundary_loops
+    assert mesh.checks.self_intersecting_faces == 0 and mesh.checks.non_manifold_edges == 0
+    assert mesh.stats["open_curves"] == rim
+    d = m.distance(mesh.vertices) / h
+    assert d.mean() <= 0.5 and d.max() <= 3.0
+    truth = m.sample(60)
+    back = cKDTree(mesh.vertices).query(truth)[0] / h  # (to the vertices: an upper bound)
+    assert back.max() <= 3.0
+    # the boundary runs along the named curves: every boundary vertex is one of theirs
+    bv = np.unique(mesh.boundary_edges())
+    rim_v = np.concatenate([mesh.curve_vertices[c] for c in rim])
+    assert np.isin(bv, rim_v).all()
+
+
+def test_open_curves_refused_when_not_curve_ids():
+    from curvenet.surfacing import surface
+
+    net = surfaces.surface_model("vase").network
+    with pytest.raises(InputError, match="no curve 28 to leave open"):
+        surface(net, open_curves=[27, 28])
+    with pytest.raises(InputError, match="integers"):
+        surface(net, open_curves=[1.5])

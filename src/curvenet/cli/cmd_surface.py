@@ -21,9 +21,32 @@ def register(sub) -> None:
                    help="edge length inside the patches (default: from the curve point spacing)")
     p.add_argument("--no-fair", action="store_true",
                    help="flat harmonic membranes instead of patches shaped by the curvature of their curves")
+    p.add_argument("--open", metavar="IDS", type=curve_ids, default=(),
+                   help="curves that bound one patch at most: the rims of openings left open (a vase's "
+                        "mouth), e.g. 24,25 or 24-27; ids as the viewer shows them (from 0). Without it "
+                        "every ring of curves that can be capped is capped")
     p.add_argument("--png", metavar="FILE.png", default=None, help="also draw the surface as a PNG picture")
     add_common(p)
     p.set_defaults(func=run)
+
+
+def curve_ids(text: str) -> tuple[int, ...]:
+    """The curve ids of ``--open``: comma-separated ids and ranges (``24,25`` or ``24-27``)."""
+    import argparse
+
+    out = []
+    for part in text.split(","):
+        part = part.strip()
+        a, sep, b = part.partition("-")
+        try:
+            lo = int(a)
+            hi = int(b) if sep else lo
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a list of curve ids: {text!r} (e.g. 24,25 or 24-27)") from None
+        if lo < 0 or hi < lo:
+            raise argparse.ArgumentTypeError(f"not a list of curve ids: {text!r} (e.g. 24,25 or 24-27)")
+        out.extend(range(lo, hi + 1))
+    return tuple(out)
 
 
 def check_outputs(outputs, *, png=None, inputs=()) -> None:
@@ -46,7 +69,7 @@ def check_outputs(outputs, *, png=None, inputs=()) -> None:
               inputs=inputs)
 
 
-def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=True):
+def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=True, open_curves=()):
     """Surface ``net`` and write the mesh files (format by extension) and an optional PNG.
 
     For ``curvenet surface`` and for ``curvenet reconstruct --surface MESH``: call
@@ -64,7 +87,7 @@ def write_surface(net, outputs, *, png=None, inputs=(), target_edge=None, fair=T
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SurfaceCheckWarning)
-        mesh = surface(net, target_edge=target_edge, fair=fair)
+        mesh = surface(net, target_edge=target_edge, fair=fair, open_curves=open_curves)
     dt = time.perf_counter() - t0
     for w in caught:
         if issubclass(w.category, SurfaceCheckWarning):
@@ -99,7 +122,7 @@ def run(args) -> int:
     check_outputs(args.output, png=args.png, inputs=inputs)
     net = read_network(args.network)
     mesh, dt = write_surface(net, args.output, png=args.png, inputs=inputs,
-                             target_edge=args.target_edge, fair=not args.no_fair)
+                             target_edge=args.target_edge, fair=not args.no_fair, open_curves=args.open)
     if not args.quiet:
         print(f"{args.network}: {summary(mesh, dt)}")
         if args.verbose:

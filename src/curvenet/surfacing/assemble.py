@@ -150,6 +150,19 @@ def _scaled(network: CurveNetwork, k: int) -> CurveNetwork:
     return CurveNetwork(np.ldexp(np.asarray(network.nodes, dtype=float), k), curves, dict(network.parameters))
 
 
+def _curve_ids(ids, n: int) -> tuple[int, ...]:
+    """``ids`` as sorted, distinct curve indices in ``range(n)``; InputError otherwise."""
+    out = set()
+    for i in ids:
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)):
+            raise InputError(f"curves to leave open are given by their ids (integers), got {i!r}")
+        if not 0 <= int(i) < n:
+            has = f"{n} curves, numbered 0 to {n - 1}" if n else "no curves"
+            raise InputError(f"no curve {int(i)} to leave open (the network has {has})")
+        out.add(int(i))
+    return tuple(sorted(out))
+
+
 def surface(
     network: CurveNetwork,
     *,
@@ -160,6 +173,7 @@ def surface(
     time_limit: float = 60.0,
     max_triangles: int = 200_000,
     check: bool = True,
+    open_curves=(),
 ) -> SurfaceMesh:
     """Surface a curve network: find its patch boundaries and fill each with a triangle mesh.
 
@@ -191,6 +205,11 @@ def surface(
         non-manifold edges, boundary loops, genus, overlapping patches), store the result in
         ``checks`` and warn (:class:`~curvenet.surfacing.checks.SurfaceCheckWarning`, naming the
         patches) when a check fails.
+    open_curves : iterable of int
+        Curves (indices into ``network.curves``, as the viewer and the network file number
+        them) that border one patch at most: the rims of openings the designer left open. The
+        network alone does not say which rings of curves are openings (a vase's mouth and a
+        can's lid are the same network), so every ring that can be capped is, unless named here.
 
     Returns
     -------
@@ -233,6 +252,7 @@ def surface(
         raise InputError(f"surface() needs a CurveNetwork, got {type(network).__name__}")
     if target_edge is not None and not (np.isfinite(target_edge) and target_edge > 0):
         raise InputError(f"target_edge must be a positive number, got {target_edge!r}")
+    open_curves = _curve_ids(open_curves, len(network.curves))
     t0 = time.perf_counter()
     allpts = [np.asarray(c.points, dtype=float) for c in network.curves if len(c.points)]
     for i, p in enumerate(allpts):
@@ -248,7 +268,7 @@ def surface(
         unit = _scaled(network, -k)
         mesh = surface(unit, target_edge=None if target_edge is None else float(np.ldexp(target_edge, -k)),
                        fair=fair, fold_angle=fold_angle, min_angle=min_angle, time_limit=time_limit,
-                       max_triangles=max_triangles, check=check)
+                       max_triangles=max_triangles, check=check, open_curves=open_curves)
         mesh.vertices = np.ldexp(mesh.vertices, k)
         mesh.stats["target_edge"] = float(np.ldexp(mesh.stats["target_edge"], k))
         return mesh
@@ -258,7 +278,7 @@ def surface(
     seg = np.concatenate([np.linalg.norm(np.diff(ch, axis=0), axis=1) for ch in chains] or [np.zeros(0)])
     seg = seg[seg > 0]
     cand = candidate_cycles(chains, edges, nodes)
-    cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit)
+    cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit, open_curves=open_curves)
     area = float(sum(cs.costs or []))
     if target_edge is not None:
         h = float(target_edge)
@@ -322,7 +342,8 @@ def surface(
         if rounds >= MAX_SELECTION_ROUNDS:
             cs = _drop_conflicting(cs, cand, conflicts, banned)
             break
-        cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit, conflicts=conflicts, banned=banned)
+        cs = select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit, conflicts=conflicts, banned=banned,
+                           open_curves=open_curves)
 
     # ------------------------------------------------------------------ final patches
     rings = [patches.ring(k) for k in cs.index]
@@ -393,6 +414,7 @@ def surface(
             "selection_rounds": rounds,
             "conflicts": len(conflicts),
             "folded": len(banned),
+            "open_curves": list(open_curves),
         },
     )
     if check:

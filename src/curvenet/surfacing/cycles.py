@@ -11,7 +11,8 @@ so the cycles here are chosen globally:
    polygon (Barequet and Sharir 1995; Liepa 2003); the area is its cost and the triangulation gives
    the side from which the patch meets each of its curves.
 3. *Selection*: a 0-1 integer program (``scipy.optimize.milp``) maximises the number of
-   (curve, patch) incidences with every curve bordering at most two patches, then minimises the
+   (curve, patch) incidences with every curve bordering at most two patches (one for the curves
+   the caller names as the rims of openings: ``open_curves``), then minimises the
    total area. Two candidates that meet a common curve from the same side (folded onto each other,
    e.g. the outer boundary of an open sheet against the sheet's own cells) may not both be chosen;
    this is what keeps an open network open while a closed network gets every curve used twice.
@@ -39,7 +40,8 @@ import numpy as np
 
 from .patches import min_area_triangulations
 
-__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling", "MAT_BATCH"]
+__all__ = ["CycleSet", "Candidates", "candidate_cycles", "select_cycles", "find_cycles", "prune_dangling", "MAT_BATCH",
+           "curve_caps"]
 
 #: Candidate polygons of one size whose minimal-area triangulations are solved together (bounds
 #: the memory: a batch of 64-point polygons holds about ``MAT_BATCH`` x 42,000 triangle areas).
@@ -421,6 +423,7 @@ def select_cycles(
     time_limit: float = 60.0,
     conflicts=(),
     banned=(),
+    open_curves=(),
 ) -> CycleSet:
     """Choose patch boundaries among candidates by a 0-1 program, and orient them.
 
@@ -437,6 +440,9 @@ def select_cycles(
         each other, see :func:`curvenet.surfacing.assemble.surface`).
     banned : iterable of int
         Candidates that may not be chosen (a patch that crosses itself).
+    open_curves : iterable of int
+        Curves that border at most one patch (the rim of an opening the designer left open);
+        every other curve borders at most two.
 
     Returns
     -------
@@ -445,7 +451,8 @@ def select_cycles(
     if not cand.cycles:
         return CycleSet([], [], 0, [], [])
     cands, costs = cand.cycles, cand.costs
-    chosen = _select(cands, costs, cand.inward, cand.n_curves, fold_angle, time_limit, conflicts, banned)
+    cap = curve_caps(cand.n_curves, open_curves)
+    chosen = _select(cands, costs, cand.inward, cap, fold_angle, time_limit, conflicts, banned)
     # a non-orientable choice (a Moebius-like ring of patches) cannot be oriented: drop, one at
     # a time, the patch whose removal leaves the fewest conflicts (ties: the costliest by area
     # per curve) among those that run the same way through a curve as a neighbour
@@ -538,8 +545,27 @@ def _inward_directions(poly, tris, owner):
     return out
 
 
-def _select(cands, costs, inward, n_curves, fold_angle, time_limit, extra=(), banned=()):
-    """Solve the 0-1 program; returns the indices of the chosen candidates."""
+def curve_caps(n_curves: int, open_curves=()) -> np.ndarray:
+    """The most patches each curve may border: 2, and 1 for the curves of ``open_curves``.
+
+    Parameters
+    ----------
+    n_curves : int
+    open_curves : iterable of int
+        Curve indices, each in ``range(n_curves)``.
+
+    Returns
+    -------
+    (n_curves,) ndarray of float
+    """
+    cap = np.full(n_curves, 2.0)
+    cap[np.asarray(list(open_curves), dtype=np.int64)] = 1.0
+    return cap
+
+
+def _select(cands, costs, inward, cap, fold_angle, time_limit, extra=(), banned=()):
+    """Solve the 0-1 program (each curve ``c`` bordering at most ``cap[c]`` chosen candidates);
+    returns the indices of the chosen candidates."""
     from scipy.optimize import Bounds, LinearConstraint, milp
     from scipy.sparse import coo_matrix
 
@@ -551,6 +577,7 @@ def _select(cands, costs, inward, n_curves, fold_angle, time_limit, extra=(), ba
             rows.append(d // 2)
             cols.append(k)
             by_curve.setdefault(d // 2, []).append(k)
+    n_curves = len(cap)
     A = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_curves, K)).tocsr()
     cos_max = np.cos(np.radians(fold_angle))
     conflicts = set()
@@ -563,7 +590,7 @@ def _select(cands, costs, inward, n_curves, fold_angle, time_limit, extra=(), ba
     conflicts.update((min(a, b), max(a, b)) for a, b in extra if a != b)
     ub = np.ones(K)
     ub[list(banned)] = 0.0
-    constraints = [LinearConstraint(A, -np.inf, 2.0)]
+    constraints = [LinearConstraint(A, -np.inf, cap)]
     if conflicts:
         cr = np.repeat(np.arange(len(conflicts)), 2)
         cc = np.array(sorted(conflicts)).ravel()
@@ -580,13 +607,13 @@ def _select(cands, costs, inward, n_curves, fold_angle, time_limit, extra=(), ba
         options={"time_limit": time_limit, "disp": False},
     )
     if res.x is None:
-        return _greedy(cands, costs, conflicts, n_curves, banned)
+        return _greedy(cands, costs, conflicts, cap, banned)
     return [k for k in range(K) if res.x[k] > 0.5]
 
 
-def _greedy(cands, costs, conflicts, n_curves, banned=()):
+def _greedy(cands, costs, conflicts, cap, banned=()):
     """Fallback selection: cheapest area per curve first, respecting the same constraints."""
-    use = np.zeros(n_curves, dtype=np.int64)
+    use = np.zeros(len(cap), dtype=np.int64)
     bad = {}
     for a, b in conflicts:
         bad.setdefault(a, set()).add(b)
@@ -596,7 +623,7 @@ def _greedy(cands, costs, conflicts, n_curves, banned=()):
         cur = [d // 2 for d in cands[k]]
         if k in banned:
             continue
-        if (use[cur] < 2).all() and not (bad.get(k, set()) & set(chosen)):
+        if (use[cur] < cap[cur]).all() and not (bad.get(k, set()) & set(chosen)):
             use[cur] += 1
             chosen.append(int(k))
     return sorted(chosen)

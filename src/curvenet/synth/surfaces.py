@@ -47,6 +47,9 @@ class SurfaceModel(NamedTuple):
         The patches a designer would draw: the faces of the network on the surface.
     boundary_loops : int
         Boundary loops of the true surface (0 where it is closed).
+    open_curves : tuple of int
+        The curves of ``network`` on the true surface's boundary (each borders one patch): what
+        a designer would name as openings (``surface(..., open_curves=...)``).
     """
 
     network: CurveNetwork
@@ -54,6 +57,7 @@ class SurfaceModel(NamedTuple):
     sample: Callable[[int], np.ndarray]
     patches: int
     boundary_loops: int
+    open_curves: tuple = ()
 
 
 def _grid(u0, u1, v0, v1, density, f):
@@ -149,7 +153,9 @@ def _revolution(name, features, profile, zs, *, bottom_cap: bool, top_cap: bool,
 
     n_side = (len(zs) - 1) * n_meridians
     patches = n_side + bottom_cap + top_cap
-    return SurfaceModel(net, dist, sample, patches, 2 - bottom_cap - top_cap)
+    rims = [z for on, z in ((bottom_cap, zs[0]), (top_cap, zs[-1])) if not on]
+    open_curves = tuple(i for i, c in enumerate(net.curves) if any(np.allclose(c.points[:, 2], z) for z in rims))
+    return SurfaceModel(net, dist, sample, patches, 2 - bottom_cap - top_cap, open_curves)
 
 
 def _capped_cylinder() -> SurfaceModel:
@@ -202,7 +208,10 @@ def _saddle() -> SurfaceModel:
     def sample(density):
         return _grid(-1, 1, -1, 1, density, lambda x, y: np.column_stack([x, y, _saddle_z(x, y)]))
 
-    return SurfaceModel(net, dist, sample, 9, 1)
+    # (the curves through a corner of the square turn there: every point on one side or the other)
+    border = tuple(i for i, c in enumerate(net.curves)
+                   if np.all(np.isclose(np.abs(c.points[:, :2]), 1.0).any(axis=1)))
+    return SurfaceModel(net, dist, sample, 9, 1, border)
 
 
 # --- a box with one filleted edge --------------------------------------------------------------
