@@ -263,3 +263,26 @@ def test_no_free_branch_beside_a_one_sample_branch(monkeypatch):
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] == 1.0
     monkeypatch.setattr(branched, "BRANCHED", branched.BRANCHED._replace(free_arm_points=0))
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] < 1.0
+
+
+@pytest.mark.parametrize("name,condition", [("ladder", "noise 0.1h"), ("outline", "outliers 2% + noise 0.1h")])
+def test_low_noise_is_read_as_noise_free_by_the_junction_stages(monkeypatch, name, condition):
+    # noise 0.1h is over the noise-free test (0.05 h) but low (NOISE.low): the links and the
+    # junction stages read it as noise-free; with the noise-free test there instead (as before)
+    # the ladder's rungs 3-5h apart merged (curve F1 0.00 -> 0.30) and the outline's corners
+    # (0.60 -> 0.85)
+    from curvenet.methods.robust import estimate, params
+    from curvenet.methods.robust.params import Estimates
+
+    conditions = {**bench.CONDITIONS, **bench.EXTRA_CONDITIONS}
+    truth = synth.model(name)
+    h = synth.h_of(truth)
+    pts, _ = synth.sample(truth, rng=bench.run_seed(name, condition), **conditions[condition])
+    est = estimate(pts)
+    assert est.low and not est.clean
+    now = compare(reconstruct(pts, method="robust"), truth, h=h)
+    monkeypatch.setattr(params, "NOISE", thresholds.NOISE._replace(low=thresholds.SPACING.dedup_noise))
+    assert not Estimates(est.hmed, est.sigma).low
+    before = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert now["curve_f1"] >= before["curve_f1"] + 0.2, (now["curve_f1"], before["curve_f1"])
+    assert now["n_nodes_found"] > before["n_nodes_found"]

@@ -19,10 +19,10 @@ vertices) and one chain per branch, ordered from the junction outwards
 (:meth:`.topology.Topology.branch_chain`). Each branch ends at the region its last
 ``BRANCHED.tip_points`` points are most linked to, when its last point lies within
 ``BRANCHED.reach`` spacings of it (the next sample); the branches holding the chain's two ends
-may keep the chain's regions there. On noise-free input a tree of two or more junctions is read
-too (:func:`cores_plan`): each piece of the tree between two of them (a path) becomes a chain
-joining them, the branches leaving end as above (a chain that ran past a building notch's ground
-corner and on up its vertical past the eave corner). A branch of the one-junction reading that
+may keep the chain's regions there. On noise-free or low-noise input (``NOISE.low``) a tree of
+two or more junctions is read too (:func:`cores_plan`): each piece of the tree between two of
+them (a path) becomes a chain joining them, the branches leaving end as above (a chain that ran
+past a building notch's ground corner and on up its vertical past the eave corner). A branch of the one-junction reading that
 reaches no region is a free branch, its tip a new free end, when it is a sampled curve of
 ``min_spur`` spacings or more (:func:`_free_branch`: a twig a few spacings from a junction
 under noise, whose tip no shell saw as an end). Left as it is: a chain with a shorter or sparser
@@ -241,7 +241,7 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
         adj = pruned_tree(X, prune_cut(hl, sc.noise), keep)
         plan = branch_plan(X, hl, sc.noise, keep, adj)
         if plan is None:
-            if sc.clean:
+            if sc.low:
                 _split_at_cores(topo, sc, i, c, X, hl, keep, adj, linked_region)
             continue
         core, arms = plan

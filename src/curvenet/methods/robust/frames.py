@@ -98,7 +98,9 @@ class Frames(NamedTuple):
     hmed : float
         Median spacing.
     clean : bool
-        ``sigma`` under ``SPACING.dedup_noise`` median spacings.
+        ``sigma`` under ``SPACING.dedup_noise`` median spacings (:attr:`.params.Estimates.clean`).
+    low : bool
+        ``sigma`` under ``NOISE.low`` median spacings (:attr:`.params.Estimates.low`).
     """
 
     t: np.ndarray
@@ -106,6 +108,7 @@ class Frames(NamedTuple):
     sigma: float
     hmed: float
     clean: bool
+    low: bool
 
 
 def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
@@ -165,11 +168,12 @@ def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None, tg: Tang
         hmed = median_spacing(h)
     else:
         sig, hmed = float(est.sigma), float(est.hmed)
-    clean = Estimates(hmed, sig).clean
+    est = Estimates(hmed, sig)
+    clean = est.clean
     if clean:
         t, lin = retry_tangents(P, idx, h, t, lin, gain)
     t, lin = vote_tangents(t, lin, idx, m=min(TANGENTS.vote_m if clean else TANGENTS.vote_m_noisy, idx.shape[1]))
-    return Frames(t, lin, sig, hmed, bool(clean))
+    return Frames(t, lin, sig, hmed, bool(clean), est.low)
 
 
 def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:

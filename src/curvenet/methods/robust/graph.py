@@ -59,7 +59,7 @@ def linked_graph(P: np.ndarray, nb: Neighbours, fr: Frames, prm: RobustParams) -
     noise = NOISE.scale * fr.sigma
     src, dst, dd = linked_edges(P, nb.h, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
                                 LINKS.strip_noise * noise, LINKS.gap_noise * noise)
-    if not fr.clean:  # links between two close parallel strands are cut
+    if not fr.low:  # links between two close parallel strands are cut
         with _k.compiled_for(N, _k.NUMBA_MIN_POINTS_NOISY, _k.STRAND_KERNELS):  # (slow in plain Python)
             tn, ln = noisy_tangents(P, nb.h, fr.sigma, nb.tree, None, nb.idx)
             tn, _ = vote_tangents(tn, ln, nb.idx, m=min(TANGENTS.vote_m_noisy, nb.idx.shape[1]))

@@ -68,8 +68,10 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
                                 order=np.arange(N, dtype=np.int64))
     flagged = groups != 2
     ka, kb = _k.short_links(P, nb.h, nb.idx, float(prm.link))
+    # (the splits read low noise as none; the finer multi-scale separation only noise-free
+    # input: see NOISE.low)
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
-                                              noisy=not fr.clean, noise=NOISE.scale * fr.sigma)
+                                              noisy=not fr.low, noise=NOISE.scale * fr.sigma)
     flagged, reg, n_reg, close = separate_close_junctions(P, hs, graph.indptr, graph.indices, flagged, reg, n_reg,
                                                           ka, kb, prm, noisy=not fr.clean)
     return Regions(groups, flagged, reg, n_reg, close)

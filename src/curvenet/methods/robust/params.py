@@ -8,7 +8,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ...errors import InputError
-from .thresholds import DEFAULTS, SPACING
+from .thresholds import DEFAULTS, NOISE, SPACING
 
 __all__ = ["RobustParams", "Scales", "Estimates"]
 
@@ -122,6 +122,12 @@ class Estimates(NamedTuple):
         """The cloud counts as noise-free (``sigma`` under ``SPACING.dedup_noise`` median spacings)."""
         return bool(self.sigma < SPACING.dedup_noise * self.hmed)
 
+    @property
+    def low(self) -> bool:
+        """The cloud's noise is low (``sigma`` under ``NOISE.low`` median spacings): the links
+        and the junction stages read it as noise-free (:data:`~.thresholds.NOISE`)."""
+        return bool(self.sigma < NOISE.low * self.hmed)
+
 
 @dataclass(frozen=True)
 class Scales:
@@ -139,6 +145,8 @@ class Scales:
         The noise scale of the radii (``NOISE.scale * sigma``).
     clean : bool
         The input is noise-free (``sigma`` under ``SPACING.dedup_noise`` median spacings).
+    low : bool
+        The noise is low (``sigma`` under ``NOISE.low`` median spacings; :attr:`Estimates.low`).
     width : float
         The link width in spacings (``max(link_width, 0)``).
     indptr, indices : ndarray of int64, ndarray of int32
@@ -152,6 +160,7 @@ class Scales:
     sigma: float
     noise: float
     clean: bool
+    low: bool
     width: float
     indptr: np.ndarray = field(repr=False)
     indices: np.ndarray = field(repr=False)

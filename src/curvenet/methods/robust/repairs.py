@@ -180,11 +180,11 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
 
 
 def _no_curve_end(topo: Topology, sc: Scales, r: int) -> bool:
-    """Whether the free end ``r`` is no curve's end: on noise-free input the last points of a
-    curve always see one side in their shells, so a curve's end is always flagged; a free end
-    without tip points is a stub's, a piece of a region's own curve traced out of it. (Under
-    noise a real tip can lose its flags: False there.)"""
-    return bool(sc.clean) and topo.v[r] == 1 and not len(topo.regions[r])
+    """Whether the free end ``r`` is no curve's end: on noise-free input (and under low noise,
+    ``NOISE.low``) the last points of a curve always see one side in their shells, so a curve's
+    end is always flagged; a free end without tip points is a stub's, a piece of a region's own
+    curve traced out of it. (Under noise a real tip can lose its flags: False there.)"""
+    return bool(sc.low) and topo.v[r] == 1 and not len(topo.regions[r])
 
 
 def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: np.ndarray, gap: float,

@@ -26,7 +26,8 @@ other repair reads the region) then splits the cores off the region one leaf of 
 a time (:meth:`.topology.Topology.split_region`), each joined to its neighbour by a new chain of
 the region's points along the tree path between them.
 
-On noise-free input the shell is not widened, but junctions 3-5 h apart still share one
+On noise-free input the shell is not widened (under low noise, ``NOISE.low``, little), but
+junctions 3-5 h apart still share one
 (:func:`.junctions.separate_close_junctions` parts some rows; a facade's ladder and a comb kept
 pairs and rows of three whole): there a pair is split too (``SPANNING.clean_min_cores``) and a
 region of a few points is read (``SPANNING.clean_min_points``). A pair is split only when each
@@ -382,13 +383,13 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
     """Every region of valence ``SPANNING.region_valence`` or more that holds a row of
     junctions (:func:`split_plan`) becomes those junctions, joined by new chains.
 
-    On noise-free input a pair is split too (``SPANNING.clean_min_cores``, regions of
+    On noise-free or low-noise input (``NOISE.low``) a pair is split too (``SPANNING.clean_min_cores``, regions of
     ``SPANNING.clean_min_points`` points or more), when each junction's branches leave it apart
     (:func:`_branches_apart`). A region with a chain that has both ends there (a loop) is left
     as it is. The regions are planned first, then split in region order (a split leaves the
     other regions as they are).
     """
-    if sc.clean:
+    if sc.low:
         min_cores, min_points, valence = SPANNING.clean_min_cores, SPANNING.clean_min_points, SPANNING.clean_region_valence
     else:
         min_cores, min_points, valence = SPANNING.min_cores, SPANNING.min_points, SPANNING.region_valence
