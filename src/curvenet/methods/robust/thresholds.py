@@ -286,7 +286,7 @@ class Noise(NamedTuple):
     scale: float = 1.2
     #: noise under this many median spacings is low: the links and the junction stages read the
     #: input as noise-free (no strand test between parallel strands; the region splits, the
-    #: spanning-tree and branched-chain readings and the free-end rules of noise-free input),
+    #: spanning-tree reading of pairs and the free-end rules of noise-free input),
     #: while the tangents, the multi-scale separation of close junctions, the duplicate rule
     #: and the fit keep the noise-free test (``SPACING.dedup_noise``)
     #: origin: benchmark (issue 25, 4 December 2026), A/B against 0.05 (the noise-free test,
