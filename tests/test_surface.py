@@ -680,3 +680,20 @@ def test_cylinder_does_not_sag():
     r = np.hypot(V[band, 0], V[band, 1])
     assert len(r) > 20
     assert 0.49 < r.min() and r.max() < 0.515
+
+
+def test_find_cycles_open_curves_bound_one_cycle_at_most():
+    """On a cube's wireframe every curve borders two of the six faces; naming the top square's
+    four curves open leaves five faces, each of those curves in one of them."""
+    from curvenet.surfacing.cycles import curve_caps, find_cycles
+
+    net = prism(SQUARE)
+    chains = [np.asarray(c.points, dtype=float) for c in net.curves]
+    top = [3 * i + 1 for i in range(len(SQUARE))]
+    closed = find_cycles(chains, net.edges, net.nodes)
+    assert len(closed.cycles) == 6
+    assert all(sum(c in cyc for cyc in closed.cycles) == 2 for c in range(len(chains)))
+    opened = find_cycles(chains, net.edges, net.nodes, open_curves=top)
+    assert len(opened.cycles) == 5
+    assert all(sum(c in cyc for cyc in opened.cycles) == 1 for c in top)
+    assert curve_caps(4, [1, 3]).tolist() == [2.0, 1.0, 2.0, 1.0]

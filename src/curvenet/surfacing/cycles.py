@@ -484,6 +484,7 @@ def find_cycles(
     fold_angle: float = 30.0,
     coarse_points: int = 64,
     time_limit: float = 60.0,
+    open_curves=(),
 ) -> CycleSet:
     """Choose the patch boundaries of a curve network (:func:`candidate_cycles`, then
     :func:`select_cycles` without geometric conflicts).
@@ -492,7 +493,7 @@ def find_cycles(
     ----------
     chains, edges, nodes, coarse_points
         As for :func:`candidate_cycles`.
-    fold_angle, time_limit
+    fold_angle, time_limit, open_curves
         As for :func:`select_cycles`.
 
     Returns
@@ -500,7 +501,7 @@ def find_cycles(
     CycleSet
     """
     cand = candidate_cycles(chains, edges, nodes, coarse_points=coarse_points)
-    return select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit)
+    return select_cycles(cand, fold_angle=fold_angle, time_limit=time_limit, open_curves=open_curves)
 
 
 def _inward_directions(poly, tris, owner):
