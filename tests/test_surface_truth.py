@@ -180,3 +180,4 @@ def test_open_curves_refused_when_not_curve_ids():
         surface(net, open_curves=[27, 28])
     with pytest.raises(InputError, match="integers"):
         surface(net, open_curves=[1.5])
+    assert surface(net, open_curves=None, check=False).stats["open_curves"] == []

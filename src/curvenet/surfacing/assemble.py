@@ -151,9 +151,10 @@ def _scaled(network: CurveNetwork, k: int) -> CurveNetwork:
 
 
 def _curve_ids(ids, n: int) -> tuple[int, ...]:
-    """``ids`` as sorted, distinct curve indices in ``range(n)``; InputError otherwise."""
+    """``ids`` (None: none) as sorted, distinct curve indices in ``range(n)``; InputError
+    otherwise."""
     out = set()
-    for i in ids:
+    for i in () if ids is None else ids:
         if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)):
             raise InputError(f"curves to leave open are given by their ids (integers), got {i!r}")
         if not 0 <= int(i) < n:
