@@ -307,7 +307,7 @@ def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
         ka, kb = _k.short_links(P, nb.h, nb.idx, float(prm.link))
         reg0, _ = components(len(P), ka, kb, reg.groups != 2)
         chains, regions = trace_chains(P, nb.h, graph, reg.flagged, reg.reg, reg.n_reg, fr.lin)
-        sc = Scales(h=nb.h, hmed=fr.hmed, sigma=fr.sigma, noise=noise, clean=fr.clean, low=fr.low,
+        sc = Scales(h=nb.h, hmed=fr.hmed, sigma=fr.sigma, noise=noise, clean=fr.clean,
                     width=max(prm.link_width, 0.0), indptr=graph.indptr, indices=graph.indices, tree=nb.tree)
         topo = Topology(P, chains, regions)
         traced = TopoState.of(topo)

@@ -199,7 +199,7 @@ def test_branch_lines_are_the_end_portions_lines(monkeypatch):
     topo = Topology(P, chains, [np.array([len(P) - 1])])
     noise = 0.3
     h = rng.uniform(0.5, 1.5, len(P))
-    sc = Scales(h=h, hmed=1.0, sigma=noise, noise=noise, clean=False, low=False, width=1.0,
+    sc = Scales(h=h, hmed=1.0, sigma=noise, noise=noise, clean=False, width=1.0,
                 indptr=np.zeros(len(P) + 1, dtype=np.int64), indices=np.zeros(0, dtype=np.int64), tree=None)
     inc = topo.incident(0)
     L, off = branch_lines(topo, sc, [inc])

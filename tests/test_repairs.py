@@ -21,7 +21,7 @@ from curvenet.methods.robust import junctions, nodes
 from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
-from curvenet.methods.robust.params import Estimates, RobustParams, Scales
+from curvenet.methods.robust.params import RobustParams, Scales
 from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
 from curvenet.methods.robust.topology import Topology
 
@@ -96,8 +96,7 @@ def _scales(topo: Topology, noise: float = 0.0, width: float = PRM.link_width) -
     N = len(P)
     g = coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(N, N)).tocsr()
     g.sum_duplicates()
-    return Scales(h=np.ones(N), hmed=1.0, sigma=noise / NOISE.scale, noise=noise, clean=noise == 0,
-                  low=Estimates(1.0, noise / NOISE.scale).low, width=width,
+    return Scales(h=np.ones(N), hmed=1.0, sigma=noise / NOISE.scale, noise=noise, clean=noise == 0, width=width,
                   indptr=g.indptr.astype(np.int64), indices=g.indices.astype(np.int64), tree=cKDTree(P))
 
 

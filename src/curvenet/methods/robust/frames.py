@@ -99,8 +99,6 @@ class Frames(NamedTuple):
         Median spacing.
     clean : bool
         ``sigma`` under ``SPACING.dedup_noise`` median spacings (:attr:`.params.Estimates.clean`).
-    low : bool
-        ``sigma`` under ``NOISE.low`` median spacings (:attr:`.params.Estimates.low`).
     """
 
     t: np.ndarray
@@ -108,7 +106,11 @@ class Frames(NamedTuple):
     sigma: float
     hmed: float
     clean: bool
-    low: bool
+
+    @property
+    def low(self) -> bool:
+        """``sigma`` under ``NOISE.low`` median spacings (:attr:`.params.Estimates.low`)."""
+        return Estimates(self.hmed, self.sigma).low
 
 
 def neighbours(P: np.ndarray, prm: RobustParams) -> Neighbours:
@@ -168,12 +170,11 @@ def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None, tg: Tang
         hmed = median_spacing(h)
     else:
         sig, hmed = float(est.sigma), float(est.hmed)
-    est = Estimates(hmed, sig)
-    clean = est.clean
+    clean = Estimates(hmed, sig).clean
     if clean:
         t, lin = retry_tangents(P, idx, h, t, lin, gain)
     t, lin = vote_tangents(t, lin, idx, m=min(TANGENTS.vote_m if clean else TANGENTS.vote_m_noisy, idx.shape[1]))
-    return Frames(t, lin, sig, hmed, bool(clean), est.low)
+    return Frames(t, lin, sig, hmed, bool(clean))
 
 
 def duplicates(nb: Neighbours, fr: Frames) -> np.ndarray | None:

@@ -145,8 +145,6 @@ class Scales:
         The noise scale of the radii (``NOISE.scale * sigma``).
     clean : bool
         The input is noise-free (``sigma`` under ``SPACING.dedup_noise`` median spacings).
-    low : bool
-        The noise is low (``sigma`` under ``NOISE.low`` median spacings; :attr:`Estimates.low`).
     width : float
         The link width in spacings (``max(link_width, 0)``).
     indptr, indices : ndarray of int64, ndarray of int32
@@ -160,8 +158,12 @@ class Scales:
     sigma: float
     noise: float
     clean: bool
-    low: bool
     width: float
     indptr: np.ndarray = field(repr=False)
     indices: np.ndarray = field(repr=False)
     tree: Any = field(repr=False)
+
+    @property
+    def low(self) -> bool:
+        """The noise is low (``sigma`` under ``NOISE.low`` median spacings; :attr:`Estimates.low`)."""
+        return Estimates(self.hmed, self.sigma).low

@@ -168,7 +168,7 @@ def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates:
     tm["graph"] = time.perf_counter() - t1
     # memory: every intermediate is dropped as soon as no later stage reads it (at 1e7 points
     # the peak is in the last stages); from here on the tangents are not read
-    sigma, hmed, clean, low, lin = fr.sigma, fr.hmed, fr.clean, fr.low, fr.lin
+    sigma, hmed, clean, lin = fr.sigma, fr.hmed, fr.clean, fr.lin
     fr = fr._replace(t=None)  # (stage 4 reads sigma, clean and low only)
     # the k-d tree is read again by the repairs alone: it is built again there, over the same
     # points (the same tree, the same answers), instead of being held through the two stages
@@ -195,7 +195,7 @@ def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates:
 
     report_stage(on_stage, ROBUST_SHARES, "assemble")
     t1 = time.perf_counter()
-    sc = Scales(h=h, hmed=hmed, sigma=sigma, noise=NOISE.scale * sigma, clean=clean, low=low,
+    sc = Scales(h=h, hmed=hmed, sigma=sigma, noise=NOISE.scale * sigma, clean=clean,
                 width=max(prm.link_width, 0.0), indptr=indptr, indices=indices, tree=build_tree(P))
     del indptr, indices  # (held by sc alone, dropped with it)
     topo = run_repairs(Topology(P, chains, regions), sc, prm)  # 6. repairs
