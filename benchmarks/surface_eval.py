@@ -240,13 +240,12 @@ def main(argv=None) -> int:
             continue
         runs = []
         for name, net in networks(kind, sel, args.network, cache):
-            runs.append((name, name, net, ()))
-            if kind == "surfaces":
-                model = surfaces.surface_model(name)
-                ids = open_ids(model, net, synth.h_of(model.network))
-                if ids:
-                    runs.append((f"{name} (opening given)", name, net, ids))
-        for label, name, net, open_curves in runs:
+            model = surfaces.surface_model(name) if kind == "surfaces" else None
+            runs.append((name, name, net, model, ()))
+            ids = open_ids(model, net, synth.h_of(model.network)) if model is not None else []
+            if ids:
+                runs.append((f"{name} (opening given)", name, net, model, ids))
+        for label, name, net, model, open_curves in runs:
             ref = reference_seconds(net)
             t0 = time.perf_counter()
             with warnings.catch_warnings():
@@ -272,8 +271,7 @@ def main(argv=None) -> int:
             tot["faces"] += len(mesh.triangles)
             if not ck.ok:
                 bad.append(f"{label}: {ck.warning()}")
-            if kind == "surfaces":
-                model = surfaces.surface_model(name)
+            if model is not None:
                 d = both_ways(model, mesh, synth.h_of(model.network))
                 row.update(true_patches=model.patches, true_boundary_loops=model.boundary_loops, distances=d)
                 print(f"      patches {mesh.n_patches} (true {model.patches}), boundary loops {ck.boundary_loops} "
