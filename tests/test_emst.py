@@ -129,3 +129,44 @@ def test_edges_as_from_a_coo_graph():
         tree = minimum_spanning_tree(coo_matrix((w[first], (uk // n, uk % n)), shape=(n, n)).tocsr()).tocoo()
         e = np.column_stack([np.minimum(tree.row, tree.col), np.maximum(tree.row, tree.col)]).astype(np.int64)
         np.testing.assert_array_equal(emst_edges(X, k=k), e[np.lexsort(e.T[::-1])])
+
+
+def _sets(seed=3):
+    """Point sets of every awkward kind: random, on a grid (many equal lengths), on a line,
+    with duplicated points, and of 0, 1 and 2 points; 2D and 3D mixed."""
+    rng = np.random.default_rng(seed)
+    grid = np.stack(np.meshgrid(np.arange(6.0), np.arange(5.0), np.arange(3.0)), -1).reshape(-1, 3)
+    out = [np.zeros((0, 3)), np.zeros((1, 2)), rng.normal(size=(2, 3)), grid, grid[::-1].copy()]
+    for n in (5, 17, 60, 150):
+        out.append(rng.normal(size=(n, 3)))
+        out.append(np.c_[np.arange(n) * 1.0, np.zeros(n)])
+        x = rng.uniform(0, 10, (n, 2))
+        out.append(np.r_[x, x[: n // 4]])  # duplicates
+    return out
+
+
+def test_emst_of_many_sets_at_once_equals_one_set_at_a_time():
+    from curvenet.methods.emst import emst_edges_each
+
+    sets = _sets()
+    ks = [1 + i % 11 for i in range(len(sets))]
+    together = emst_edges_each(sets, ks)
+    assert len(together) == len(sets)
+    for X, k, e in zip(sets, ks, together):
+        alone = emst_edges_each([X], [k])[0]
+        np.testing.assert_array_equal(e, alone)
+        assert e.dtype == np.int64 and e.shape == (max(len(X) - 1, 0), 2) or k < len(X) - 1
+
+
+def test_emst_of_many_sets_is_each_sets_exact_spanning_tree():
+    from scipy.sparse.csgraph import minimum_spanning_tree
+    from scipy.spatial.distance import cdist
+
+    from curvenet.methods.emst import emst_edges_each
+
+    rng = np.random.default_rng(7)
+    sets = [rng.normal(size=(n, 3)) for n in (3, 9, 40, 90)]  # distinct lengths: one EMST each
+    for X, e in zip(sets, emst_edges_each(sets, [len(X) - 1 for X in sets])):
+        t = minimum_spanning_tree(np.triu(cdist(X, X))).tocoo()
+        ref = np.sort(np.column_stack([t.row, t.col]), axis=1)
+        np.testing.assert_array_equal(e, ref[np.lexsort(ref.T[::-1])])

@@ -162,3 +162,19 @@ def test_clusters_number_as_connected_components():
         g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
         _, lab = connected_components(g, directed=False)
         np.testing.assert_array_equal(_clusters(Y, r), lab)
+
+
+def test_pruned_trees_of_many_sets_equal_each_alone():
+    from curvenet.methods.robust.spanning import pruned_trees
+
+    rng = np.random.default_rng(2)
+    sets, cuts, keeps = [], [], []
+    for n in (12, 40, 90):
+        X = _line((0, 0), (n / 2, 0))
+        X = np.r_[X, X[::3] + [0.3, 0.9] + rng.normal(0, 0.05, (len(X[::3]), 2)), _line((4, -1), (4, -6))]
+        sets.append(X)
+        cuts.append(SPANNING.prune + SPANNING.prune_noise * NOISE)
+        keeps.append(None if n == 40 else rng.random(len(X)) < 0.1)
+    for X, cut, keep, adj in zip(sets, cuts, keeps, pruned_trees(sets, cuts, keeps)):
+        assert adj == pruned_tree(X, cut, keep)
+        assert any(len(a) > 2 for a in adj)  # the twig at x = 4 (5 spacings, over the cut) stays

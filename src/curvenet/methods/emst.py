@@ -17,7 +17,7 @@ from ..network import Curve, CurveNetwork
 from ..neighbors import knn
 from ..validate import as_points
 
-__all__ = ["reconstruct_emst", "emst_edges"]
+__all__ = ["reconstruct_emst", "emst_edges", "emst_edges_each"]
 
 
 def emst_edges(points: np.ndarray, *, k: int = 12) -> np.ndarray:
@@ -38,31 +38,74 @@ def emst_edges(points: np.ndarray, *, k: int = 12) -> np.ndarray:
     (E, 2) ndarray of int64
         Edges ``(i, j)`` with ``i < j``, sorted.
     """
+    return emst_edges_each([points], [k])[0]
+
+
+def emst_edges_each(blocks, ks) -> list[np.ndarray]:
+    """:func:`emst_edges` of several point sets at once: one spanning-tree computation over
+    the block-diagonal graph of all of them instead of one per set.
+
+    Parameters
+    ----------
+    blocks : sequence of (n_b, d) ndarray
+        The point sets.
+    ks : sequence of int
+        Neighbours per point of each set's graph (clipped to ``n_b - 1``).
+
+    Returns
+    -------
+    list of (E_b, 2) ndarray of int64
+        Per set, its edges as :func:`emst_edges` returns them (ids into that set). The same
+        edges as one call per set: no edge joins two sets, every set's weights are its own, and
+        Kruskal's algorithm (scipy's, with a stable sort of the weights) meets each set's edges
+        in the order it meets them alone.
+
+    Notes
+    -----
+    Many small sets (the regions and chains the robust method reads with their trees) cost
+    mostly the fixed cost of each sparse-graph call; here that cost is paid once.
+    """
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-    n = len(points)
-    if n < 2:
-        return np.zeros((0, 2), dtype=np.int64)
-    dist, idx = knn(points, k)
-    rows = np.repeat(np.arange(n), idx.shape[1])
-    cols = idx.ravel()
-    i, j = np.minimum(rows, cols), np.maximum(rows, cols)
-    # explicit zeros count as "no edge" in csgraph: shift every weight by the same tiny amount
-    scale = float(np.median(dist[:, 0])) if dist.size else 1.0
-    w = dist.ravel() + max(scale, 1e-300) * 1e-9
-    # one weight per undirected pair (the same from both sides: coo would sum duplicates)
-    key = i * n + j
-    uk, first = np.unique(key, return_index=True)
-    ui, uj = uk // n, uk % n
-    # the keys are sorted and unique: row by row, columns ascending, which is the canonical
-    # CSR layout itself (what a COO matrix of them converts to, without the conversion)
-    g = csr_matrix((w[first], uj, np.searchsorted(ui, np.arange(n + 1))), shape=(n, n))
+    sizes = np.array([len(b) for b in blocks], dtype=np.int64)
+    base = np.r_[0, np.cumsum(sizes)]
+    total = int(base[-1])
+    keys, weights = [np.zeros(0, dtype=np.int64)], [np.zeros(0)]
+    for b, (X, k) in enumerate(zip(blocks, ks)):
+        n = int(sizes[b])
+        if n < 2:
+            continue
+        dist, idx = knn(X, int(k))
+        rows = np.repeat(np.arange(n), idx.shape[1])
+        cols = idx.ravel()
+        i, j = np.minimum(rows, cols), np.maximum(rows, cols)
+        # explicit zeros count as "no edge" in csgraph: shift every weight of the set by the
+        # same tiny amount
+        scale = float(np.median(dist[:, 0])) if dist.size else 1.0
+        w = dist.ravel() + max(scale, 1e-300) * 1e-9
+        # one weight per undirected pair (the same from both sides: coo would sum duplicates)
+        key = i * n + j
+        uk, first = np.unique(key, return_index=True)
+        keys.append((uk // n + base[b]) * total + (uk % n + base[b]))
+        weights.append(w[first])
+    key, w = np.concatenate(keys), np.concatenate(weights)
+    out = [np.zeros((0, 2), dtype=np.int64) for _ in blocks]
+    if not len(key):
+        return out
+    ui, uj = key // total, key % total
+    # the keys are sorted and unique (sets in turn, each row by row, columns ascending): the
+    # canonical CSR layout itself, without a COO conversion
+    g = csr_matrix((w, uj, np.searchsorted(ui, np.arange(total + 1))), shape=(total, total))
     t = minimum_spanning_tree(g)
-    row = np.repeat(np.arange(n), np.diff(t.indptr))
-    col = t.indices
-    e = np.column_stack([np.minimum(row, col), np.maximum(row, col)]).astype(np.int64)
-    return e[np.lexsort(e.T[::-1])]
+    row = np.repeat(np.arange(total), np.diff(t.indptr))
+    col = t.indices.astype(np.int64)
+    e = np.column_stack([np.minimum(row, col), np.maximum(row, col)])
+    e = e[np.lexsort(e.T[::-1])]
+    cut = np.searchsorted(e[:, 0], base)
+    for b in range(len(blocks)):
+        out[b] = e[cut[b]:cut[b + 1]] - base[b]
+    return out
 
 
 def reconstruct_emst(points, *, k: int = 12) -> CurveNetwork:

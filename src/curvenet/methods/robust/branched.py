@@ -42,7 +42,7 @@ import numpy as np
 
 from .chains import flat_steps, group_medians
 from .params import RobustParams, Scales
-from .spanning import prune_cut, pruned_tree, tree_cores
+from .spanning import prune_cut, pruned_tree, pruned_trees, tree_cores
 from .thresholds import BRANCHED, NODES
 from .topology import Topology
 
@@ -175,12 +175,11 @@ def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: li
     return [sorted(mem) for mem in cores], pieces
 
 
-def _near_jump_branches(X: np.ndarray, hl: float, noise: float, keep: np.ndarray) -> bool:
-    """Whether the pruned tree of the chain's points near its jumps (within
-    ``BRANCHED.window`` spacings plus the noise of a jump's two points) shows a junction: the
-    cheap test before the whole chain's tree (a long chain under noise jumps where the noise
-    widens it, most often without a branch). Points near the window's edge are kept from the
-    cut (the chain goes on there)."""
+def _jump_window(X: np.ndarray, hl: float, noise: float, keep: np.ndarray):
+    """The chain's points near its jumps (within ``BRANCHED.window`` spacings plus the noise of
+    a jump's two points), whose pruned tree :func:`_near_jump_branches` reads: their mask and
+    the points kept from the cut (``keep`` and those near the window's edge, where the chain
+    goes on). None when every point of the chain is near a jump."""
     step = np.linalg.norm(np.diff(X, axis=0), axis=1)
     at = np.flatnonzero(step > _jump(hl, noise))
     ends = X[np.unique(np.r_[at, at + 1])]
@@ -188,10 +187,14 @@ def _near_jump_branches(X: np.ndarray, hl: float, noise: float, keep: np.ndarray
     w = BRANCHED.window * hl + noise
     inw = d <= w
     if inw.all():
-        return True
-    Y = X[inw]
-    edge = d[inw] > w - _reach(hl, noise)
-    adj = pruned_tree(Y, prune_cut(hl, noise), keep[inw] | edge)
+        return None
+    return inw, keep[inw] | (d[inw] > w - _reach(hl, noise))
+
+
+def _near_jump_branches(Y: np.ndarray, adj: list[set], hl: float, noise: float) -> bool:
+    """Whether the pruned tree ``adj`` of the chain's points ``Y`` near its jumps
+    (:func:`_jump_window`) shows a junction: the cheap test before the whole chain's tree (a
+    long chain under noise jumps where the noise widens it, most often without a branch)."""
     return len(tree_cores(Y, adj, np.ones(len(Y), dtype=bool), hl, noise, 1)) > 0
 
 
@@ -237,13 +240,23 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
         out[own[rr >= 0]] = True
         return out
 
-    for i, hl in cand:
-        c = topo.chains[i]
-        X = P[c.ids]
-        keep = linked_to_a_region(c.ids)
-        if not _near_jump_branches(X, hl, sc.noise, keep):
+    # the trees of every candidate at once (one sparse-graph call for all the windows, one for
+    # the whole chains whose window shows a junction): the candidates are distinct chains, and
+    # splitting one leaves the others' points as they are
+    Xs = [P[topo.chains[i].ids] for i, _ in cand]
+    keeps = [linked_to_a_region(topo.chains[i].ids) for i, _ in cand]
+    wins = [_jump_window(X, hl, sc.noise, keep) for X, keep, (_, hl) in zip(Xs, keeps, cand)]
+    looked = [j for j, w in enumerate(wins) if w is not None]
+    wtrees = pruned_trees([Xs[j][wins[j][0]] for j in looked], [prune_cut(cand[j][1], sc.noise) for j in looked],
+                          [wins[j][1] for j in looked])
+    near = {j: _near_jump_branches(Xs[j][wins[j][0]], adj, cand[j][1], sc.noise) for j, adj in zip(looked, wtrees)}
+    whole = [j for j in range(len(cand)) if near.get(j, True)]
+    trees = dict(zip(whole, pruned_trees([Xs[j] for j in whole], [prune_cut(cand[j][1], sc.noise) for j in whole],
+                                         [keeps[j] for j in whole])))
+    for j, (i, hl) in enumerate(cand):
+        if j not in trees:
             continue
-        adj = pruned_tree(X, prune_cut(hl, sc.noise), keep)
+        c, X, keep, adj = topo.chains[i], Xs[j], keeps[j], trees[j]
         plan = branch_plan(X, hl, sc.noise, keep, adj)
         if plan is None:  # (two or more junctions: read at any noise, see the module's notes)
             _split_at_cores(topo, sc, i, c, X, hl, keep, adj, linked_region)

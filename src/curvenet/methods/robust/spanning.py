@@ -51,7 +51,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..emst import emst_edges
+from ..emst import emst_edges_each
+from .chains import group_medians
 from .graph import components
 from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_each, region_stats, straight_pairs,
                      towards_tips)
@@ -59,7 +60,7 @@ from .params import RobustParams, Scales
 from .thresholds import NODES, PAIRED, SPANNING
 from .topology import Topology
 
-__all__ = ["split_multiple_junctions", "split_plan", "Plan", "pruned_tree", "prune_cut", "tree_cores"]
+__all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut", "tree_cores"]
 
 
 class Plan(NamedTuple):
@@ -90,9 +91,23 @@ def pruned_tree(X: np.ndarray, cut: float, keep: np.ndarray | None = None) -> li
     is cut (its vertices lose their edges) when its length is under ``cut``. Up to
     ``SPANNING.prune_passes`` passes (cutting a branch can leave a short one behind).
     """
+    return pruned_trees([X], [cut], [keep])[0]
+
+
+def pruned_trees(blocks, cuts, keeps) -> list[list[set]]:
+    """:func:`pruned_tree` of several point sets, their spanning trees computed at once
+    (:func:`..emst.emst_edges_each`): per set ``blocks[b]`` (n_b, d), its cut ``cuts[b]`` and
+    its ``keeps[b]`` ((n_b,) bool or None), the pruned tree as adjacency sets."""
+    edges = emst_edges_each(blocks, [min(SPANNING.k, len(X) - 1) for X in blocks])
+    return [_pruned(X, e, cut, keep) for X, e, cut, keep in zip(blocks, edges, cuts, keeps)]
+
+
+def _pruned(X: np.ndarray, edges: np.ndarray, cut: float, keep: np.ndarray | None) -> list[set]:
+    """The tree of ``edges`` ((E, 2) ids into ``X``) as adjacency sets, pruned as
+    :func:`pruned_tree` says."""
     n = len(X)
     adj: list[set] = [set() for _ in range(n)]
-    for a, b in emst_edges(X, k=min(SPANNING.k, n - 1)).tolist():
+    for a, b in edges.tolist():
         adj[a].add(b)
         adj[b].add(a)
     for _ in range(SPANNING.prune_passes):
@@ -225,8 +240,31 @@ def tree_cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noi
     return out
 
 
+def region_points(P: np.ndarray, tree, h: np.ndarray, ids: np.ndarray, end_points: np.ndarray) -> np.ndarray:
+    """The points whose spanning tree :func:`split_plan` reads for the region ``ids``: those
+    within ``SPANNING.margin`` spacings (the region's median) of a region point, and the points
+    ``end_points`` of its chain ends; sorted ids into ``P`` (its arguments are that function's)."""
+    return region_points_each(P, tree, np.array([np.median(h[ids])]), [ids], [end_points])[0]
+
+
+def region_points_each(P: np.ndarray, tree, hls: np.ndarray, regions: list, end_points: list) -> list[np.ndarray]:
+    """:func:`region_points` of several regions (``regions``, their median spacings ``hls``
+    and ``end_points``), the ball queries of all of them in one call."""
+    sizes = np.array([len(ids) for ids in regions], dtype=np.int64)
+    if not len(sizes) or not sizes.sum():
+        return [np.union1d(np.zeros(0, dtype=np.int64), e) for e in end_points]
+    flat = np.concatenate(regions).astype(np.int64)
+    balls = tree.query_ball_point(P[flat], np.repeat(SPANNING.margin * np.asarray(hls, dtype=float), sizes))
+    lens = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
+    found = np.fromiter((v for b in balls for v in b), dtype=np.int64, count=int(lens.sum()))
+    per = np.add.reduceat(lens, np.r_[0, np.cumsum(sizes)[:-1]]) if len(sizes) else lens
+    cut = np.r_[0, np.cumsum(per)]
+    return [np.union1d(np.unique(found[cut[r]:cut[r + 1]]), e) for r, e in enumerate(end_points)]
+
+
 def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray, ends: list,
-               end_points: np.ndarray, min_cores: int = SPANNING.min_cores) -> Plan | None:
+               end_points: np.ndarray, min_cores: int = SPANNING.min_cores,
+               near_tree: tuple[np.ndarray, list[set]] | None = None) -> Plan | None:
     """How the region of points ``ids`` splits into a row of junctions (None: it does not).
 
     Parameters
@@ -248,16 +286,22 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     min_cores : int
         The fewest junctions of a split (``SPANNING.min_cores``, or ``SPANNING.clean_min_cores``
         on noise-free input).
+    near_tree : (ndarray, list of set), optional
+        The region's points (:func:`region_points`) and their pruned tree (:func:`pruned_tree`
+        with the cut :func:`prune_cut`), when already built (:func:`split_multiple_junctions`
+        builds every region's at once).
 
     Returns
     -------
     Plan or None
     """
     hl = float(np.median(h[ids]))
-    near = np.unique(np.concatenate(tree.query_ball_point(P[ids], SPANNING.margin * hl)).astype(np.int64))
-    near = np.union1d(near, end_points)
+    if near_tree is None:
+        near = region_points(P, tree, h, ids, end_points)
+        adj = pruned_tree(P[near], prune_cut(hl, noise))
+    else:
+        near, adj = near_tree
     X = P[near]
-    adj = pruned_tree(X, prune_cut(hl, noise))
     inside = np.isin(near, ids)
     cores = tree_cores(X, adj, inside, hl, noise, min_cores)
     if len(cores) < min_cores:
@@ -406,13 +450,20 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
     L_all, off = branch_lines(topo, sc, incs)
     anchors, _ = region_stats(topo.P, sc.h, [topo.regions[r] for r in cand])
     hub = meet_at_one_point_each(L_all, off, anchors)
+    # every region's spanning tree at once (one sparse-graph call instead of one per region)
+    read = np.flatnonzero(~hub).tolist()
+    end_points = [np.array([int(topo.end_ids(i, s)[-1]) for i, s in incs[j]], dtype=np.int64) for j in read]
+    regions = [topo.regions[cand[j]] for j in read]
+    hls = group_medians(sc.h[np.concatenate(regions)], [len(ids) for ids in regions]) if read else np.zeros(0)
+    nears = region_points_each(topo.P, sc.tree, hls, regions, end_points)
+    cuts = [prune_cut(float(hl), sc.noise) for hl in hls]
+    trees = pruned_trees([topo.P[near] for near in nears], cuts, [None] * len(read))
     plans = []
-    for j in np.flatnonzero(~hub).tolist():
+    for j, ep, near, adj in zip(read, end_points, nears, trees):
         r, inc = cand[j], incs[j]
         ids = topo.regions[r]
         L = Lines(*(a[off[j]:off[j + 1]] for a in L_all))
-        end_points = np.array([int(topo.end_ids(i, s)[-1]) for i, s in inc], dtype=np.int64)
-        plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), end_points, min_cores)
+        plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), ep, min_cores, (near, adj))
         if plan is None:
             continue
         if len(plan.ends) == 2 and not _branches_apart(L, list(inc), plan):  # converging curves
