@@ -303,3 +303,12 @@ def test_chains_past_several_junctions_are_split_under_noise_too(monkeypatch):
     before = compare(reconstruct(pts, method="robust"), truth, h=h)
     assert now["curve_f1"] >= before["curve_f1"] + 0.15, (now["curve_f1"], before["curve_f1"])
     assert now["n_nodes_found"] > before["n_nodes_found"]
+
+
+def test_the_outline_clean_is_exact():
+    # its notch corners lie 4h apart on samples exactly h apart: at the finest re-test the
+    # corner's three branches reach the shell's middle (2 spacings) exactly, where the last bit
+    # of a sum of steps decided (the corner lost, curve F1 0.914); radii compared with the
+    # rounding tolerance (kernels/shell.py), every sampling is exact
+    got = _score("outline")
+    assert got["exact_topology"] and got["curve_f1"] == 1.0

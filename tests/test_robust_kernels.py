@@ -10,7 +10,7 @@ from curvenet.methods.robust import frames as RF
 from curvenet.methods.robust import graph as RG
 from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust.kernels import heap, linalg, nodes, registry as KR, shell
-from curvenet.methods.robust.thresholds import ENDS, LINALG, NODES, SHELL, SPACING, STRIP, TANGENTS
+from curvenet.methods.robust.thresholds import ENDS, LINALG, NODES, NUMERIC, SHELL, SPACING, STRIP, TANGENTS
 from curvenet import synth
 from curvenet.neighbors import build_tree, knn
 
@@ -510,7 +510,9 @@ def _shell_groups_reference(P, h, indptr, indices, r_in, r_out, pts):
     g = csr_matrix((np.maximum(w, 1e-300), indices, indptr), shape=(n, n))
     out = []
     for p in pts:
-        ro, ri = r_out * h[p], r_in * h[p]
+        # (the radii with the rounding tolerance, ties in, as the kernel compares them)
+        ro, ri = r_out * h[p] * (1 + NUMERIC.rel), r_in * h[p] * (1 - NUMERIC.rel)
+        rmid = 0.5 * (r_in + r_out) * h[p] * (1 - NUMERIC.rel)
         gd = dijkstra(g, indices=p, limit=ro)
         reach = np.flatnonzero(np.isfinite(gd))
         sh = reach[(gd[reach] >= ri) & (((P[reach] - P[p]) ** 2).sum(axis=1) >= ri * ri)]
@@ -520,7 +522,7 @@ def _shell_groups_reference(P, h, indptr, indices, r_in, r_out, pts):
         _, lab = connected_components(g[sh][:, sh], directed=False)
         top = np.zeros(lab.max() + 1)
         np.maximum.at(top, lab, gd[sh])
-        out.append(int((top >= 0.5 * (ri + ro)).sum()))
+        out.append(int((top >= rmid).sum()))
     return np.array(out)
 
 
@@ -551,10 +553,38 @@ def test_shell_groups_match_scipy_dijkstra(py, monkeypatch):
         # the plain kernel calls the heap of its module's globals (the compiled one its own)
         monkeypatch.setattr(shell, "_heap_push", lambda *a, _fm=fm: pushes.append(_fm) or heap._heap_push(*a))
         got = shell._shell_groups(P, h, indptr, indices, 2.5, 5.5, pts.astype(np.int64), 1,
-                                  SHELL._replace(front_max=fm))
+                                  SHELL._replace(front_max=fm), NUMERIC)
         assert np.array_equal(got[pts], ref), fm
     # the clump fills the short list (the heap is used), the curve points never do
     assert 0 < pushes.count(32) < pushes.count(0) and 10**9 not in pushes
+
+
+@pytest.mark.parametrize("py", [False, True])
+def test_shell_groups_count_a_branch_reaching_the_middle_exactly(py):
+    """Three branches leave a corner at right angles, sampled every spacing exactly; on the
+    finest shell of the re-tests (1.25 to 2.75 spacings, middle at 2) each branch's shell point
+    lies 2 spacings out: exactly at the middle, where only the last bit of the sum of two steps
+    against the spacing decided (the spacing one ulp over 0.02: none of the three counted)."""
+    step = 0.02
+    k = np.arange(1, 9)[:, None] * step
+    z = np.zeros_like(k)
+    P = np.vstack([[[0.0, 0.0, 0.0]], np.c_[k, z, z], np.c_[z, k, z], np.c_[z, z, k]])
+    n = len(P)
+    src, dst = [], []
+    for a in range(n):  # links to the next samples along each branch (and the corner)
+        for b in range(n):
+            if a != b and np.linalg.norm(P[a] - P[b]) < 1.01 * step:
+                src.append(a)
+                dst.append(b)
+    indptr, indices = K.csr_union(n, np.array(src), np.array(dst))
+    h = np.full(n, np.nextafter(step, 1.0))
+    pts = np.array([0], dtype=np.int64)
+    if py:
+        got = shell._shell_groups(P, h, indptr, indices, 1.25, 2.75, pts, 1, SHELL, NUMERIC)
+    else:
+        got = K.shell_groups(P, h, indptr, indices, 1.25, 2.75, subset=pts)
+    assert got[0] == 3
+    assert _shell_groups_reference(P, h, indptr, indices, 1.25, 2.75, pts)[0] == 3
 
 
 def _chain_order_reference(n, src, dst, dd, chn, n_chn):

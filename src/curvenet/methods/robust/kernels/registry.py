@@ -31,7 +31,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from ...._sigint import held
-from ..thresholds import CHAINS, ENDS, LINALG, NODES, NOISY, SHELL, SPACING, STRAND, STRIP, UNTANGLE, VOTE
+from ..thresholds import CHAINS, ENDS, LINALG, NODES, NOISY, NUMERIC, SHELL, SPACING, STRAND, STRIP, UNTANGLE, VOTE
 from . import chains, frames, graph, heap, linalg, nodes, shell
 from .nodes import JunctionParams
 
@@ -169,7 +169,7 @@ _PLAIN = {
     "csr_union": (graph._csr_union, ()),
     "components": (graph._components, ()),
     "strand_cuts": (graph._strand_cuts, (STRAND, LINALG)),
-    "shell_groups": (shell._shell_groups, (SHELL,)),
+    "shell_groups": (shell._shell_groups, (SHELL, NUMERIC)),
     "chain_order": (chains._chain_order, (CHAINS,)),
     "chain_ends": (chains._chain_ends, (CHAINS,)),
     "untangle": (chains._untangle, (UNTANGLE,)),

@@ -1,6 +1,11 @@
 """The geodesic shell test: how many branches leave every point (groups of its shell).
 
-The fixed constants come in a :class:`~curvenet.methods.robust.thresholds.Shell` (``sh``).
+The fixed constants come in a :class:`~curvenet.methods.robust.thresholds.Shell` (``sh``) and
+the rounding tolerance in a :class:`~curvenet.methods.robust.thresholds.Numeric` (``num``).
+Every radius is compared with that relative tolerance, ties counting in: on regularly sampled
+input a point often lies exactly at a radius (the middle of the shell is 4 spacings out, 2 at
+the finest scale of the re-tests), where the last bit of a sum of steps would otherwise decide
+whether a branch leaves.
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ from .heap import _heap_pop, _heap_push
 prange = range  # numba.prange in the compiled copies (parallel loops over blocks of points)
 
 
-def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks, sh):  # pragma: no cover - compiled
+def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks, sh, num):  # pragma: no cover - compiled
     """Groups of the geodesic shell around every point (see robust.shell_group_counts).
 
     The points ``order`` (any permutation: the result does not depend on it; a spatial one is
@@ -26,11 +31,11 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks, sh):  # pr
     nb = (no + bs - 1) // bs if bs > 0 else 0
     for b in prange(nb):
         p1 = (b + 1) * bs
-        _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, b * bs, p1 if p1 < no else no, groups, sh)
+        _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, b * bs, p1 if p1 < no else no, groups, sh, num)
     return groups
 
 
-def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, groups, sh):  # pragma: no cover - compiled
+def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, groups, sh, num):  # pragma: no cover - compiled
     """Points ``order[i0:i1]`` of :func:`_shell_groups` (own scratch: ids as int32)."""
     n = P.shape[0]
     d = P.shape[1]
@@ -50,8 +55,10 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
     stack = np.empty(n, dtype=np.int32)
     for ii in range(i0, i1):
         p = order[ii]
-        ro = r_out * h[p]
-        ri = r_in * h[p]
+        # the radii with the rounding tolerance, ties in: the reach bound a little out, the
+        # inner radius and the middle a little in
+        ro = r_out * h[p] * (1.0 + num.rel)
+        ri = r_in * h[p] * (1.0 - num.rel)
         nreach = 0
         # Dijkstra from p, bounded by ro. The frontier is a short list scanned for its nearest
         # point (on curves it holds a few); past front_max points (a dense clump) it moves to a
@@ -134,7 +141,7 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
         # connected groups of shell points, linked among themselves; a group counts only
         # when it reaches the middle of the shell along the graph (a branch leaving p), not
         # when it is a small cluster near the inner radius (the tip of an acute corner)
-        rmid = 0.5 * (ri + ro)
+        rmid = 0.5 * (r_in + r_out) * h[p] * (1.0 - num.rel)
         ng = 0
         for q in range(nreach):
             a = reached[q]
