@@ -587,6 +587,7 @@ _NEAR_MISSES = [
     (R.merge_close_junctions, lambda: _doubled_junction(REPAIRS.merge_len + 2 + 2 * EPS)[0],
      {"merge_len": REPAIRS.merge_len + 4 * EPS}),
     (R.merge_close_junctions, lambda: _aim_near_miss()[0], {"width": PRM.link_width + 4 * EPS}),
+    (R.merge_twin_chains, lambda: _twins(np.sqrt((REPAIRS.twin + EPS) ** 2 - 1.0))[0], {"twin": REPAIRS.twin + 4 * EPS}),
 ]
 
 
@@ -925,7 +926,7 @@ def test_split_branched_chains_leaves_two_branches_into_one_region():
 # ------------------------------------------------------------------------------ the order
 TESTED = (R.split_multiple_junctions, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
-          R.merge_close_junctions, R.split_paired_junctions)
+          R.merge_close_junctions, R.split_paired_junctions, R.merge_twin_chains)
 
 
 def test_every_repair_in_the_order_has_its_tests_here():
@@ -992,3 +993,39 @@ def test_tips_to_junctions_leaves_the_stub_under_noise_or_when_linked(noise, lin
     # region's own (both left to prune_spurs)
     topo, *_ = _close_junctions_with_stub(linked)
     _assert_untouched(R.tips_to_junctions, topo, noise=noise)
+
+
+# ------------------------------------------------------------------------------ merge_twin_chains
+def _twins(offset):
+    """Junctions ``A`` at the origin and ``B`` at (5, 0), two branches each, joined by two
+    chains: one through x = 1, 3 on the axis and one through x = 2, 4 at height ``offset``."""
+    net = _Net()
+    A = net.region([[0, 0]])
+    B = net.region([[5, 0]])
+    net.chain(_line((-1, 1), (-6, 6), 6), (A, -1))
+    net.chain(_line((-1, -1), (-6, -6), 6), (A, -1))
+    net.chain(_line((6, 1), (11, 6), 6), (B, -1))
+    net.chain(_line((6, -1), (11, -6), 6), (B, -1))
+    one = net.chain([[1, 0], [3, 0]], (A, B))
+    two = net.chain([[2, offset], [4, offset]], (B, A))
+    return net.topology(), A, B, one, two
+
+
+def test_merge_twin_chains_joins_a_curve_traced_twice():
+    # each point of either chain lies within sqrt(1 + offset^2) of the other's: just inside
+    offset = np.sqrt((REPAIRS.twin - EPS) ** 2 - 1.0)
+    topo, A, B, one, two = _twins(offset)
+    assert topo.v[A] == topo.v[B] == 4
+    _run(R.merge_twin_chains, topo)
+    assert not topo.alive[two] and topo.alive[one]
+    assert topo.v[A] == topo.v[B] == 3
+    # the four samples in order along the curve, from A to B
+    assert topo.P[topo.chains[one].ids][:, 0].tolist() == [1, 2, 3, 4]
+    assert topo.chains[one].ends == [A, B]
+
+
+def test_merge_twin_chains_leaves_two_curves_apart():
+    # an eye: two curves between the same two junctions, just beyond the twin distance
+    offset = np.sqrt((REPAIRS.twin + EPS) ** 2 - 1.0)
+    topo, *_ = _twins(offset)
+    _assert_untouched(R.merge_twin_chains, topo)

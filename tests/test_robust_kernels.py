@@ -498,7 +498,7 @@ def test_shell_groups_of_a_subset_equal_those_of_all(cloud):
     assert np.all(part[rest] == 0) and np.any(full[sub] != 2)
 
 
-def _shell_groups_reference(P, h, indptr, indices, r_in, r_out, pts):
+def _shell_groups_reference(P, h, indptr, indices, r_in, r_out, pts, goes_on=False):
     """Shell group counts of the points ``pts`` by scipy's dijkstra (numpy, one point at a time)."""
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import connected_components, dijkstra
@@ -522,7 +522,11 @@ def _shell_groups_reference(P, h, indptr, indices, r_in, r_out, pts):
         _, lab = connected_components(g[sh][:, sh], directed=False)
         top = np.zeros(lab.max() + 1)
         np.maximum.at(top, lab, gd[sh])
-        out.append(int((top >= rmid).sum()))
+        # (goes_on: a group also counts when a point of it is linked to one beyond the shell)
+        out_link = np.array([not np.isfinite(gd[indices[indptr[a]:indptr[a + 1]]]).all() for a in sh])
+        beyond = np.zeros(lab.max() + 1, dtype=bool)
+        np.logical_or.at(beyond, lab, out_link)
+        out.append(int(((top >= rmid) | (goes_on & beyond)).sum()))
     return np.array(out)
 
 
@@ -547,12 +551,14 @@ def test_shell_groups_match_scipy_dijkstra(py, monkeypatch):
     if not py:
         got = K.shell_groups(P, h, indptr, indices, 2.5, 5.5, subset=pts)
         assert np.array_equal(got[pts], ref)
+        got = K.shell_groups(P, h, indptr, indices, 2.5, 5.5, subset=pts, goes_on=True)
+        assert np.array_equal(got[pts], _shell_groups_reference(P, h, indptr, indices, 2.5, 5.5, pts, True))
         return
     pushes = []
     for fm in (SHELL.front_max, 0, 10**9):
         # the plain kernel calls the heap of its module's globals (the compiled one its own)
         monkeypatch.setattr(shell, "_heap_push", lambda *a, _fm=fm: pushes.append(_fm) or heap._heap_push(*a))
-        got = shell._shell_groups(P, h, indptr, indices, 2.5, 5.5, pts.astype(np.int64), 1,
+        got = shell._shell_groups(P, h, indptr, indices, 2.5, 5.5, False, pts.astype(np.int64), 1,
                                   SHELL._replace(front_max=fm), NUMERIC)
         assert np.array_equal(got[pts], ref), fm
     # the clump fills the short list (the heap is used), the curve points never do
@@ -580,11 +586,33 @@ def test_shell_groups_count_a_branch_reaching_the_middle_exactly(py):
     h = np.full(n, np.nextafter(step, 1.0))
     pts = np.array([0], dtype=np.int64)
     if py:
-        got = shell._shell_groups(P, h, indptr, indices, 1.25, 2.75, pts, 1, SHELL, NUMERIC)
+        got = shell._shell_groups(P, h, indptr, indices, 1.25, 2.75, False, pts, 1, SHELL, NUMERIC)
     else:
         got = K.shell_groups(P, h, indptr, indices, 1.25, 2.75, subset=pts)
     assert got[0] == 3
     assert _shell_groups_reference(P, h, indptr, indices, 1.25, 2.75, pts)[0] == 3
+
+
+@pytest.mark.parametrize("py", [False, True])
+@pytest.mark.parametrize("goes_on", [False, True])
+def test_shell_groups_count_a_branch_going_on_past_a_thin_shell(py, goes_on):
+    """A curve point on the finest shell of the re-tests (1.25 to 2.75 spacings, middle at 2):
+    each side has one sample in the shell, at 1.9 spacings (short of the middle), the next at
+    3 (beyond the shell): with ``goes_on`` 2 groups (a curve), else 0 (the sampling's phase
+    decides)."""
+    x = np.array([0.0, 1.0, 1.9, 3.0, 4.0])
+    x = np.r_[x, -x[1:]]
+    P = np.c_[x, np.zeros_like(x), np.zeros_like(x)]
+    order = np.argsort(x)
+    indptr, indices = K.csr_union(len(P), np.r_[order[:-1], order[1:]], np.r_[order[1:], order[:-1]])
+    h = np.ones(len(P))
+    pts = np.array([0], dtype=np.int64)
+    if py:
+        got = shell._shell_groups(P, h, indptr, indices, 1.25, 2.75, goes_on, pts, 1, SHELL, NUMERIC)
+    else:
+        got = K.shell_groups(P, h, indptr, indices, 1.25, 2.75, subset=pts, goes_on=goes_on)
+    assert got[0] == (2 if goes_on else 0)
+    assert _shell_groups_reference(P, h, indptr, indices, 1.25, 2.75, pts, goes_on)[0] == got[0]
 
 
 def _chain_order_reference(n, src, dst, dd, chn, n_chn):

@@ -77,7 +77,7 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     return Regions(groups, flagged, reg, n_reg, close)
 
 
-def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None):
+def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None, goes_on=False):
     """Number of connected groups of linked points in the shell around each point.
 
     Parameters
@@ -92,6 +92,11 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
         Shell radii in units of ``h``.
     order : (N,) ndarray of int, optional
         Visiting order of the points (cache locality only), when already computed.
+    goes_on : bool
+        A group that goes on past the shell (a point of it linked to one beyond the outer
+        radius) counts as a branch even when it falls short of the shell's middle: on
+        noise-free and low-noise input (``NOISE.low``), where the links follow the curves, so
+        that the sampling's phase does not decide (see ``kernels/shell.py``).
 
     Returns
     -------
@@ -99,7 +104,7 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
     """
     return _k.shell_groups(
         np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
-        indptr, indices, float(shell_inner), float(shell_outer), order=order,
+        indptr, indices, float(shell_inner), float(shell_outer), order=order, goes_on=goes_on,
     )
 
 
@@ -158,13 +163,13 @@ def split_large_regions(P, hs, indptr, indices, flagged, ka, kb, prm: RobustPara
         flagged, reg, n_reg = _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm,
                                           noisy and k == 0, coarse, fine,
                                           SPLIT.min_points if k == 0 else SPLIT.fine_min_points,
-                                          0.0 if k == 0 else SPLIT.fine_noise * noise)
+                                          0.0 if k == 0 else SPLIT.fine_noise * noise, goes_on=not noisy)
         coarse = fine
     return flagged, reg, n_reg
 
 
 def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: RobustParams, noisy: bool,
-                coarse: float, fine: float, min_points: int, clear: float):
+                coarse: float, fine: float, min_points: int, clear: float, goes_on: bool = False):
     """One scale of :func:`split_large_regions`: the regions too large for one junction at shell
     scale ``coarse`` re-tested at scale ``fine`` (both in shell radii), split when that shows
     separate junctions (sub-regions of ``min_points`` points or more); only regions whose
@@ -179,7 +184,7 @@ def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: Robust
     big = (rad > SPLIT.radius * coarse * prm.shell_outer * hmean) & (fine * prm.shell_inner * hmean > clear)
     if not big.any():
         return flagged, reg, n_reg
-    ft = _fine_test(P, hs, indptr, indices, flagged, ka, kb, ids[big[r]], prm, fine)
+    ft = _fine_test(P, hs, indptr, indices, flagged, ka, kb, ids[big[r]], prm, fine, goes_on=goes_on)
     # the points of each big region, grouped (one sort, not one pass per region)
     bsel = big[r]
     bi, br = ids[bsel], r[bsel]
@@ -450,7 +455,8 @@ def _close_candidates(P, hs, indptr, indices, sub, na, nb_, prm, sc):
     candidates kept: ``SPLIT.fine_min_points`` points or more, one of them in 3 or more groups.
     """
     N = len(P)
-    fine = _k.shell_groups(P, hs, indptr, indices, sc * prm.shell_inner, sc * prm.shell_outer, subset=sub)
+    fine = _k.shell_groups(P, hs, indptr, indices, sc * prm.shell_inner, sc * prm.shell_outer, subset=sub,
+                           goes_on=True)  # (noise-free input only)
     nf = np.zeros(N, dtype=bool)
     nf[sub] = fine[sub] != 2
     cand, _ = components(N, na, nb_, nf)
@@ -483,11 +489,12 @@ def _region_sizes(P, hs, ids, r, n_reg):
     return rad, np.bincount(r, weights=hs[ids], minlength=n_reg) / cnt
 
 
-def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm, scale) -> _Fine:
-    """The shell test again on the points ``sub``, ``scale`` times the size, and what it frees."""
+def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm, scale, goes_on: bool = False) -> _Fine:
+    """The shell test again on the points ``sub``, ``scale`` times the size, and what it frees
+    (``goes_on``: see :func:`shell_group_counts`)."""
     N = len(P)
     fine = _k.shell_groups(P, hs, indptr, indices, scale * prm.shell_inner, scale * prm.shell_outer,
-                           subset=sub)
+                           subset=sub, goes_on=goes_on)
     nf = flagged.copy()
     nf[sub] = fine[sub] != 2
     reg2, _ = components(N, ka, kb, nf)

@@ -25,7 +25,7 @@ from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS
 from .topology import Topology
 
-__all__ = ["ORDER", "run_repairs", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
+__all__ = ["ORDER", "run_repairs", "merge_twin_chains", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
            "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "join_through_pass_regions",
            "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions", "split_branched_chains"]
 
@@ -84,6 +84,39 @@ def absorb_short_loops(topo: Topology, sc: Scales, prm: RobustParams) -> None:
             cen = P[topo.regions[r]].mean(axis=0)
             if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm.shell_outer * hl:
                 topo.absorb_chain(i, r)
+
+
+def merge_twin_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Two chains between the same two regions that are one curve traced twice become one.
+
+    The failure: the samples of a short curve between two junctions are shared out between two
+    chains (every other sample in each), giving the two junctions a double edge. Two live open
+    chains with the same two end regions (distinct) are twins when every point of each lies
+    within ``REPAIRS.twin`` spacings (plus the noise) of a point of the other; the second (in
+    chain order) dies and its points join the first, ordered along it. Two curves between the
+    same two junctions that lie apart (an eye's two arcs) are left as they are.
+    """
+    from scipy.spatial import cKDTree
+
+    P, h = topo.P, sc.h
+    pairs: dict[tuple[int, int], list[int]] = {}
+    for i, c in enumerate(topo.chains):
+        if topo.alive[i] and not c.closed and c.ends[0] != c.ends[1]:
+            pairs.setdefault((min(c.ends), max(c.ends)), []).append(i)
+    for key in sorted(pairs):
+        group = pairs[key]
+        while len(group) >= 2:
+            i = group[0]
+            for j in group[1:]:
+                a, b = topo.chains[i].ids, topo.chains[j].ids
+                lim = REPAIRS.twin * float(np.median(h[np.r_[a, b]])) + sc.noise
+                if (cKDTree(P[a]).query(P[b])[0].max() <= lim * (1 + NUMERIC.rel)
+                        and cKDTree(P[b]).query(P[a])[0].max() <= lim * (1 + NUMERIC.rel)):
+                    topo.merge_twin(i, j)
+                    group.remove(j)
+                    break
+            else:
+                group.pop(0)
 
 
 def absorb_orphans(topo: Topology, sc: Scales, prm: RobustParams) -> None:
@@ -608,6 +641,7 @@ ORDER = (
     join_facing_tips,
     attach_dangling,
     prune_spurs,
+    merge_twin_chains,  # (after the tips joined junctions: a tip's chain can become a twin)
     join_through_pass_regions,
     split_paired_junctions,
     merge_close_junctions,  # (after the split: it merges back what it takes for one junction)

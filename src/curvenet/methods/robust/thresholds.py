@@ -598,6 +598,12 @@ class Repairs(NamedTuple):
     #: passes of the spur pruning (a pruned spur can make another)
     #: origin: first version (3e727c1); no measurement recorded
     prune_passes: int = 3
+    #: two chains between the same two regions are one curve traced twice when every point of
+    #: each lies within this many spacings (plus the noise) of the other's points: samples of
+    #: one curve shared out between two chains lie about one spacing from the other's
+    #: origin: set with the repair (issue 25), not tuned: the shell test's finest re-tests on a
+    #: real-dev building split a 4 h edge's samples into chains of 4 and 3 points
+    twin: float = 1.5
 
 
 REPAIRS = Repairs()

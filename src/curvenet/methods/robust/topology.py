@@ -137,6 +137,30 @@ class Topology:
             self.v[c.ends[1]] -= 1
         self._changed()
 
+    def merge_twin(self, i: int, j: int) -> None:
+        """Chains ``i`` and ``j``, between the same two regions, become one: ``j`` dies and its
+        points join ``i``, each placed along ``i`` by its projection on ``i``'s polyline
+        (ties: ``i``'s own points first, then by point id)."""
+        ci, cj = self.chains[i], self.chains[j]
+        Q = self.P[ci.ids]
+        seg = np.diff(Q, axis=0)
+        s0 = np.r_[0.0, np.cumsum(np.linalg.norm(seg, axis=1))]
+        X = self.P[cj.ids]
+        if len(Q) >= 2:
+            # every point against every segment of i (twin chains are short): the nearest one
+            L2 = np.maximum(np.einsum("ij,ij->i", seg, seg), np.finfo(float).tiny)
+            t = np.clip(np.einsum("kij,ij->ki", X[:, None, :] - Q[None, :-1, :], seg) / L2, 0.0, 1.0)
+            foot = Q[None, :-1, :] + t[..., None] * seg[None]
+            k = np.argmin(np.einsum("kij,kij->ki", X[:, None, :] - foot, X[:, None, :] - foot), axis=1)
+            par = s0[k] + t[np.arange(len(X)), k] * np.sqrt(L2[k])
+        else:
+            par = np.zeros(len(X))
+        ids = np.r_[ci.ids, cj.ids]
+        key = np.r_[s0, par]
+        own = np.r_[np.zeros(len(ci.ids)), np.ones(len(cj.ids))]
+        self.chains[i] = Chain(ids[np.lexsort((ids, own, key))], list(ci.ends))
+        self.drop(j)
+
     def join_through(self, r: int, inc: list[tuple[int, int]]) -> None:
         """The two chain ends ``inc`` at region ``r`` (valence 2) become one curve through it.
 

@@ -438,10 +438,10 @@ def noisy_tangents(P, rows, idx, h, sig):
     return _run("noisy_tangents", (P, rows, idx, h, sig), len(rows))
 
 
-def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
+def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None, goes_on=False):
     """Shell group count of every point (or of the points ``subset``, the others 0): see
     :func:`~.shell._shell_groups` (``order``: the visiting order of all points when already
-    computed, see :func:`_order`)."""
+    computed, see :func:`_order`; ``goes_on``: a group going on past the shell counts too)."""
     if P.shape[0] >= MAX_SHELL_POINTS:
         raise ValueError("too many points for the shell test (int32 ids)")
     if subset is not None:
@@ -450,7 +450,7 @@ def shell_groups(P, h, indptr, indices, r_in, r_out, subset=None, order=None):
         order = _order(P)
     par = compiled_active() and len(order) >= PAR_MIN["shell_groups"]
     nblocks = BLOCKS_PER_THREAD * numba.get_num_threads() if par else 1
-    return _run("shell_groups", (P, h, indptr, indices, r_in, r_out, order, nblocks), len(order))
+    return _run("shell_groups", (P, h, indptr, indices, r_in, r_out, bool(goes_on), order, nblocks), len(order))
 
 
 def junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise, params):

@@ -17,7 +17,7 @@ from .heap import _heap_pop, _heap_push
 prange = range  # numba.prange in the compiled copies (parallel loops over blocks of points)
 
 
-def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks, sh, num):  # pragma: no cover - compiled
+def _shell_groups(P, h, indptr, indices, r_in, r_out, goes_on, order, nblocks, sh, num):  # pragma: no cover - compiled
     """Groups of the geodesic shell around every point (see robust.shell_group_counts).
 
     The points ``order`` (any permutation: the result does not depend on it; a spatial one is
@@ -31,11 +31,11 @@ def _shell_groups(P, h, indptr, indices, r_in, r_out, order, nblocks, sh, num): 
     nb = (no + bs - 1) // bs if bs > 0 else 0
     for b in prange(nb):
         p1 = (b + 1) * bs
-        _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, b * bs, p1 if p1 < no else no, groups, sh, num)
+        _shell_groups_block(P, h, indptr, indices, r_in, r_out, goes_on, order, b * bs, p1 if p1 < no else no, groups, sh, num)
     return groups
 
 
-def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, groups, sh, num):  # pragma: no cover - compiled
+def _shell_groups_block(P, h, indptr, indices, r_in, r_out, goes_on, order, i0, i1, groups, sh, num):  # pragma: no cover - compiled
     """Points ``order[i0:i1]`` of :func:`_shell_groups` (own scratch: ids as int32)."""
     n = P.shape[0]
     d = P.shape[1]
@@ -139,8 +139,11 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
             if d2 >= ri * ri:
                 shell[a] = p
         # connected groups of shell points, linked among themselves; a group counts only
-        # when it reaches the middle of the shell along the graph (a branch leaving p), not
-        # when it is a small cluster near the inner radius (the tip of an acute corner)
+        # when it is a branch leaving p: it reaches the middle of the shell along the graph,
+        # or (``goes_on``) it goes on past the shell (a point of it linked to one beyond the
+        # outer radius); not a small cluster near the inner radius (the tip of an acute
+        # corner). (On a thin shell, at the finest re-tests, a branch sampled every spacing has
+        # one sample in it, on either side of the middle by the sampling's phase.)
         rmid = 0.5 * (r_in + r_out) * h[p] * (1.0 - num.rel)
         ng = 0
         for q in range(nreach):
@@ -149,6 +152,7 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
                 continue
             comp[a] = p
             gmax = gd[a]
+            beyond = False
             top = 1
             stack[0] = a
             while top > 0:
@@ -158,11 +162,13 @@ def _shell_groups_block(P, h, indptr, indices, r_in, r_out, order, i0, i1, group
                     gmax = gd[x]
                 for e in range(indptr[x], indptr[x + 1]):
                     y = indices[e]
-                    if shell[y] == p and comp[y] != p:
+                    if mark[y] != p:  # (not reached within the outer radius)
+                        beyond = True
+                    elif shell[y] == p and comp[y] != p:
                         comp[y] = p
                         stack[top] = y
                         top += 1
-            if gmax >= rmid:
+            if gmax >= rmid or (goes_on and beyond):
                 ng += 1
         groups[p] = ng
     return groups
