@@ -77,7 +77,7 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     return Regions(groups, flagged, reg, n_reg, close)
 
 
-def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None, goes_on=False):
+def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=None):
     """Number of connected groups of linked points in the shell around each point.
 
     Parameters
@@ -92,11 +92,6 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
         Shell radii in units of ``h``.
     order : (N,) ndarray of int, optional
         Visiting order of the points (cache locality only), when already computed.
-    goes_on : bool
-        A group that goes on past the shell (a point of it linked to one beyond the outer
-        radius) counts as a branch even when it falls short of the shell's middle: on
-        noise-free and low-noise input (``NOISE.low``), where the links follow the curves, so
-        that the sampling's phase does not decide (see ``kernels/shell.py``).
 
     Returns
     -------
@@ -104,7 +99,7 @@ def shell_group_counts(P, h, indptr, indices, shell_inner, shell_outer, order=No
     """
     return _k.shell_groups(
         np.ascontiguousarray(P), np.ascontiguousarray(h, dtype=np.float64),
-        indptr, indices, float(shell_inner), float(shell_outer), order=order, goes_on=goes_on,
+        indptr, indices, float(shell_inner), float(shell_outer), order=order,
     )
 
 
@@ -490,8 +485,13 @@ def _region_sizes(P, hs, ids, r, n_reg):
 
 
 def _fine_test(P, hs, indptr, indices, flagged, ka, kb, sub, prm, scale, goes_on: bool = False) -> _Fine:
-    """The shell test again on the points ``sub``, ``scale`` times the size, and what it frees
-    (``goes_on``: see :func:`shell_group_counts`)."""
+    """The shell test again on the points ``sub``, ``scale`` times the size, and what it frees.
+
+    ``goes_on``: a group that goes on past the shell (a point of it linked to one beyond the
+    outer radius) counts as a branch even when it falls short of the shell's middle, so that
+    the sampling's phase does not decide on the thin shells of the re-tests; on noise-free and
+    low-noise input only (``NOISE.low``), where the links follow the curves (see
+    ``kernels/shell.py``)."""
     N = len(P)
     fine = _k.shell_groups(P, hs, indptr, indices, scale * prm.shell_inner, scale * prm.shell_outer,
                            subset=sub, goes_on=goes_on)

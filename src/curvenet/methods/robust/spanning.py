@@ -257,7 +257,7 @@ def region_points_each(P: np.ndarray, tree, hls: np.ndarray, regions: list, end_
     balls = tree.query_ball_point(P[flat], np.repeat(SPANNING.margin * np.asarray(hls, dtype=float), sizes))
     lens = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
     found = np.fromiter((v for b in balls for v in b), dtype=np.int64, count=int(lens.sum()))
-    per = np.add.reduceat(lens, np.r_[0, np.cumsum(sizes)[:-1]]) if len(sizes) else lens
+    per = np.add.reduceat(lens, np.r_[0, np.cumsum(sizes)[:-1]])
     cut = np.r_[0, np.cumsum(per)]
     return [np.union1d(np.unique(found[cut[r]:cut[r + 1]]), e) for r, e in enumerate(end_points)]
 
