@@ -22,7 +22,7 @@ from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
 from curvenet.methods.robust.params import RobustParams, Scales
-from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
+from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LAYOUT, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
 from curvenet.methods.robust.topology import Topology
 
 PRM = RobustParams()
@@ -1022,6 +1022,30 @@ def test_merge_twin_chains_joins_a_curve_traced_twice():
     # the four samples in order along the curve, from A to B
     assert topo.P[topo.chains[one].ids][:, 0].tolist() == [1, 2, 3, 4]
     assert topo.chains[one].ends == [A, B]
+
+
+def test_merge_twin_chains_orders_a_long_twin_block_by_block():
+    # a long curve (a wave, 2,400 samples) traced twice: the samples shared out between two
+    # chains, every other one in each. The twin's points are placed along the first chain in
+    # blocks of points (its 1,199 segments make several blocks of LAYOUT.curve_block pairs);
+    # the merged chain runs through all 2,400 samples in order, as one block would place them
+    n = 2400
+    x = np.arange(1, n + 1, dtype=float)
+    wave = np.column_stack([x, 3.0 * np.sin(x / 40.0)])
+    net = _Net()
+    A = net.region([[0, 0]])
+    B = net.region([[n + 1, 3.0 * np.sin((n + 1) / 40.0)]])
+    net.chain(_line((-1, 1), (-6, 6), 6), (A, -1))
+    net.chain(_line((-1, -1), (-6, -6), 6), (A, -1))
+    net.chain(_line((n + 2, 1), (n + 7, 6), 6), (B, -1))
+    net.chain(_line((n + 2, -1), (n + 7, -6), 6), (B, -1))
+    one = net.chain(wave[0::2], (A, B))
+    two = net.chain(wave[1::2][::-1], (B, A))
+    topo = net.topology()
+    assert LAYOUT.curve_block // (n // 2 - 1) < n // 2  # several blocks
+    _run(R.merge_twin_chains, topo)
+    assert not topo.alive[two] and topo.alive[one]
+    assert topo.P[topo.chains[one].ids][:, 0].tolist() == x.tolist()
 
 
 def test_merge_twin_chains_leaves_two_curves_apart():

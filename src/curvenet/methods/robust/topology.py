@@ -16,6 +16,7 @@ import os
 import numpy as np
 
 from .chains import Chain, order_between
+from .thresholds import LAYOUT
 
 __all__ = ["Topology", "TopologyError"]
 
@@ -146,15 +147,19 @@ class Topology:
         seg = np.diff(Q, axis=0)
         s0 = np.r_[0.0, np.cumsum(np.linalg.norm(seg, axis=1))]
         X = self.P[cj.ids]
+        par = np.zeros(len(X))
         if len(Q) >= 2:
-            # every point against every segment of i (twin chains are short): the nearest one
+            # every point against every segment of i: the nearest one; in blocks of points so
+            # that the (points, segments, d) temporaries hold about LAYOUT.curve_block
+            # point-segment pairs (a long curve traced twice), the same arithmetic per pair
             L2 = np.maximum(np.einsum("ij,ij->i", seg, seg), np.finfo(float).tiny)
-            t = np.clip(np.einsum("kij,ij->ki", X[:, None, :] - Q[None, :-1, :], seg) / L2, 0.0, 1.0)
-            foot = Q[None, :-1, :] + t[..., None] * seg[None]
-            k = np.argmin(np.einsum("kij,kij->ki", X[:, None, :] - foot, X[:, None, :] - foot), axis=1)
-            par = s0[k] + t[np.arange(len(X)), k] * np.sqrt(L2[k])
-        else:
-            par = np.zeros(len(X))
+            rows = max(1, LAYOUT.curve_block // len(seg))
+            for a in range(0, len(X), rows):
+                Xb = X[a:a + rows, None, :]
+                t = np.clip(np.einsum("kij,ij->ki", Xb - Q[None, :-1, :], seg) / L2, 0.0, 1.0)
+                foot = Q[None, :-1, :] + t[..., None] * seg[None]
+                k = np.argmin(np.einsum("kij,kij->ki", Xb - foot, Xb - foot), axis=1)
+                par[a:a + rows] = s0[k] + t[np.arange(len(k)), k] * np.sqrt(L2[k])
         ids = np.r_[ci.ids, cj.ids]
         key = np.r_[s0, par]
         own = np.r_[np.zeros(len(ci.ids)), np.ones(len(cj.ids))]
