@@ -170,6 +170,54 @@ def test_merge_near_pass_through_needs_a_junction_not_a_free_end():
     _assert_untouched(R.merge_near_pass_through, topo)
 
 
+def _corner_next_to_junction(d):
+    """A junction ``J`` at the origin (left, up and down branches) and, ``d`` along x, a region
+    ``C`` where one curve turns a right angle (up and right): two junctions whose short curve
+    between them was taken into their regions."""
+    net = _Net()
+    J = net.region([[0, 0]])
+    C = net.region([[d, 0]])
+    net.chain(_line((-6, 0), (-1, 0), 6), (-1, J))
+    net.chain(_line((0, 1), (0, 6), 6), (J, -1))
+    net.chain(_line((0, -1), (0, -6), 6), (J, -1))
+    net.chain(_line((d, 1), (d, 6), 6), (C, -1))
+    net.chain(_line((d + 1, 0), (d + 6, 0), 6), (C, -1))
+    return net.topology(), J, C
+
+
+def test_merge_near_pass_through_keeps_a_corner_next_to_a_junction_under_noise():
+    # under noise the region turned through at a right angle is a junction of its own
+    noise = 0.1
+    topo, J, C = _corner_next_to_junction(GAP - EPS)
+    assert topo.v[[J, C]].tolist() == [3, 2]
+    _assert_untouched(R.merge_near_pass_through, topo, noise=noise)
+    # the same region passed straight through (the right-hand chain turned to go down, in
+    # line with the upward one) is half of a crossing: it merges
+    topo, J, C = _corner_next_to_junction(GAP - EPS)
+    down = _line((GAP - EPS, -1), (GAP - EPS, -6), 6)
+    topo.P[topo.chains[4].ids] = down
+    assert R._passed_straight(topo, _scales(topo, noise), C)
+    _run(R.merge_near_pass_through, topo, noise=noise)
+    assert topo.v[[J, C]].tolist() == [5, 0]
+
+
+def test_merge_near_pass_through_merges_a_corner_on_noise_free_input():
+    # noise-free, the short curve between two junctions survives as a chain: a region next to
+    # a junction with no such chain is half of a crossing (cut into two corners), as before
+    topo, J, C = _corner_next_to_junction(GAP - EPS)
+    _run(R.merge_near_pass_through, topo)
+    assert topo.v[[J, C]].tolist() == [5, 0]
+
+
+def test_passed_straight_reads_the_angle_of_the_two_chain_ends():
+    # the right-hand chain turned to leave C at 29 and at 31 degrees from the upward one's line
+    for deg, want in ((29.0, True), (31.0, False)):
+        topo, J, C = _corner_next_to_junction(GAP - EPS)
+        u = np.array([np.sin(np.radians(deg)), -np.cos(np.radians(deg))])  # from straight down
+        topo.P[topo.chains[4].ids] = np.array([GAP - EPS, 0.0]) + np.arange(1, 7)[:, None] * u
+        assert R._passed_straight(topo, _scales(topo, 0.1), C) is want
+
+
 # ------------------------------------------------------------------------------ absorb_short_loops
 def _loop_at_junction(top):
     """A junction ``J`` at the origin with three long branches and a thin loop from J up to

@@ -35,7 +35,10 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
 
     The failure: noise cuts a crossing's region in two, one half seen as a plain pass-through.
     Each valence-2 region merges into the nearest region of valence 2 or more within
-    ``link * REPAIRS.tip_gap`` spacings (plus ``LINKS.gap_noise`` times the noise).
+    ``link * REPAIRS.tip_gap`` spacings (plus ``LINKS.gap_noise`` times the noise). Under noise,
+    into a junction (valence 3 or more) only when the curve passes it straight
+    (:func:`_passed_straight`): else it is a junction whose short curve to that one the widened
+    shell took into the regions, and it stays (see ``REPAIRS.pass_cos``).
     """
     from scipy.spatial import cKDTree
 
@@ -65,8 +68,27 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
         if best is None:
             continue
         t = best[1]
+        if not sc.clean and v[t] >= NODES.junction_valence and not _passed_straight(topo, sc, r):
+            continue
         lab[lab == r] = t
         topo.absorb(r, t)
+
+
+def _passed_straight(topo: Topology, sc: Scales, r: int) -> bool:
+    """Whether the curve through region ``r`` (valence 2) passes it straight: the lines fitted
+    on its two chain ends (as node placement fits them: ``NODES.fit_span`` spacings plus
+    ``NODES.fit_noise`` times the noise) within ``REPAIRS.pass_cos`` of each other; True when
+    an end has too few points for a line."""
+    P, h = topo.P, sc.h
+    us = []
+    for i, s in topo.incident(r):
+        ids = topo.chains[i].ids if s == 1 else topo.chains[i].ids[::-1]
+        span = NODES.fit_span + NODES.fit_noise * sc.noise / float(h[ids[-1]])
+        _, u = fit_line(end_portion(P, h, np.asarray(ids), span=span))
+        if u is None:
+            return True
+        us.append(u)
+    return len(us) != 2 or abs(float(us[0] @ us[1])) >= REPAIRS.pass_cos
 
 
 def absorb_short_loops(topo: Topology, sc: Scales, prm: RobustParams) -> None:

@@ -562,6 +562,16 @@ class Repairs(NamedTuple):
     #: two tips (or a tip and a region) within this many link lengths are joined
     #: origin: set with the join of facing free ends (8b94cf1); no measurement recorded
     tip_gap: float = 1.2
+    #: under noise, a region passed through by one curve (valence 2) merges into a junction next
+    #: to it (valence 3 or more) only when the curve passes it straight: the lines of its two
+    #: chain ends within 30 degrees of each other (cosine; either way along them). Half of a
+    #: crossing cut in two by noise is passed straight by one of the crossing curves; a region
+    #: whose two curves meet at an angle there is a junction of its own, whose short curve to
+    #: the next junction the widened shell took into the regions (two junctions 4-9 h apart)
+    #: origin: benchmark (issue 25, 4 December 2026; 784 kind/real-dev/synthetic runs): 21
+    #: better, 2 worse (-0.03, -0.01); on noise-free input too, 16 worse (the outline kind's
+    #: jittered clean samplings, 4 CASSIE sketches: a crossing cut into two corner halves)
+    pass_cos: float = float(np.cos(np.radians(30.0)))
     #: a free end attaches to a chain at most this many link lengths (plus gap_noise times the
     #: noise) ahead of it: a link lost to noise; a longer gap on clean samples is in the data
     #: origin: benchmark: 1.5 -> 1.0, CASSIE 0.8752 -> 0.8774, 2.5h gaps under noise still joined
