@@ -120,15 +120,22 @@ def _assert_untouched(repair, topo: Topology, noise: float = 0.0, run=_run) -> N
 
 
 # ------------------------------------------------------------------------------ merge_near_pass_through
-def _split_crossing(d):
-    """A crossing cut in two by noise: junction ``J`` at the origin (left, up and down branches,
-    and a chain along x to ``R``), ``R`` at (d, 0) passed through by the horizontal curve."""
+def _junction_beside(d):
+    """A hand-built net with a junction ``J`` at the origin (left, up and down branches, chains
+    0-2) and a region at (d, 0) with no chain yet: ``net, J`` and that region."""
     net = _Net()
     J = net.region([[0, 0]])
-    Rr = net.region([[d, 0]])
+    R_ = net.region([[d, 0]])
     net.chain(_line((-6, 0), (-1, 0), 6), (-1, J))
     net.chain(_line((0, 1), (0, 6), 6), (J, -1))
     net.chain(_line((0, -1), (0, -6), 6), (J, -1))
+    return net, J, R_
+
+
+def _split_crossing(d):
+    """A crossing cut in two by noise: junction ``J`` at the origin (left, up and down branches,
+    and a chain along x to ``R``), ``R`` at (d, 0) passed through by the horizontal curve."""
+    net, J, Rr = _junction_beside(d)
     mid = net.chain(_line((1, 0), (d - 1, 0), 2), (J, Rr))
     right = net.chain(_line((d + 1, 0), (d + 6, 0), 6), (Rr, -1))
     return net.topology(), J, Rr, mid, right
@@ -174,12 +181,7 @@ def _corner_next_to_junction(d):
     """A junction ``J`` at the origin (left, up and down branches) and, ``d`` along x, a region
     ``C`` where one curve turns a right angle (up and right): two junctions whose short curve
     between them was taken into their regions."""
-    net = _Net()
-    J = net.region([[0, 0]])
-    C = net.region([[d, 0]])
-    net.chain(_line((-6, 0), (-1, 0), 6), (-1, J))
-    net.chain(_line((0, 1), (0, 6), 6), (J, -1))
-    net.chain(_line((0, -1), (0, -6), 6), (J, -1))
+    net, J, C = _junction_beside(d)
     net.chain(_line((d, 1), (d, 6), 6), (C, -1))
     net.chain(_line((d + 1, 0), (d + 6, 0), 6), (C, -1))
     return net.topology(), J, C

@@ -75,19 +75,12 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
 
 
 def _passed_straight(topo: Topology, sc: Scales, r: int) -> bool:
-    """Whether the curve through region ``r`` (valence 2) passes it straight: the lines fitted
-    on its two chain ends (as node placement fits them: ``NODES.fit_span`` spacings plus
-    ``NODES.fit_noise`` times the noise) within ``REPAIRS.pass_cos`` of each other; True when
-    an end has too few points for a line."""
-    P, h = topo.P, sc.h
-    us = []
-    for i, s in topo.incident(r):
-        ids = topo.chains[i].ids if s == 1 else topo.chains[i].ids[::-1]
-        span = NODES.fit_span + NODES.fit_noise * sc.noise / float(h[ids[-1]])
-        _, u = fit_line(end_portion(P, h, np.asarray(ids), span=span))
-        if u is None:
-            return True
-        us.append(u)
+    """Whether the curve through region ``r`` (valence 2) passes it straight: the lines of its
+    two chain ends (:func:`_end_line`, as node placement fits them) within
+    ``REPAIRS.pass_cos`` of each other; True when an end has too few points for a line."""
+    us = [_end_line(topo.P, sc.h, topo.chains, i, s, sc.noise)[2] for i, s in topo.incident(r)]
+    if any(u is None for u in us):
+        return True
     return len(us) != 2 or abs(float(us[0] @ us[1])) >= REPAIRS.pass_cos
 
 
