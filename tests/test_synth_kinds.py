@@ -93,3 +93,27 @@ def test_run_kinds_rows():
     assert "## Analogues of real failure kinds (synthetic)" in md and "worst curve F1" in md
     with pytest.raises(InputError):
         bench.run_kinds(["emst"], ["cube"])
+
+
+def test_plate_model_has_tangent_t_junctions_in_pairs(models):
+    # every node: a line and an arc leaving it in opposite directions (tangent continuation)
+    # and a third curve at a right angle to both, the fillet's edge to the node of the
+    # other face 6h away
+    m = models["plate"]
+    h = synth.h_of(m)
+    assert (m.valence == 3).all() and len(m.nodes) == 16
+    assert sum(c.start is None for c in m.curves) == 4  # the holes, on both faces
+    for v in range(len(m.nodes)):
+        dirs, far = [], []
+        for c in m.curves:
+            if c.start is None or v not in (c.start, c.end):
+                continue
+            p = c.points if c.start == v else c.points[::-1]
+            u = p[1] - p[0]
+            dirs.append(u / np.linalg.norm(u))
+            far.append(np.linalg.norm(p[-1] - p[0]) / h)
+        cos = np.array(dirs) @ np.array(dirs).T
+        pair = np.unravel_index(np.argmin(cos), cos.shape)
+        assert cos[pair] < -0.999  # tangent continuation
+        third = ({0, 1, 2} - set(pair)).pop()
+        assert abs(cos[third, pair[0]]) < 1e-6 and abs(far[third] - 6.0) < 1e-6

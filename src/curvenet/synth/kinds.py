@@ -199,6 +199,44 @@ def _tangent() -> CurveNetwork:
                    "tangent, a fillet whose straight edge continues past it (a tangent T junction)")
 
 
+def _plate() -> CurveNetwork:
+    h = 0.02
+    b = _Builder(h)
+    R = _rot(0.4, 0.25, -0.3)
+    place = lambda X: np.array([matvec(R, x) for x in np.atleast_2d(X)])
+    W, D, T, r, hole = 40 * h, 25 * h, 6 * h, 5 * h, 4 * h
+    # a plate with rounded corners (vertical edges filleted, radius r) and two through holes:
+    # on each face the outline is four lines and four quarter arcs meeting tangentially, and at
+    # each of the 8 tangent points an edge of the fillet (length T) leaves at a right angle,
+    # to the tangent point of the other face: 16 tangent T junctions in pairs T apart
+    corners = [(r, r, np.pi), (W - r, r, 1.5 * np.pi), (W - r, D - r, 0.0), (r, D - r, 0.5 * np.pi)]
+    face = []
+    for z in (0.0, T):
+        ends = []
+        for cx, cy, a0 in corners:
+            arc = lambda u, cx=cx, cy=cy, z=z: place(np.column_stack([cx + r * np.cos(u), cy + r * np.sin(u),
+                                                                      np.full(len(u), z)]))
+            i, j = b.node(arc(np.array([a0]))[0]), b.node(arc(np.array([a0 + np.pi / 2]))[0])
+            b.param(arc, a0, a0 + np.pi / 2, i, j)
+            ends.append((i, j))
+        for k in range(4):
+            j, i = ends[k][1], ends[(k + 1) % 4][0]
+            b.curve(_poly([b.nodes[j], b.nodes[i]], b.step), j, i)
+        face.append(ends)
+    for k in range(4):
+        for e in range(2):
+            lo, hi = face[0][k][e], face[1][k][e]
+            b.curve(_poly([b.nodes[lo], b.nodes[hi]], b.step), lo, hi)
+    for z in (0.0, T):
+        for cx in (W / 3, 2 * W / 3):
+            circle = lambda u, cx=cx, z=z: place(np.column_stack([cx + hole * np.cos(u), D / 2 + hole * np.sin(u),
+                                                                  np.full(len(u), z)]))
+            b.loop(_param(circle, 0.0, 2 * np.pi, b.step)[:-1])
+    return b.build("plate", "CAD-like part: a plate 6h thick with rounded corners (radius 5h) and two "
+                   "holes; tangent T junctions (a line continuing into an arc, an edge leaving at a "
+                   "right angle) in pairs 6h apart")
+
+
 #: Model name -> builder (no argument, returns a CurveNetwork).
 KIND_MODELS: dict[str, Callable[[], CurveNetwork]] = {
     "ladder": _ladder,
@@ -207,4 +245,5 @@ KIND_MODELS: dict[str, Callable[[], CurveNetwork]] = {
     "twigs": _twigs,
     "outline": _outline,
     "tangent": _tangent,
+    "plate": _plate,
 }
