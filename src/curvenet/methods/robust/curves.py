@@ -239,8 +239,9 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
 
     The width ``b_j`` is chosen per sample from the noise ``sigma`` (Lepski's idea): the curves
     are fitted with the widest kernel ``FIT.band`` and with the narrowest ``FIT.band_min``;
-    where the two fits part (across the curve) by more than the noise explains, the wide fit
-    rounds a bend or a corner, and the width is cut to the one that minimises the expected
+    where the two fits part (across the curve) by more than the noise explains (their parting
+    averaged along the curve over ``FIT.bias_reach`` and over ``FIT.bias_reach_long`` wide
+    kernels: the larger), the wide fit rounds a bend or a corner, and the width is cut to the one that minimises the expected
     squared error: bias growing as ``b^4``, noise variance falling as ``1 / b``. On a straight
     or gently bent stretch the width stays ``FIT.band``; within a few samples of a held end it
     is at most ``FIT.end_taper`` times their number (a node placed a little off the samples
@@ -308,12 +309,11 @@ def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
     t /= np.maximum(np.linalg.norm(t, axis=1), NUMERIC.tiny)[:, None]
     D = Yn - Yw
     D -= (D * t).sum(axis=1)[:, None] * t  # across the curve only
-    # mean over a window of the wide kernel's reach along the curve (within the curve)
-    w = int(np.ceil(wide))
+    # the mean over a window of the wide kernel's reach along the curve (within the curve),
+    # and over a longer window (a steadier mean where the curve bends smoothly): the larger
     cum = np.r_[0.0, np.cumsum((D * D).sum(axis=1))]
-    lo = np.maximum(ch.idx - w, ch.first)
-    hi = np.minimum(ch.idx + w, ch.last)
-    part2 = (cum[hi + 1] - cum[lo]) / (hi - lo + 1)
+    part2 = np.maximum(_window_mean(cum, ch, int(np.ceil(FIT.bias_reach * wide))),
+                       _window_mean(cum, ch, int(np.ceil(FIT.bias_reach_long * wide))))
     # what the noise alone puts between the two fits, and the wide fit's bias beyond it
     noise2 = (d - 1) * FIT.kernel_l2 * sigma**2 * (1.0 / narrow - 1.0 / wide)
     bias2 = np.maximum(part2 - noise2, NUMERIC.tiny)
@@ -325,6 +325,14 @@ def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
     # samples then pulls only the last few of them
     k = np.where(ch.held_curve, np.minimum(ch.idx - ch.first, ch.last - ch.idx), np.inf)
     return np.clip(np.minimum(best, FIT.end_taper * k), narrow, wide)
+
+
+def _window_mean(cum: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
+    """(M,) mean of a per-sample value over the ``w`` samples on either side of each sample,
+    within its curve; ``cum`` (M + 1,) is the value's running sum with a leading 0."""
+    lo = np.maximum(ch.idx - w, ch.first)
+    hi = np.minimum(ch.idx + w, ch.last)
+    return (cum[hi + 1] - cum[lo]) / (hi - lo + 1)
 
 
 class _Chains:

@@ -953,6 +953,19 @@ class Fit(NamedTuple):
     #: of the widest fit, of width ``wide``; a property of the kernel, not a tuning; unitless)
     #: origin: a property of the kernel (above)
     bias_order: float = 4.0
+    #: the wide fit's squared bias at a sample is the larger of the mean squared parting of the
+    #: two fits over this many wide-kernel reaches on either side (short: a corner's bias stays
+    #: local) ...
+    #: origin: the reach of the widest kernel (71dc5cf): a window of one kernel width
+    bias_reach: float = 1.0
+    #: ... and over this many (long: the parting of the two fits is correlated over about one
+    #: kernel width, so the short window holds about two independent values of it and its mean
+    #: follows the noise; three reaches hold about six). On smooth curves the width then follows
+    #: the bend, not the noise: over the 16 synthetic models at noise 0.1 h the mean distance
+    #: to the true curves 0.0525 -> 0.0465 h (knot 0.075 -> 0.048, fig8 0.060 -> 0.039)
+    #: origin: benchmark: benchmarks/fit_eval.py (issue 25, 4 December 2026): 2, 3 and 4 reaches
+    #: alone and 3 with the short window (taken): see docs/method.md, stage 8
+    bias_reach_long: float = 3.0
     #: curves of fewer samples are left as they are (points: an open curve's two ends are held)
     #: origin: derived: a fit needs a sample between the two held ends
     min_points: int = 3
