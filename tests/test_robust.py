@@ -389,10 +389,30 @@ def test_fit_curves_is_pure_and_follows_a_corner():
     dist = np.minimum(np.where(Y[:, 0] <= 20, np.abs(Y[:, 1]), np.inf), np.where(Y[:, 1] >= 0, np.abs(Y[:, 0] - 20), np.inf))
     raw = np.minimum(np.where(X[:, 0] <= 20, np.abs(X[:, 1]), np.inf), np.where(X[:, 1] >= 0, np.abs(X[:, 0] - 20), np.inf))
     assert dist.mean() < 0.6 * raw.mean()
-    # the corner is rounded (a spline has no kink), but less than by the widest kernel: the
-    # width is cut where the wide fit parts from the narrow one
+    # the corner is found and held at the knot of the two lines fitted on its sides (0.1 from
+    # the true corner, the noise 0.3 a coordinate)
+    assert np.linalg.norm(Y[20] - [20.0, 0.0]) < 0.15
+
+
+def test_fit_without_corners_rounds_a_corner_less_than_the_widest_kernel(monkeypatch):
+    # with the corner test off, the spline rounds the corner (it has no kink), but less than the
+    # widest kernel does: the width is cut where the wide fit parts from the narrow one
+    from curvenet.methods.robust import curves
+    from curvenet.methods.robust.curves import fit_curves
+    from curvenet.methods.robust.thresholds import FIT
+    from curvenet.network import Curve
+
+    rng = np.random.default_rng(3)
+    s = np.arange(0, 40.0)
+    true = np.column_stack([np.minimum(s, 20.0), np.maximum(s - 20.0, 0.0)])
+    X = true + rng.normal(scale=0.3, size=true.shape)
+    X[0], X[-1] = true[0], true[-1]
+    c = Curve(X, 0, 1, False, np.arange(len(X)))
+    held = np.linalg.norm(fit_curves([c], 0.3)[0].points[20] - [20.0, 0.0])
+    monkeypatch.setattr(curves, "FIT", FIT._replace(corner_gain=np.inf))
+    Y = fit_curves([c], 0.3)[0].points
     wide = fit_curves([c], 0.3, band=4.0)[0].points
-    assert np.linalg.norm(wide[20] - [20.0, 0.0]) > np.linalg.norm(Y[20] - [20.0, 0.0])
+    assert np.linalg.norm(wide[20] - [20.0, 0.0]) > np.linalg.norm(Y[20] - [20.0, 0.0]) > 5 * held
 
 
 def test_registered_as_method():
@@ -903,3 +923,46 @@ def test_fit_width_follows_the_bend_not_the_noise(monkeypatch):
     monkeypatch.setattr(curves, "FIT", FIT._replace(bias_reach_long=FIT.bias_reach))
     short = deviation(reconstruct_robust(pts), truth, h=h)[0]
     assert now < 0.05 < 0.06 < short
+
+
+def test_fit_holds_the_corners_of_a_noisy_square_loop_and_finds_none_on_a_circle():
+    from curvenet.methods.robust.curves import _Chains, _corners, fit_curves
+    from curvenet.network import Curve
+
+    rng = np.random.default_rng(5)
+    side = np.arange(20.0)
+    sq = np.vstack([np.column_stack([side, 0 * side]), np.column_stack([20 + 0 * side, side]),
+                    np.column_stack([20 - side, 20 + 0 * side]), np.column_stack([0 * side, 20 - side])])
+    X = sq + rng.normal(scale=0.2, size=sq.shape)  # (at 0.3 a 90-degree corner sampled every 1 is at the test's edge)
+    ch = _Chains(X, np.array([len(X)]), np.array([True]))
+    corner, at = _corners(ch, 0.2)
+    assert np.flatnonzero(corner).tolist() == [0, 20, 40, 60]
+    assert np.abs(at - [[0, 0], [20, 0], [20, 20], [0, 20]]).max() < 0.4
+    Y = fit_curves([Curve(X, None, None, True, np.arange(len(X)))], 0.2)[0].points
+    assert np.array_equal(Y[[0, 20, 40, 60]], at)
+    # the sides straight: closer to the square than the samples
+    d = lambda P: np.minimum(np.minimum(np.abs(P[:, 0]), np.abs(P[:, 0] - 20)), np.minimum(np.abs(P[:, 1]), np.abs(P[:, 1] - 20)))
+    assert d(Y).mean() < 0.5 * d(X).mean()
+    t = np.linspace(0, 2 * np.pi, 95, endpoint=False)
+    C = np.column_stack([15 * np.cos(t), 15 * np.sin(t)]) + rng.normal(scale=0.2, size=(95, 2))
+    assert not _corners(_Chains(C, np.array([95]), np.array([True])), 0.2)[0].any()
+
+
+def test_fit_distance_to_the_nearest_held_sample_matches_a_plain_loop():
+    # (the fit's width tapers towards the held samples: ends of open curves and corners)
+    from curvenet.methods.robust.curves import _to_held
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        m = rng.integers(1, 12, size=rng.integers(1, 6))
+        closed = rng.random(len(m)) < 0.5
+        M, cid = m.sum(), np.repeat(np.arange(len(m)), m)
+        idx, first = np.arange(M), np.repeat(np.r_[0, np.cumsum(m)[:-1]], m)
+        last, loop = first + m[cid] - 1, closed[cid]
+        held = rng.random(M) < rng.choice([0.05, 0.2, 0.6])
+        got = _to_held(held, idx, first, last, loop)
+        for i in range(M):
+            n = last[i] - first[i] + 1
+            hs = [j for j in range(first[i], last[i] + 1) if held[j]]
+            want = min((min(abs(i - j), n - abs(i - j)) if loop[i] else abs(i - j) for j in hs), default=np.inf)
+            assert got[i] == want

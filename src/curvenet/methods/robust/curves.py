@@ -287,6 +287,11 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
         m = sizes[start:stop]
         closed = np.array([bool(curves[i].closed) for i in block])
         ch = _Chains(X, m, closed)
+        corner, at = _corners(ch, float(sigma))
+        if corner.any():  # held where found, the two sides fitted apart
+            X = X.copy()
+            X[corner] = at
+            ch = _Chains(X, m, closed, corner)
         if band is not None:
             Y = ch.solve(np.full(len(X), float(band)))
         else:
@@ -323,8 +328,95 @@ def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
     best = wide * ((d - 1) * FIT.kernel_l2 * sigma**2 / (q2 * wide * bias2)) ** (1.0 / (q2 + 1.0))
     # near a held end no wider than its distance from it in samples: a node placed off the
     # samples then pulls only the last few of them
-    k = np.where(ch.held_curve, np.minimum(ch.idx - ch.first, ch.last - ch.idx), np.inf)
-    return np.clip(np.minimum(best, FIT.end_taper * k), narrow, wide)
+    return np.clip(np.minimum(best, FIT.end_taper * ch.to_held), narrow, wide)
+
+
+def _to_held(held: np.ndarray, idx: np.ndarray, first: np.ndarray, last: np.ndarray,
+             loop: np.ndarray) -> np.ndarray:
+    """(M,) samples from each sample to the nearest held one of its curve (along a loop either
+    way round; ``inf`` on a curve without one)."""
+    M = len(held)
+    far = M  # (farther than any two samples of one curve)
+    # the nearest held sample at or before / at or after each sample, in the concatenation
+    before = np.maximum.accumulate(np.where(held, idx, -far))
+    after = np.minimum.accumulate(np.where(held, idx, M + far)[::-1])[::-1]
+    d = np.minimum(np.where(before >= first, idx - before, far), np.where(after <= last, after - idx, far))
+    # a loop wraps: from a sample back past its first sample to its last held one, or on past
+    # its last sample to its first held one
+    lo_h, hi_h = after[first], before[last]  # each curve's first and last held sample
+    has = (lo_h <= last) & (hi_h >= first)
+    wrap = np.minimum(idx - first + last - hi_h + 1, last - idx + lo_h - first + 1)
+    d = np.where(loop & has, np.minimum(d, wrap), d)
+    return np.where(d < far, d, np.inf).astype(float)
+
+
+def _corners(ch: "_Chains", sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """The samples at sharp corners of the curves, and where each corner lies.
+
+    Over the ``FIT.corner_reach`` samples on either side of a sample (chord-length parameter
+    ``s``, 0 at the sample), two models of as many parameters are fitted by least squares to
+    each coordinate: a parabola ``a + b s + c s^2`` (a smooth bend) and a hinge
+    ``a + b s + c max(s, 0)`` (two lines meeting at the sample). A corner is where the hinge
+    fits better by at least ``FIT.corner_gain`` noise variances (sum of squares over the
+    window and the coordinates), its two lines turn by at least ``FIT.corner_turn`` degrees,
+    and no sample within the reach fits the hinge better by more; the corner lies at the
+    hinge's knot (``a``). Noise-free curves, curves shorter than two reaches and the samples
+    within a reach of an open curve's ends have none.
+
+    Returns
+    -------
+    corner : (M,) bool ndarray
+    at : (n_corners, d) float ndarray
+        The corners' positions, in the order of the samples.
+    """
+    M, d = ch.X.shape
+    L = int(FIT.corner_reach)
+    none = np.zeros(M, dtype=bool), np.zeros((0, d))
+    if not sigma > 0 or M < 2 * L + 1:
+        return none
+    idx, first, last = ch.idx, ch.first, ch.last
+    n = last - first + 1
+    ok = np.where(ch.loop, n >= 2 * L + 1, (idx - first >= L) & (last - idx >= L))
+    # a cheap bound first: the chords to the samples a reach away turn by FIT.corner_chord of
+    # the angle at least
+    ok_ids = np.flatnonzero(ok)
+    back = first[ok_ids] + (ok_ids - first[ok_ids] - L) % n[ok_ids]
+    ahead = first[ok_ids] + (ok_ids - first[ok_ids] + L) % n[ok_ids]
+    u, v = ch.X[ok_ids] - ch.X[back], ch.X[ahead] - ch.X[ok_ids]
+    cos = (u * v).sum(axis=1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), NUMERIC.tiny)
+    cand = ok_ids[cos <= np.cos(np.radians(FIT.corner_chord * FIT.corner_turn))]
+    if not len(cand):
+        return none
+    k = np.arange(-L, L + 1)
+    Jc = first[cand, None] + (cand[:, None] - first[cand, None] + k[None, :]) % n[cand, None]  # (C, 2L + 1)
+    st = ch.step[Jc[:, :-1]]  # the step from each window sample to the next
+    s = np.concatenate([-np.cumsum(st[:, :L][:, ::-1], axis=1)[:, ::-1], np.zeros((len(cand), 1)),
+                        np.cumsum(st[:, L:], axis=1)], axis=1)
+    s /= np.maximum(s[:, -1] - s[:, 0], NUMERIC.tiny)[:, None]  # (conditioning: unit length)
+    Y = ch.X[Jc]  # (C, 2L + 1, d)
+    one = np.ones_like(s)
+    rss, coef = [], []
+    for A in (np.stack([one, s, s * s], axis=2), np.stack([one, s, np.maximum(s, 0.0)], axis=2)):
+        At = A.transpose(0, 2, 1)
+        cf = np.linalg.solve(At @ A, At @ Y)  # (C, 3, d)
+        r = Y - A @ cf
+        rss.append((r * r).sum(axis=(1, 2)))
+        coef.append(cf)
+    gain = (rss[0] - rss[1]) / sigma**2
+    a, b = coef[1][:, 1], coef[1][:, 1] + coef[1][:, 2]  # the slopes before and after the knot
+    turn = (a * b).sum(axis=1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), NUMERIC.tiny)
+    keep = (gain >= FIT.corner_gain) & (turn <= np.cos(np.radians(FIT.corner_turn)))
+    # the best within a reach (ties: the first sample)
+    g = np.full(M, -np.inf)
+    g[cand[keep]] = gain[keep]
+    Jk = Jc[keep]
+    gk = g[Jk]
+    pos = np.arange(2 * L + 1)[None, :]
+    best = ((gk < gain[keep][:, None]) | ((gk == gain[keep][:, None]) & (Jk >= cand[keep][:, None]))
+            | (pos == L)).all(axis=1)
+    corner = np.zeros(M, dtype=bool)
+    corner[cand[keep][best]] = True
+    return corner, coef[1][keep][best][:, 0]
 
 
 def _window_mean(cum: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
@@ -339,13 +431,14 @@ class _Chains:
     """The curves' samples concatenated, with the sparse system of :func:`fit_curves`'s
     energy for a given kernel width per sample."""
 
-    def __init__(self, X: np.ndarray, m: np.ndarray, closed: np.ndarray):
+    def __init__(self, X: np.ndarray, m: np.ndarray, closed: np.ndarray, corner: np.ndarray | None = None):
         self.X, self.M = X, len(X)
+        corner = np.zeros(len(X), dtype=bool) if corner is None else corner
         cid = np.repeat(np.arange(len(m)), m)
         self.idx = idx = np.arange(self.M)
         self.first = first = np.repeat(np.r_[0, np.cumsum(m)[:-1]], m)
         self.last = last = first + m[cid] - 1
-        loop = closed[cid]
+        self.loop = loop = closed[cid]
         self.prv = np.where(idx == first, last, idx - 1)  # neighbours along the curve (cyclic on loops)
         self.nxt = np.where(idx == last, first, idx + 1)
         self.prv_open = np.where((idx == first) & ~loop, idx, self.prv)
@@ -354,14 +447,16 @@ class _Chains:
         real = loop | (idx != last)  # steps of the curve (an open curve has no wrap-around)
         mean = np.bincount(cid, step * real, len(m)) / np.maximum(np.bincount(cid, real, len(m)), 1)
         self.step = np.maximum(step, FIT.step_floor * mean[cid] + NUMERIC.tiny)
-        # one penalty row per sample of a loop and per inner sample of an open curve
-        self.rows = np.flatnonzero(loop | ((idx != first) & (idx != last)))
-        self.held = ~loop & ((idx == first) | (idx == last))  # open curves' ends: at their nodes
-        self.held_curve = ~loop
+        # one penalty row per sample of a loop and per inner sample of an open curve, but at a
+        # corner (the two sides are fitted apart)
+        self.rows = np.flatnonzero((loop | ((idx != first) & (idx != last))) & ~corner)
+        # open curves' ends (at their nodes) and corners stay where they are
+        self.held = (~loop & ((idx == first) | (idx == last))) | corner
+        self.to_held = _to_held(self.held, idx, first, last, loop)
         self.free = np.flatnonzero(~self.held)
         # the open curves' free samples (a banded system: no wrap-around) and the loops'
         self.free_open = np.flatnonzero(~self.held & ~loop)
-        self.free_loop = np.flatnonzero(loop)
+        self.free_loop = np.flatnonzero(loop & ~self.held)
 
     def solve(self, band: np.ndarray) -> np.ndarray:
         """(M, d) fitted samples for the kernel width ``band`` (M,) of each sample (spacings);

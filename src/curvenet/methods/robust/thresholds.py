@@ -966,6 +966,28 @@ class Fit(NamedTuple):
     #: origin: benchmark: benchmarks/fit_eval.py (issue 25, 4 December 2026): 2, 3 and 4 reaches
     #: alone and 3 with the short window (taken): see docs/method.md, stage 8
     bias_reach_long: float = 3.0
+    #: a corner (:func:`.curves._corners`) is read over this many samples on either side of a
+    #: sample
+    #: origin: benchmark (issue 25, 4 December 2026): the corner test's gain on the synthetic
+    #: models at noise 0.1 h, 0.3 h and 0.3 h + x3, over 4 and 6 samples: see docs/method.md,
+    #: stage 8
+    corner_reach: int = 6
+    #: ... where two lines meeting at the sample fit its window better than a parabola by this
+    #: many noise variances (both models have three parameters a coordinate: on noise alone the
+    #: gain is about a chi-square of 3 degrees of freedom, over 16 once in a thousand windows)
+    #: origin: benchmark (as corner_reach): smooth models' largest gain 12.6, the corners
+    #: model's 30-150-degree corners 51-270 at noise 0.1 h
+    corner_gain: float = 16.0
+    #: ... and turn by at least this many degrees (a bend of a smooth curve over the window
+    #: turns less and fits the parabola)
+    #: origin: benchmark (as corner_reach)
+    corner_turn: float = 30.0
+    #: only the samples whose chords to the samples a reach away turn by this fraction of
+    #: ``corner_turn`` are tested (speed: on the noisy tree a quarter of the samples instead of
+    #: half; the chords' directions are off the hinge's lines by a few degrees of noise)
+    #: origin: speed, checked: the corners found on the 16 synthetic models at four noise
+    #: levels the same as with 0.5
+    corner_chord: float = 0.75
     #: curves of fewer samples are left as they are (points: an open curve's two ends are held)
     #: origin: derived: a fit needs a sample between the two held ends
     min_points: int = 3
