@@ -281,10 +281,12 @@ def test_no_free_branch_beside_a_one_sample_branch(monkeypatch):
     # they gave the corners model a third node (curve F1 1.000 -> 0.667, sampling 5)
     from curvenet.methods.robust import branched
 
+    # (unfitted: the fit holds the corner and pulls the hanging samples back onto the curve,
+    # which hides the wrong branch from the curve match)
     pts, truth = _sampled("corners", "noise 0.2h", 5)
-    assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] == 1.0
+    assert compare(reconstruct(pts, method="robust", fit=False), truth, h=synth.h_of(truth))["curve_f1"] == 1.0
     monkeypatch.setattr(branched, "BRANCHED", branched.BRANCHED._replace(free_arm_points=0))
-    assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] < 1.0
+    assert compare(reconstruct(pts, method="robust", fit=False), truth, h=synth.h_of(truth))["curve_f1"] < 1.0
 
 
 @pytest.mark.parametrize("name,offset", [("comb", 5), ("outline", 7)])

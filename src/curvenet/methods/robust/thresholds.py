@@ -966,7 +966,7 @@ class Fit(NamedTuple):
     #: origin: benchmark: benchmarks/fit_eval.py (issue 25, 4 December 2026): 2, 3 and 4 reaches
     #: alone and 3 with the short window (taken): see docs/method.md, stage 8
     bias_reach_long: float = 3.0
-    #: a corner (:func:`.curves._corners`) is read over this many samples on either side of a
+    #: a corner (``curves._corners``) is read over this many samples on either side of a
     #: sample
     #: origin: benchmark (issue 25, 4 December 2026): the corner test's gain on the synthetic
     #: models at noise 0.1 h, 0.3 h and 0.3 h + x3, over 4 and 6 samples: see docs/method.md,
