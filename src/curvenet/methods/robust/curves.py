@@ -387,13 +387,50 @@ def _corners(ch: "_Chains", sigma: float) -> tuple[np.ndarray, np.ndarray]:
     cand = ok_ids[cos <= np.cos(np.radians(FIT.corner_chord * FIT.corner_turn))]
     if not len(cand):
         return none
+    # the two fits, window by window, in chunks of about LAYOUT.curve_block window samples
+    # (memory: a few arrays of one value per window sample and coordinate)
+    step = max(1, LAYOUT.curve_block // (2 * L + 1))
+    kept = []  # (samples, windows, gains, knots) of the windows that pass
+    for i in range(0, len(cand), step):
+        c = cand[i:i + step]
+        J, gain, turn, knot = _hinge_gain(ch, c, L, sigma)
+        keep = (gain >= FIT.corner_gain) & (turn <= np.cos(np.radians(FIT.corner_turn)))
+        kept.append((c[keep], J[keep], gain[keep], knot[keep]))
+    ck, Jk, gain, knot = (np.concatenate(x) for x in zip(*kept))
+    # the best within a reach (ties: the first sample)
+    g = np.full(M, -np.inf)
+    g[ck] = gain
+    gk = g[Jk]
+    pos = np.arange(2 * L + 1)[None, :]
+    best = ((gk < gain[:, None]) | ((gk == gain[:, None]) & (Jk >= ck[:, None])) | (pos == L)).all(axis=1)
+    corner = np.zeros(M, dtype=bool)
+    corner[ck[best]] = True
+    return corner, knot[best]
+
+
+def _hinge_gain(ch: "_Chains", cand: np.ndarray, L: int, sigma: float):
+    """The parabola's and the hinge's fits over the windows of the samples ``cand`` (C,) (see
+    :func:`_corners`).
+
+    Returns
+    -------
+    J : (C, 2 L + 1) int ndarray
+        Each window's samples.
+    gain : (C,) float ndarray
+        How much better the hinge fits, in noise variances.
+    turn : (C,) float ndarray
+        Cosine of the angle between the hinge's two lines.
+    knot : (C, d) float ndarray
+        Where they meet.
+    """
+    first, n = ch.first[cand], (ch.last - ch.first + 1)[cand]
     k = np.arange(-L, L + 1)
-    Jc = first[cand, None] + (cand[:, None] - first[cand, None] + k[None, :]) % n[cand, None]  # (C, 2L + 1)
-    st = ch.step[Jc[:, :-1]]  # the step from each window sample to the next
+    J = first[:, None] + (cand[:, None] - first[:, None] + k[None, :]) % n[:, None]
+    st = ch.step[J[:, :-1]]  # the step from each window sample to the next
     s = np.concatenate([-np.cumsum(st[:, :L][:, ::-1], axis=1)[:, ::-1], np.zeros((len(cand), 1)),
                         np.cumsum(st[:, L:], axis=1)], axis=1)
     s /= np.maximum(s[:, -1] - s[:, 0], NUMERIC.tiny)[:, None]  # (conditioning: unit length)
-    Y = ch.X[Jc]  # (C, 2L + 1, d)
+    Y = ch.X[J]  # (C, 2L + 1, d)
     one = np.ones_like(s)
     rss, coef = [], []
     for A in (np.stack([one, s, s * s], axis=2), np.stack([one, s, np.maximum(s, 0.0)], axis=2)):
@@ -402,21 +439,9 @@ def _corners(ch: "_Chains", sigma: float) -> tuple[np.ndarray, np.ndarray]:
         r = Y - A @ cf
         rss.append((r * r).sum(axis=(1, 2)))
         coef.append(cf)
-    gain = (rss[0] - rss[1]) / sigma**2
     a, b = coef[1][:, 1], coef[1][:, 1] + coef[1][:, 2]  # the slopes before and after the knot
     turn = (a * b).sum(axis=1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), NUMERIC.tiny)
-    keep = (gain >= FIT.corner_gain) & (turn <= np.cos(np.radians(FIT.corner_turn)))
-    # the best within a reach (ties: the first sample)
-    g = np.full(M, -np.inf)
-    g[cand[keep]] = gain[keep]
-    Jk = Jc[keep]
-    gk = g[Jk]
-    pos = np.arange(2 * L + 1)[None, :]
-    best = ((gk < gain[keep][:, None]) | ((gk == gain[keep][:, None]) & (Jk >= cand[keep][:, None]))
-            | (pos == L)).all(axis=1)
-    corner = np.zeros(M, dtype=bool)
-    corner[cand[keep][best]] = True
-    return corner, coef[1][keep][best][:, 0]
+    return J, (rss[0] - rss[1]) / sigma**2, turn, coef[1][:, 0]
 
 
 def _window_mean(cum: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
