@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 
 from ..network import CurveNetwork
-from .arith import matvec, norm
+from .arith import matmul, matvec, norm
 from .models import _Builder, _param, _poly, _rot
 
 __all__ = ["KIND_MODELS", "TANGENT_ANGLES"]
@@ -203,7 +203,7 @@ def _plate() -> CurveNetwork:
     h = 0.02
     b = _Builder(h)
     R = _rot(0.4, 0.25, -0.3)
-    place = lambda X: np.array([matvec(R, x) for x in np.atleast_2d(X)])
+    place = lambda X: matmul(np.atleast_2d(X), R.T)  # each row rotated by R
     W, D, T, r, hole = 40 * h, 25 * h, 6 * h, 5 * h, 4 * h
     # a plate with rounded corners (vertical edges filleted, radius r) and two through holes:
     # on each face the outline is four lines and four quarter arcs meeting tangentially, and at
