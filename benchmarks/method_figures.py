@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import ast
 import dataclasses
+import functools
 import re
 import sys
 from pathlib import Path
@@ -38,6 +39,7 @@ from curvenet.methods.robust.frames import duplicates, frames, neighbours
 from curvenet.methods.robust.graph import components, linked_edges, linked_graph
 from curvenet.methods.robust.junctions import junction_regions
 from curvenet.methods.robust.nodes import place_nodes
+from curvenet.methods.robust.unexplained import add_unexplained_branches
 from curvenet.methods.robust.params import RobustParams, Scales
 from curvenet.methods.robust.repairs import ORDER
 from curvenet.methods.robust.thresholds import SHELL
@@ -90,6 +92,7 @@ SECTIONS = {
     "REPAIRS": ("REPAIRS", "PAIRED", "SPANNING", "BRANCHED"),
     "NODES": ("NODES",),
     "CURVES": ("CURVES", "FIT", "UNTANGLE"),
+    "UNEXPLAINED": ("UNEXPLAINED",),
     "NUMERIC": ("NUMERIC", "LINALG"),
 }
 
@@ -317,10 +320,14 @@ def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
             states.append((repair.__name__, TopoState.of(topo)))
         placement = place_nodes(topo, sc, prm)
         curves = drop_spikes(build_curves(P, nb.h, placement), P, nb.h, noise)
-        pipeline._to_input_ids(curves, order)
+        fit, nodes = None, placement.nodes
         if not fr.clean:  # under noise, fitted (stage 8's last step)
-            curves = fit_curves(curves, fr.sigma)
-    net = CurveNetwork(placement.nodes, curves, {}, {})
+            fit = functools.partial(fit_curves, sigma=fr.sigma, band=prm.smoothing)
+            curves = fit(curves)
+            nodes, curves, _ = add_unexplained_branches(P, nb.h, placement.nodes, curves, noise, prm.link,
+                                                        prm.min_spur, fit)  # stage 9, under noise
+        pipeline._to_input_ids(curves, order)
+    net = CurveNetwork(nodes, curves, {}, {})
     return StageRun(ex, P_in, dropped, P, nb.h, fr.t, fr.lin, fr.sigma, fr.hmed, fr.clean, links, cut,
                     reg.groups, reg0, reg.reg, traced, states, placement.nodes, net)
 

@@ -13,7 +13,9 @@ small example):
    where noise and sparse sampling broke it;
 6. :mod:`.nodes` -- node positions;
 7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
-   by smoothing splines under noise.
+   by smoothing splines under noise;
+8. :mod:`.unexplained` -- under noise, branches the network leaves unexplained (a twig whose
+   junction the earlier stages missed), added.
 
 The result does not depend on the order of the input points: they are sorted by coordinates
 first and every tie is broken by that order. The fixed constants are in :mod:`.thresholds`,
@@ -23,6 +25,7 @@ the user's keywords in :class:`.params.RobustParams`.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from typing import NamedTuple
 
@@ -46,6 +49,7 @@ from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
 from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
+from .unexplained import add_unexplained_branches
 
 __all__ = ["reconstruct_robust", "estimate", "local_spacing", "shell_group_counts", "Prepared", "prepare",
            "PointEstimates", "point_estimates"]
@@ -205,19 +209,29 @@ def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates:
     noise = sc.noise
     del topo, sc  # the linked graph: read by the repairs and node placement alone
     nodes, curves = placement.nodes, drop_spikes(build_curves(P, h, placement), P, h, noise)  # 8. curves
-    del placement, P, h
+    del placement
     tm["assemble"] = time.perf_counter() - t1
-    _to_input_ids(curves, order)
-    del order
 
     fitted = (not clean) if prm.fit is None else prm.fit
     params_out["fit"] = fitted
+    fit = None
     if fitted:  # 8b. under noise: the curves fitted (same samples, same input indices)
         report_stage(on_stage, ROBUST_SHARES, "fit")
         t1 = time.perf_counter()
         params_out["smoothing"] = prm.smoothing
-        curves = fit_curves(curves, sigma, prm.smoothing)
+        fit = functools.partial(fit_curves, sigma=sigma, band=prm.smoothing)
+        curves = fit(curves)
         tm["fit"] = time.perf_counter() - t1
+    added = 0
+    if not clean:  # 9. under noise: branches the network leaves unexplained (fitted like the others)
+        report_stage(on_stage, ROBUST_SHARES, "branches")
+        t1 = time.perf_counter()
+        nodes, curves, added = add_unexplained_branches(P, h, nodes, curves, noise, prm.link, prm.min_spur, fit)
+        tm["branches"] = time.perf_counter() - t1
+    params_out["branches_added"] = added
+    del P, h
+    _to_input_ids(curves, order)
+    del order
     params_out["groups_histogram"] = groups_histogram
     return CurveNetwork(nodes, curves, params_out, {"time": tm})
 

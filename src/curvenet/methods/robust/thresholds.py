@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Numeric", "NUMERIC", "Linalg", "LINALG"]
+__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
 
 class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
@@ -1020,6 +1020,79 @@ class Untangle(NamedTuple):
 
 
 UNTANGLE = Untangle()
+
+
+class Unexplained(NamedTuple):
+    """Stage 9: branches the finished network leaves unexplained (:mod:`.unexplained`)."""
+
+    #: a point farther than this many spacings from every curve ...
+    #: origin: benchmark (issue 25, 5 December 2026, with the fields below): the tip of a 3 h
+    #: twig leaving at 50 degrees lies 2.3 h from its parent; a noise-free sample lies on its
+    #: curve, a noisy one within about 3 standard deviations
+    explain: float = 1.2
+    #: ... plus this many times the noise (2.5 noise scales: 3 standard deviations) is unexplained
+    #: origin: as ``explain``
+    explain_noise: float = 2.5
+    #: unexplained points within this many spacings of each other form one group (one branch
+    #: at most per group, from its point farthest from the network)
+    #: origin: set with the stage, not tuned: about two sample steps
+    group: float = 2.0
+    #: a branch's path ends at a sample within this many spacings of a curve ...
+    #: origin: set with the stage, not tuned
+    near: float = 0.5
+    #: ... plus this many times the noise
+    #: origin: as ``explain_noise``
+    near_noise: float = 2.5
+    #: a branch's path is at most this many spacings long (the samples searched lie within this
+    #: distance of its tip)
+    #: origin: set with the stage, not tuned: the twigs of the kinds and neurons are 3-6 h
+    search: float = 14.0
+    #: the fewest samples of a branch's path (its explained end included): fewer are stray
+    #: points (2% outliers land near curves too)
+    #: origin: benchmark (issue 25, 5 December 2026; a first version of the stage, run after the
+    #: method, on 832 runs of the kinds, real-dev and synthetic models under noise, outliers and
+    #: density x3): 3 samples 46 networks better, 27 worse (curve F1 summed +6.1); 4 samples 19
+    #: better, 20 worse (+1.5)
+    min_samples: int = 3
+    #: a branch's tip lies at least this many times its path's length from the network: a
+    #: branch leaves the network; a path alongside a curve (a stretch the network passes a
+    #: little off, a bend it cuts) is no branch
+    #: origin: benchmark (issue 25, 5 December 2026; the first version, as ``min_samples``):
+    #: without the test 43 better, 47 worse (+4.9: branches along real neurons' wiggles under
+    #: noise 0.1 h); with 0.5 46 better, 27 worse (+6.1)
+    rise: float = 0.5
+    #: a branch reaches at least ``min_spur`` spacings plus this many times the noise from where
+    #: it joins, and its tip lies as far from every other node: noise scatters the samples around
+    #: a junction by this much (where the points are sampled densely, ``min_spur`` local spacings
+    #: are less than the scatter)
+    #: origin: benchmark (issue 25, 5 December 2026): without it three of the sweep's 576 networks
+    #: lost their exact topology (eye, fan, tree at noise 0.3 h + x3: a branch of 2-4 samples 2.3 h
+    #: from a junction placed 2 h off the true one)
+    length_noise: float = 2.5
+    #: a branch joining a curve within this many spacings (along it) of one of its nodes joins
+    #: that node instead of cutting the curve
+    #: origin: set with the stage, not tuned: a node placed within 2 h of a junction matches it
+    snap: float = 2.0
+    #: a branch's direction at its foot: from its sample this many steps along its path to its
+    #: first sample off the network
+    #: origin: set with the stage, not tuned
+    foot_samples: int = 3
+    #: a branch's tip is a free end: the mean of the unit vectors from it to the samples within
+    #: ``min_spur`` spacings is at least this long (samples on one side); where samples lie on both
+    #: sides the unexplained points are a stretch of a curve the network missed or merged
+    #: with another, and no branch
+    #: origin: benchmark (issue 25, 5 December 2026; 832 runs as ``min_samples``): without the
+    #: test 46 better, 53 worse (+6.3; real neurons under noise got branches along curves the
+    #: network had merged); with 0.5 over the link length 39 better, 27 worse (+6.7); over
+    #: ``min_spur`` with ``end_points`` (the stage as landed) 39 better, 19 worse (+6.75)
+    end: float = 0.5
+    #: ... read on at least this many samples (fewer: no end, nothing to read it on)
+    #: origin: set with the stage, not tuned: a neuron's branch whose tip had one sample within
+    #: the link length of it (a junction the earlier stages merged with another, 1.8 h away)
+    end_points: int = 2
+
+
+UNEXPLAINED = Unexplained()
 
 
 class Numeric(NamedTuple):
