@@ -196,3 +196,16 @@ def test_the_stage_runs_under_noise_only_and_is_reported():
     clean_pts = synth.sample(truth, rng=bench.run_seed("kinds", "comb", "clean"))[0]
     clean = reconstruct(clean_pts, method="robust")
     assert "branches" not in clean.stats["time"] and clean.parameters["branches_added"] == 0
+
+
+@pytest.mark.parametrize("spread", [1.0, 100.0])  # radii of one size, and a few far-reaching ones
+def test_pairs_within_the_smaller_radius_match_a_plain_search(spread):
+    rng = np.random.default_rng(4)
+    X = rng.uniform(0, 10, size=(300, 3))
+    r = np.full(300, 0.8)
+    r[:5] *= spread
+    got, w = unexplained._pairs_within(X, r)
+    D = np.linalg.norm(X[:, None] - X[None], axis=2)
+    i, j = np.nonzero(np.triu(D <= np.minimum(r[:, None], r[None]), k=1))
+    assert sorted(map(tuple, got.tolist())) == sorted(zip(i.tolist(), j.tolist()))
+    assert np.allclose(w, D[got[:, 0], got[:, 1]])

@@ -39,6 +39,7 @@ extended curve) are fitted like every other curve.
 
 from __future__ import annotations
 
+import itertools
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -209,12 +210,7 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
     the two), and the path between the same two samples through every sample between them
     (the least sum of squared steps); each an array of point ids from the explained sample to
     the tip."""
-    hu = h[un]
-    tu = build_tree(P[un])
-    pairs = tu.query_pairs(UNEXPLAINED.group * float(hu.max()), output_type="ndarray")
-    if len(pairs):
-        gap = np.linalg.norm(P[un[pairs[:, 0]]] - P[un[pairs[:, 1]]], axis=1)
-        pairs = pairs[gap <= UNEXPLAINED.group * np.minimum(hu[pairs[:, 0]], hu[pairs[:, 1]])]
+    pairs, _ = _pairs_within(P[un], UNEXPLAINED.group * h[un])
     n = len(un)
     A = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)) if len(pairs) else \
         coo_matrix((n, n))
@@ -233,15 +229,12 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
     local = np.unique(np.concatenate([np.asarray(x, dtype=np.int64) for x in ptree.query_ball_point(
         P[tips], reach, workers=query_threads())] + [tips]).astype(np.int64))
     hl = h[local]
-    lt = build_tree(P[local])
-    lp = lt.query_pairs(link * float(hl.max()), output_type="ndarray")
+    # (steps in the smaller of the two spacings: a point alone in sparse surroundings, an
+    # outlier the isolated-point rule kept, does not step far)
+    lp, w = _pairs_within(P[local], link * hl)
     if len(lp) == 0:
         return []
-    w = np.linalg.norm(P[local[lp[:, 0]]] - P[local[lp[:, 1]]], axis=1)
-    # (in the smaller of the two spacings: a point alone in sparse surroundings, an outlier
-    # the isolated-point rule kept, does not step far)
-    ok = w <= link * np.minimum(hl[lp[:, 0]], hl[lp[:, 1]])
-    lp, w = lp[ok], np.maximum(w[ok], NUMERIC.tiny)
+    w = np.maximum(w, NUMERIC.tiny)
     m = len(local)
     G = coo_matrix((w, (lp[:, 0], lp[:, 1])), shape=(m, m)).tocsr()
     # the same ends joined through every sample between them: the path whose squared steps sum
@@ -275,6 +268,29 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
             found[k] = (local[perm[a + _walk(pred[r], j, int(srcs[r]))]],
                         local[perm[a + _walk(pred2[r], j, int(srcs[r]))]])
     return [found[k] for k in sorted(found)]
+
+
+def _pairs_within(X: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(i, j)``, ``i < j``, of the points ``X`` (m, d) at most the smaller of their
+    radii ``r`` (m,) apart, as an (p, 2) array, and their distances (p,). All pairs within the
+    largest radius are searched at once when it is at most ``UNEXPLAINED.pair_spread`` times
+    the median; else each point's neighbours within its own radius (one far-reaching radius, of
+    an outlier in sparse surroundings, does not widen every search). The pairs are the same
+    either way."""
+    tree = build_tree(X)
+    if len(r) == 0 or float(r.max()) <= UNEXPLAINED.pair_spread * float(np.median(r)):
+        ij = tree.query_pairs(float(r.max()) if len(r) else 0.0, output_type="ndarray")
+        i, j = ij[:, 0].astype(np.int64), ij[:, 1].astype(np.int64)
+    else:  # a few far-reaching radii: each point searched within its own
+        near = tree.query_ball_point(X, r, workers=query_threads())
+        cnt = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
+        i = np.repeat(np.arange(len(X), dtype=np.int64), cnt)
+        j = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(cnt.sum()))
+        keep = j > i
+        i, j = i[keep], j[keep]
+    w = np.linalg.norm(X[i] - X[j], axis=1)
+    ok = w <= np.minimum(r[i], r[j])
+    return np.column_stack([i[ok], j[ok]]), w[ok]
 
 
 def _walk(pred: np.ndarray, j: int, s: int) -> np.ndarray:
