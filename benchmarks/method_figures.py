@@ -39,11 +39,11 @@ from curvenet.methods.robust.frames import duplicates, frames, neighbours
 from curvenet.methods.robust.graph import components, linked_edges, linked_graph
 from curvenet.methods.robust.junctions import junction_regions
 from curvenet.methods.robust.nodes import place_nodes
-from curvenet.methods.robust.unexplained import add_unexplained_branches
 from curvenet.methods.robust.params import RobustParams, Scales
 from curvenet.methods.robust.repairs import ORDER
 from curvenet.methods.robust.thresholds import SHELL
 from curvenet.methods.robust.topology import Topology
+from curvenet.methods.robust.unexplained import add_unexplained_branches
 from curvenet.network import CurveNetwork
 from curvenet.style import END_COLOR, JUNCTION_COLOR, OTHER_NODE_COLOR, PALETTE, POINT_COLOR
 

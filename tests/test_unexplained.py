@@ -149,10 +149,10 @@ def test_a_network_that_explains_every_point_is_returned_as_it_is():
     assert added == 0 and out_nodes is nodes and out_curves is curves
 
 
-def _comb(monkeypatch=None):
+def _comb():
+    """The default network of the noisy comb's sampling 1, and its score."""
     truth = synth.model("comb")
-    pts, _ = synth.sample(truth, rng=bench.run_seed("kinds", "comb", "n0.2") + 1, noise=0.2)
-    net = reconstruct(pts, method="robust")
+    net = reconstruct(_noisy_comb_points(1), method="robust")
     return net, compare(net, truth, h=synth.h_of(truth))
 
 

@@ -527,6 +527,15 @@ def _spd_solve(A, rhs: np.ndarray) -> np.ndarray:
                              np.ascontiguousarray(rhs, dtype=np.float64))
 
 
+def segment_distance(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) distance of each point ``x`` (n, d) to the segment from ``a`` (n, d) to ``b`` (n, d)
+    (a segment of length 0: the distance to its point)."""
+    ab = b - a
+    L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
+    t = np.clip(((x - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
+    return np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
+
+
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):
     """The curves without their spikes: interior samples far off the chord of their neighbours.
 
@@ -572,11 +581,8 @@ def _spike_free(curves, lens, h, noise):
         return []
     X = np.concatenate([c.points for c in curves])
     ids = np.concatenate([c.indices for c in curves])
-    a, b, x = X[:-2], X[2:], X[1:-1]  # x: every sample but the first and last of the block
-    ab = b - a
-    L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
-    t = np.clip(((x - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
-    dist = np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
+    # x: every sample but the first and last of the block, against the chord of its neighbours
+    dist = segment_distance(X[1:-1], X[:-2], X[2:])
     mid = ids[1:-1]
     hh = np.where(mid >= 0, h[np.maximum(mid, 0)], np.inf)
     spike = (mid >= 0) & (dist > CURVES.spike * (hh + noise))

@@ -48,7 +48,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ...network import Curve
 from ...neighbors import build_tree, query_threads
-from .curves import sort_curves
+from .curves import segment_distance, sort_curves
 from .thresholds import CURVES, NUMERIC, UNEXPLAINED
 
 __all__ = ["add_unexplained_branches", "network_distance"]
@@ -136,11 +136,7 @@ def _network_distance(P: np.ndarray, curves: list[Curve], vx: _Vertices) -> np.n
         wrap_lo, wrap_hi = w < first[v], w > last[v]
         w = np.where(wrap_lo, np.where(closed[v], last[v], v), w)
         w = np.where(wrap_hi, np.where(closed[v], first[v], v), w)
-        a, b = V[v], V[w]
-        ab = b - a
-        L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
-        t = np.clip(((P - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
-        best = np.minimum(best, np.linalg.norm(P - (a + t[:, None] * ab), axis=1))
+        best = np.minimum(best, segment_distance(P, V[v], V[w]))
     return best
 
 
@@ -212,9 +208,8 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
     the tip."""
     pairs, _ = _pairs_within(P[un], UNEXPLAINED.group * h[un])
     n = len(un)
-    A = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)) if len(pairs) else \
-        coo_matrix((n, n))
-    n_groups, group = connected_components(A, directed=False)
+    A = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, group = connected_components(A, directed=False)
     # the tip of each group: its point farthest from the network (ties: the lowest id)
     order = np.lexsort((un, -d[un], group))
     starts = np.r_[0, np.flatnonzero(np.diff(group[order])) + 1]
