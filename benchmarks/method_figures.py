@@ -41,6 +41,7 @@ from curvenet.methods.robust.junctions import junction_regions
 from curvenet.methods.robust.nodes import place_nodes
 from curvenet.methods.robust.params import RobustParams, Scales
 from curvenet.methods.robust.repairs import ORDER
+from curvenet.methods.robust.skipped import rejoin_skipped_stretches
 from curvenet.methods.robust.thresholds import SHELL
 from curvenet.methods.robust.topology import Topology
 from curvenet.methods.robust.unexplained import add_unexplained_branches
@@ -92,6 +93,7 @@ SECTIONS = {
     "REPAIRS": ("REPAIRS", "PAIRED", "SPANNING", "BRANCHED"),
     "NODES": ("NODES",),
     "CURVES": ("CURVES", "FIT", "UNTANGLE"),
+    "SKIPPED": ("SKIPPED",),
     "UNEXPLAINED": ("UNEXPLAINED",),
     "NUMERIC": ("NUMERIC", "LINALG"),
 }
@@ -320,11 +322,12 @@ def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
             states.append((repair.__name__, TopoState.of(topo)))
         placement = place_nodes(topo, sc, prm)
         curves = drop_spikes(build_curves(P, nb.h, placement), P, nb.h, noise)
-        fit, nodes = None, placement.nodes
+        nodes, curves, _ = rejoin_skipped_stretches(P, nb.h, placement.nodes, curves, prm.link)  # stage 8c
+        fit = None
         if not fr.clean:  # under noise, fitted (stage 8's last step)
             fit = functools.partial(fit_curves, sigma=fr.sigma, band=prm.smoothing)
             curves = fit(curves)
-            nodes, curves, _ = add_unexplained_branches(P, nb.h, placement.nodes, curves, noise, prm.link,
+            nodes, curves, _ = add_unexplained_branches(P, nb.h, nodes, curves, noise, prm.link,
                                                         prm.min_spur, fit)  # stage 9, under noise
         pipeline._to_input_ids(curves, order)
     net = CurveNetwork(nodes, curves, {}, {})

@@ -20,7 +20,7 @@ from . import kernels as _k
 from .nodes import Placement
 from .thresholds import CURVES, FIT, LAYOUT, NODES, NUMERIC
 
-__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "fit_curves", "drop_spikes"]
+__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "renumbered", "fit_curves", "drop_spikes"]
 
 
 def build_curves(P: np.ndarray, h: np.ndarray, pl: Placement) -> list[Curve]:
@@ -220,6 +220,35 @@ def sort_curves(curves):
     X = np.round(np.stack([c.points[min(1, len(c.points) - 1)] for c in curves]), CURVES.round_decimals)
     o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (en, st))
     return [curves[i] for i in o.tolist()]
+
+
+def renumbered(X: np.ndarray, curves: list[Curve], drop=()) -> tuple[np.ndarray, list[Curve]]:
+    """The nodes ``X`` (n, d) without the rows ``drop`` (no curve ends there), sorted by
+    coordinates (rounded to ``CURVES.round_decimals``), and the curves with their node ids
+    renumbered, each oriented from its lower node id, sorted as :func:`sort_curves` sorts them.
+
+    Returns
+    -------
+    nodes : (n - len(drop), d) ndarray
+    curves : list of Curve
+        New list (curves without nodes are the inputs' objects).
+    """
+    keep = np.ones(len(X), dtype=bool)
+    keep[np.asarray(list(drop), dtype=np.int64)] = False
+    kept = np.flatnonzero(keep)
+    order = kept[np.lexsort(np.round(X[kept], CURVES.round_decimals).T[::-1])]
+    new_id = np.full(len(X), -1, dtype=np.int64)
+    new_id[order] = np.arange(len(order))
+    final: list[Curve] = []
+    for c in curves:
+        if c.start is None:
+            final.append(c)
+            continue
+        cv = Curve(c.points, int(new_id[c.start]), int(new_id[c.end]), c.closed, c.indices)
+        if cv.start > cv.end:
+            cv = cv.reversed()
+        final.append(cv)
+    return X[order], sort_curves(final)
 
 
 def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> list[Curve]:

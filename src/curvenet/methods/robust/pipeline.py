@@ -13,7 +13,8 @@ small example):
    where noise and sparse sampling broke it;
 6. :mod:`.nodes` -- node positions;
 7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
-   by smoothing splines under noise;
+   by smoothing splines under noise; before the fit, :mod:`.skipped` makes a short free spur
+   that a neighbouring curve jumped over (a zigzag read as a junction) part of that curve;
 8. :mod:`.unexplained` -- under noise, branches the network leaves unexplained (a twig whose
    junction the earlier stages missed), added.
 
@@ -47,6 +48,7 @@ from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
 from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
+from .skipped import rejoin_skipped_stretches
 from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
 from .unexplained import add_unexplained_branches
@@ -210,6 +212,8 @@ def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates:
     del topo, sc  # the linked graph: read by the repairs and node placement alone
     nodes, curves = placement.nodes, drop_spikes(build_curves(P, h, placement), P, h, noise)  # 8. curves
     del placement
+    nodes, curves, rejoined = rejoin_skipped_stretches(P, h, nodes, curves, prm.link)  # 8c. skipped stretches
+    params_out["stretches_rejoined"] = rejoined
     tm["assemble"] = time.perf_counter() - t1
 
     fitted = (not clean) if prm.fit is None else prm.fit

@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
+__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Skipped", "SKIPPED", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
 
 class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
@@ -1020,6 +1020,36 @@ class Untangle(NamedTuple):
 
 
 UNTANGLE = Untangle()
+
+
+class Skipped(NamedTuple):
+    """Stage 8c: a free spur that is the skipped first stretch of a neighbouring curve
+    (:mod:`.skipped`)."""
+
+    #: a spur (a curve from a valence-3 node to a free end) is read as a skipped stretch only
+    #: when it is at most this many spacings long
+    #: origin: set with the stage (issue 25, 5 December 2026), not tuned: the spurs seen on real
+    #: neurons (zigzags of 50-110 degree turns every 2 h) were 2.9-5.5 h long
+    spur: float = 8.0
+    #: the samples bridging the spur's tip to the curve's first sample lie no nearer the node
+    #: than the nearer of the two, less this many spacings (the bridge runs outside the
+    #: junction's own samples)
+    #: origin: set with the stage, not tuned: half a sample step
+    clearance: float = 0.5
+    #: the samples of a bridging path are searched within this many spacings of the spur's tip
+    #: (at least: farther when the curve's first sample lies farther)
+    #: origin: set with the stage, not tuned: a skipped stretch about as long as a spur
+    search: float = 8.0
+    #: where the curve's first sample lies nearer the node than the spur's tip, the bridging
+    #: path must be longer than the way through the node by this many spacings (it runs around
+    #: the junction; a path straight through it is no skipped stretch)
+    #: origin: set with the stage (issue 25): on the twigs model (clean) a path straight
+    #: through a junction was 0.5 h longer than the way through the node; around a real
+    #: zigzag's junction 3 h
+    around: float = 2.0
+
+
+SKIPPED = Skipped()
 
 
 class Unexplained(NamedTuple):

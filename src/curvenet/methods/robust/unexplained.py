@@ -48,8 +48,8 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ...network import Curve
 from ...neighbors import build_tree, query_threads
-from .curves import segment_distance, sort_curves
-from .thresholds import CURVES, NUMERIC, UNEXPLAINED
+from .curves import renumbered, segment_distance
+from .thresholds import NUMERIC, UNEXPLAINED
 
 __all__ = ["add_unexplained_branches", "network_distance"]
 
@@ -463,17 +463,5 @@ def _with_branches(P, nodes, curves, joins, kept, fit):
         b = len(node_list) - 1
         new.append(Curve(np.vstack([node_list[a], P[br]]), a, b, False, np.r_[-1, br].astype(np.int64)))
     out.extend(fit(new) if fit is not None else new)
-    X = np.stack(node_list)
-    order = np.lexsort(np.round(X, CURVES.round_decimals).T[::-1])
-    new_id = np.empty(len(order), dtype=np.int64)
-    new_id[order] = np.arange(len(order))
-    final: list[Curve] = []
-    for c in out:
-        if c.start is None:
-            final.append(c)
-            continue
-        cv = Curve(c.points, int(new_id[c.start]), int(new_id[c.end]), c.closed, c.indices)
-        if cv.start > cv.end:
-            cv = cv.reversed()
-        final.append(cv)
-    return X[order], sort_curves(final), len(new) + len(extend)
+    X, final = renumbered(np.stack(node_list), out)
+    return X, final, len(new) + len(extend)

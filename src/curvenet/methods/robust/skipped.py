@@ -1,0 +1,216 @@
+"""Stage 8c: a short free spur that is the skipped first stretch of a neighbouring curve.
+
+A real curve can turn sharply several times within a few spacings (neuron tracings zigzag with
+turns of 50-110 degrees every 2 spacings). Around such a zigzag the shell test sees three
+branches and places a junction. The chain tracer then reads part of the zigzag as a short spur
+to a free end, and the curve that carries on past it starts with a jump: from the junction
+over the spur's samples to its first sample beyond the spur's tip. The samples between the
+spur's tip and that first sample are in no curve.
+
+This stage reads that pattern from the finished curves (before the fit). At a node of valence 3
+with exactly one spur (a curve to a free end, at most ``SKIPPED.spur`` spacings long) and two
+other curves, the spur is the skipped stretch of one of the others when:
+
+* that curve's first sample lies farther from the node than the spur's tip (it jumped past the
+  spur; on a twig at a junction the curves' first samples lie nearer the node than the twig's
+  tip),
+  or, where that first sample lies nearer, the path below is longer than the way from the tip
+  through the node to that sample by ``SKIPPED.around`` spacings (the curve came back past the
+  junction: it runs around it, where a path between a twig's tip and its neighbour runs
+  through it);
+* a path leads from the spur's tip to that first sample through samples that belong to no
+  curve (searched within ``SKIPPED.search`` spacings of the tip), with steps of at most the
+  link length ``link`` spacings (in the smaller spacing of their two ends), each sample no
+  nearer the node than the nearer of the tip and the first sample less ``SKIPPED.clearance``
+  spacings (the path runs outside the junction).
+
+Of the curves that qualify, the one with the shortest path takes the spur: the curve now runs
+from the node through the spur's samples and the path's samples to its own. The node is then
+of valence 2 and is dropped: that curve and the third are one curve (a loop through one node
+when their far ends are the same node). The spur's free end is dropped with it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from ...network import Curve
+from ...neighbors import build_tree
+from .curves import renumbered
+from .thresholds import NODES, SKIPPED
+
+__all__ = ["rejoin_skipped_stretches"]
+
+
+def rejoin_skipped_stretches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves: list[Curve],
+                             link: float) -> tuple[np.ndarray, list[Curve], int]:
+    """The network with every short free spur that a neighbouring curve skipped made part of
+    that curve (see the module docstring for the rule).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+        The points, in the internal order the curves' ``indices`` refer to.
+    h : (N,) ndarray
+        Local spacing of each point.
+    nodes : (n, d) ndarray
+        Node positions, sorted by coordinates.
+    curves : list of Curve
+        The network's curves, not fitted (``indices``: internal point ids, -1 at computed
+        nodes).
+    link : float
+        Longest step of a bridging path, in spacings (the method's link length).
+
+    Returns
+    -------
+    nodes : (n', d) ndarray
+        Node positions, sorted by coordinates: the input's without the dropped junctions and
+        free ends.
+    curves : list of Curve
+        New list, sorted as :func:`.curves.sort_curves` sorts it. When ``rejoined`` is 0,
+        ``nodes`` and ``curves`` are the inputs.
+    rejoined : int
+        The number of spurs made part of a neighbouring curve.
+    """
+    n = len(nodes)
+    if not curves or n == 0:
+        return nodes, curves, 0
+    ends = np.array([(-1 if c.start is None else c.start, -1 if c.end is None else c.end) for c in curves],
+                    dtype=np.int64).reshape(-1, 2)
+    valence = np.bincount(ends[ends >= 0], minlength=n)
+    # candidate junctions: valence 3, one end of a short curve whose other end is free
+    free = (ends >= 0) & (valence[np.maximum(ends, 0)] == 1)
+    length = np.fromiter((c.length for c in curves), dtype=np.float64, count=len(curves))
+    cand = []
+    for ci in np.flatnonzero(free.any(axis=1) & ~free.all(axis=1)):
+        j = int(ends[ci, 1] if free[ci, 0] else ends[ci, 0])
+        if valence[j] == NODES.junction_valence:  # (the smallest junction: a spur and two curves)
+            cand.append((j, int(ci)))
+    if not cand:
+        return nodes, curves, 0
+    used = np.zeros(len(P), dtype=bool)
+    for c in curves:
+        used[c.indices[c.indices >= 0]] = True
+    tree = build_tree(P)
+    out: list[Curve | None] = list(curves)
+    at: dict[int, list[int]] = {}
+    for ci, (a, b) in enumerate(ends.tolist()):
+        for v in {a, b}:
+            if v >= 0:
+                at.setdefault(v, []).append(ci)
+    dropped: list[int] = []
+    for j, s in sorted(cand):
+        inc = at.get(j, [])
+        if s not in inc or len(inc) != NODES.junction_valence or any(out[ci].start == out[ci].end for ci in inc):
+            continue  # (a curve here changed in an earlier rejoin, or a loop at the node)
+        sp = out[s]
+        own = sp.indices[sp.indices >= 0]
+        if len(own) == 0 or length[s] > SKIPPED.spur * float(np.median(h[own])):
+            continue
+        best = _best_bridge(P, h, nodes[j], j, sp, [(ci, out[ci]) for ci in inc if ci != s], used, tree, link)
+        if best is None:
+            continue
+        a, bridge = best
+        b = next(ci for ci in inc if ci not in (s, a))
+        merged = _merged(P, j, sp, bridge, out[a], out[b])
+        tip_node = sp.end if sp.start == j else sp.start
+        used[bridge] = True
+        for ci in (s, a, b):
+            out[ci] = None
+        out.append(merged)
+        k = len(out) - 1
+        for v in (merged.start, merged.end):
+            lst = at.setdefault(v, [])
+            for ci in (a, b):
+                if ci in lst:
+                    lst.remove(ci)
+            if k not in lst:
+                lst.append(k)
+        at.pop(j, None)
+        at.pop(tip_node, None)
+        dropped += [j, tip_node]
+    if not dropped:
+        return nodes, curves, 0
+    X, final = renumbered(nodes, [c for c in out if c is not None], drop=dropped)
+    return X, final, len(dropped) // 2
+
+
+def _from(c: Curve, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """The points and indices of curve ``c`` oriented to start at node ``j``."""
+    return (c.points, c.indices) if c.start == j else (c.points[::-1], c.indices[::-1])
+
+
+def _best_bridge(P, h, x0, j, sp, others, used, tree, link):
+    """(curve id, bridge sample ids) of the curve of ``others`` (pairs of curve id and curve
+    at node ``j``, at ``x0``) whose skipped stretch the spur ``sp`` is, with the shortest
+    bridging path; None when no curve qualifies."""
+    _, sid = _from(sp, j)
+    sid = sid[sid >= 0]
+    if len(sid) == 0:
+        return None
+    tip = int(sid[-1])
+    dtip = float(np.linalg.norm(P[tip] - x0))
+    best = None
+    for ci, c in others:
+        _, aid = _from(c, j)
+        aid = aid[aid >= 0]
+        if len(aid) == 0:
+            continue
+        a0 = int(aid[0])
+        da0 = float(np.linalg.norm(P[a0] - x0))
+        reach = max(float(np.linalg.norm(P[a0] - P[tip])) + link * max(h[tip], h[a0]), SKIPPED.search * h[tip])
+        near = np.asarray(tree.query_ball_point(P[tip], r=reach), dtype=np.int64)
+        near = near[~used[near]]
+        near = near[np.linalg.norm(P[near] - x0, axis=1) >= min(dtip, da0) - SKIPPED.clearance * h[near]]
+        ids = np.r_[tip, near, a0].astype(np.int64)
+        path = _shortest_path(P, h, ids, link)
+        # the curve jumped past the spur's tip, or the path runs around the junction (longer
+        # than the way through the node): on a twig neither holds
+        if path is not None and da0 <= dtip and path[0] <= dtip + da0 + SKIPPED.around * h[tip]:
+            continue
+        if path is not None and (best is None or path[0] < best[0]):
+            best = (path[0], ci, path[1])
+    return None if best is None else (best[1], best[2])
+
+
+def _shortest_path(P, h, ids, link):
+    """(length, inner sample ids) of the shortest path from ``ids[0]`` to ``ids[-1]`` through
+    ``ids`` with steps of at most ``link`` times the smaller spacing of their ends; None when
+    there is none."""
+    X = P[ids]
+    r = link * float(h[ids].max())
+    pr = build_tree(X).query_pairs(r, output_type="ndarray")
+    if len(pr) == 0:
+        return None
+    w = np.linalg.norm(X[pr[:, 0]] - X[pr[:, 1]], axis=1)
+    ok = w <= link * np.minimum(h[ids[pr[:, 0]]], h[ids[pr[:, 1]]])
+    pr, w = pr[ok], w[ok]
+    m = len(ids)
+    G = coo_matrix((w, (pr[:, 0], pr[:, 1])), shape=(m, m)).tocsr()
+    dist, pred = dijkstra(G, directed=False, indices=0, return_predecessors=True)
+    if not np.isfinite(dist[m - 1]):
+        return None
+    walk = []
+    k = pred[m - 1]
+    while k != 0:
+        walk.append(int(k))
+        k = pred[k]
+    return float(dist[m - 1]), ids[np.array(walk[::-1], dtype=np.int64)]
+
+
+def _merged(P, j, sp, bridge, ca, cb) -> Curve:
+    """One curve: ``cb`` from its far end to node ``j`` (the node's point left out), the spur's
+    samples, the bridge and ``ca`` from its first sample to its far end."""
+    pb, ib = _from(cb, j)
+    pb, ib = pb[::-1][:-1], ib[::-1][:-1]
+    _, sid = _from(sp, j)
+    sid = sid[sid >= 0]
+    pa, ia = _from(ca, j)
+    first = int(np.flatnonzero(ia >= 0)[0])
+    pts = np.vstack([pb, P[sid], P[bridge], pa[first:]])
+    ind = np.r_[ib, sid, bridge, ia[first:]].astype(np.int64)
+    start = cb.end if cb.start == j else cb.start
+    end = ca.end if ca.start == j else ca.start
+    return Curve(pts, start, end, False, ind)
