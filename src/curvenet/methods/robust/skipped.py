@@ -32,6 +32,8 @@ when their far ends are the same node). The spur's free end is dropped with it.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
@@ -77,23 +79,30 @@ def rejoin_skipped_stretches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
     n = len(nodes)
     if not curves or n == 0:
         return nodes, curves, 0
-    ends = np.array([(-1 if c.start is None else c.start, -1 if c.end is None else c.end) for c in curves],
-                    dtype=np.int64).reshape(-1, 2)
+    m = len(curves)
+    ends = np.fromiter(itertools.chain.from_iterable((-1 if c.start is None else c.start, -1 if c.end is None else c.end)
+                                                     for c in curves), dtype=np.int64, count=2 * m).reshape(m, 2)
     valence = np.bincount(ends[ends >= 0], minlength=n)
-    # candidate junctions: valence 3, one end of a short curve whose other end is free
+    # candidates: a node of the smallest junction valence (a spur and two curves) at one end of
+    # a curve whose other end is free and which is short
     free = (ends >= 0) & (valence[np.maximum(ends, 0)] == 1)
-    length = np.fromiter((c.length for c in curves), dtype=np.float64, count=len(curves))
+    one = np.flatnonzero(free.any(axis=1) & ~free.all(axis=1))
+    at_j = np.where(free[one, 0], ends[one, 1], ends[one, 0])
+    keep = valence[at_j] == NODES.junction_valence
     cand = []
-    for ci in np.flatnonzero(free.any(axis=1) & ~free.all(axis=1)):
-        j = int(ends[ci, 1] if free[ci, 0] else ends[ci, 0])
-        if valence[j] == NODES.junction_valence:  # (the smallest junction: a spur and two curves)
-            cand.append((j, int(ci)))
+    for j, ci in zip(at_j[keep].tolist(), one[keep].tolist()):
+        own = curves[ci].indices[curves[ci].indices >= 0]
+        if len(own) and curves[ci].length <= SKIPPED.spur * float(np.median(h[own])):
+            cand.append((j, ci))
     if not cand:
         return nodes, curves, 0
+    ids = np.concatenate([c.indices for c in curves])
     used = np.zeros(len(P), dtype=bool)
-    for c in curves:
-        used[c.indices[c.indices >= 0]] = True
-    tree = build_tree(P)
+    used[ids[ids >= 0]] = True
+    spare = np.flatnonzero(~used)  # the samples of no curve: a bridge's only samples
+    if len(spare) == 0:
+        return nodes, curves, 0
+    tree = build_tree(P[spare])
     out: list[Curve | None] = list(curves)
     at: dict[int, list[int]] = {}
     for ci, (a, b) in enumerate(ends.tolist()):
@@ -106,10 +115,7 @@ def rejoin_skipped_stretches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
         if s not in inc or len(inc) != NODES.junction_valence or any(out[ci].start == out[ci].end for ci in inc):
             continue  # (a curve here changed in an earlier rejoin, or a loop at the node)
         sp = out[s]
-        own = sp.indices[sp.indices >= 0]
-        if len(own) == 0 or length[s] > SKIPPED.spur * float(np.median(h[own])):
-            continue
-        best = _best_bridge(P, h, nodes[j], j, sp, [(ci, out[ci]) for ci in inc if ci != s], used, tree, link)
+        best = _best_bridge(P, h, nodes[j], j, sp, [(ci, out[ci]) for ci in inc if ci != s], used, spare, tree, link)
         if best is None:
             continue
         a, bridge = best
@@ -142,7 +148,7 @@ def _from(c: Curve, j: int) -> tuple[np.ndarray, np.ndarray]:
     return (c.points, c.indices) if c.start == j else (c.points[::-1], c.indices[::-1])
 
 
-def _best_bridge(P, h, x0, j, sp, others, used, tree, link):
+def _best_bridge(P, h, x0, j, sp, others, used, spare, tree, link):
     """(curve id, bridge sample ids) of the curve of ``others`` (pairs of curve id and curve
     at node ``j``, at ``x0``) whose skipped stretch the spur ``sp`` is, with the shortest
     bridging path; None when no curve qualifies."""
@@ -161,7 +167,7 @@ def _best_bridge(P, h, x0, j, sp, others, used, tree, link):
         a0 = int(aid[0])
         da0 = float(np.linalg.norm(P[a0] - x0))
         reach = max(float(np.linalg.norm(P[a0] - P[tip])) + link * max(h[tip], h[a0]), SKIPPED.search * h[tip])
-        near = np.asarray(tree.query_ball_point(P[tip], r=reach), dtype=np.int64)
+        near = spare[np.asarray(tree.query_ball_point(P[tip], r=reach), dtype=np.int64)]
         near = near[~used[near]]
         near = near[np.linalg.norm(P[near] - x0, axis=1) >= min(dtip, da0) - SKIPPED.clearance * h[near]]
         ids = np.r_[tip, near, a0].astype(np.int64)
