@@ -63,6 +63,24 @@ def test_a_spur_the_next_curve_skipped_becomes_part_of_it():
     assert steps.max() <= LINK * H  # no jump left
 
 
+def test_at_a_junction_of_four_the_curve_takes_the_spur_and_the_junction_stays():
+    P, nodes, curves, (ib, is_, iu, ia) = _zigzag()
+    # a fourth curve at the junction: a branch along -y (samples (0, -1) .. (0, -12))
+    D = np.column_stack([np.zeros(12), -1.0 - np.arange(12.0)])
+    idd = len(P) + np.arange(len(D))
+    P = np.vstack([P, D])
+    nodes = np.vstack([nodes, [[0.0, -13.0]]])
+    curves = curves + [Curve(np.vstack([nodes[1], D, nodes[4]]), 1, 4, False, np.r_[-1, idd, -1])]
+    X, out, n = rejoin_skipped_stretches(P, np.full(len(P), H), _sorted_nodes(nodes), _reindexed(nodes, curves), LINK)
+    assert n == 1 and len(out) == 3 and len(X) == 4  # the spur's free end gone, the junction kept
+    j = int(np.flatnonzero((X == [0.0, 0.0]).all(axis=1))[0])
+    assert sum((c.start == j) + (c.end == j) for c in out) == 3
+    c = next(c for c in out if set(c.indices[c.indices >= 0].tolist()) >= set(ia.tolist()))
+    ids = c.indices[c.indices >= 0]
+    expect = np.r_[is_, iu, ia]
+    assert np.array_equal(ids, expect) or np.array_equal(ids, expect[::-1])
+
+
 def _reindexed(nodes, curves):
     """The curves with node ids of ``nodes`` sorted by coordinates (the stage's input order)."""
     order = np.lexsort(nodes.T[::-1])
@@ -137,3 +155,14 @@ def test_zigzags_the_junction_stages_misread_come_out_as_one_curve(seed, monkeyp
     off = reconstruct(P)
     assert off.parameters["stretches_rejoined"] == 0
     assert not compare(off, truth, h=1.0)["exact_topology"]
+
+
+def test_the_neurites_kind_is_exact_when_clean_and_needs_the_stage_for_it(monkeypatch):
+    truth = synth.model("neurites")
+    h = truth.parameters["h"]
+    P, _ = synth.sample(truth, rng=0)
+    net = reconstruct(P)
+    assert net.parameters["stretches_rejoined"] >= 1
+    assert compare(net, truth, h=h)["exact_topology"]
+    monkeypatch.setattr(skipped, "SKIPPED", skipped.SKIPPED._replace(spur=0.0))
+    assert not compare(reconstruct(P), truth, h=h)["exact_topology"]

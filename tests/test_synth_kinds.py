@@ -117,3 +117,22 @@ def test_plate_model_has_tangent_t_junctions_in_pairs(models):
         assert cos[pair] < -0.999  # tangent continuation
         third = ({0, 1, 2} - set(pair)).pop()
         assert abs(cos[third, pair[0]]) < 1e-6 and abs(far[third] - 6.0) < 1e-6
+
+
+def test_neurites_zigzag_and_stay_clear_of_themselves(models):
+    m = models["neurites"]
+    h = synth.h_of(m)
+    assert set(m.valence.tolist()) == {1, 3}
+    sharp = 0
+    for c in m.curves:
+        p = c.points
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
+        q = np.array([np.interp(t, s, p[:, k]) for t in np.arange(0, s[-1], h) for k in range(3)]).reshape(-1, 3)
+        u = np.diff(q, axis=0)
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        sharp += int((np.einsum("ij,ij->i", u[1:], u[:-1]) < np.cos(np.radians(40))).sum())
+        # no part within 3h of a part more than 6h away along the curve
+        sq = np.arange(len(q)) * h
+        D = np.linalg.norm(q[:, None] - q[None], axis=2)
+        assert D[np.abs(sq[:, None] - sq[None]) > 6 * h].min() >= 3 * h - 0.05 * h
+    assert sharp >= 3 * m.n_curves  # bursts of sharp turns on every branch, about

@@ -2,7 +2,8 @@
 
 Each model reproduces one structure that real networks have and the original synthetic models
 lack: junctions a few spacings apart (a facade's ladder, a comb of free ends, street grids
-with short links), short twigs near junctions (neuron trees), short coplanar edges at right
+with short links), short twigs near junctions (neuron trees), tortuous branches (traced
+neurites zigzag), short coplanar edges at right
 angles (building outlines) and lines leaving arcs almost tangentially (CAD feature curves).
 They are built as :mod:`.models` builds its models (curves sampled every h/10, valence-2 nodes
 contracted, ``parameters`` with ``model``, ``h`` and ``features``) and can be named wherever a
@@ -139,6 +140,80 @@ def _twigs() -> CurveNetwork:
                    "from a junction, valence 3")
 
 
+def _turned(d: np.ndarray, axis: np.ndarray, deg: float) -> np.ndarray:
+    """The unit vector ``d`` turned by ``deg`` degrees about ``axis`` (Rodrigues)."""
+    k = axis / norm(axis)
+    a = np.radians(deg)
+    return d * np.cos(a) + np.cross(k, d) * np.sin(a) + k * float((k * d).sum()) * (1.0 - np.cos(a))
+
+
+def _neurites() -> CurveNetwork:
+    h = 0.02
+    b = _Builder(h)
+    rng = np.random.default_rng(11)
+    placed: list[np.ndarray] = []  # the dense points of the branches so far, with their start node
+
+    def zigzag_path(p0, d, length):
+        # straight runs of 4-10h, each followed by a zigzag of 2-4 turns of 40-120 degrees about
+        # random axes every 1.6-3.7h (a traced neurite's tortuosity), until about ``length``;
+        # the branch starts and ends with a straight run (its junctions and tip stay clear)
+        v, run, heading = [p0], 0.0, d / norm(d)
+        while True:
+            step = rng.uniform(4.0, 10.0) * h
+            v.append(v[-1] + heading * step)
+            run += step
+            if run >= length:
+                return np.array(v)
+            for _ in range(int(rng.integers(2, 5))):
+                heading = _turned(heading, np.cross(heading, rng.normal(size=3)), rng.uniform(40.0, 120.0))
+                step = rng.uniform(1.6, 3.7) * h
+                v.append(v[-1] + heading * step)
+                run += step
+            # back towards the branch's direction, so the tree spreads out
+            heading = heading + 1.5 * d / norm(d)
+            heading = heading / norm(heading)
+
+    def well_posed(pts, p0):
+        # at least 3h from the other branches (away from the shared start) and from itself
+        # (parts more than 6h apart along it)
+        far = norm(pts - p0) > 4.0 * h if pts.ndim == 1 else np.linalg.norm(pts - p0, axis=1) > 4.0 * h
+        q = pts[far]
+        for other in placed:
+            if len(q) and np.min(np.linalg.norm(q[:, None] - other[None, ::4], axis=2)) < 3.0 * h:
+                return False
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))]
+        sub = slice(None, None, 4)
+        D = np.linalg.norm(pts[sub][:, None] - pts[sub][None], axis=2)
+        apart = np.abs(s[sub][:, None] - s[sub][None]) > 6.0 * h
+        return not np.any(D[apart] < 3.0 * h)
+
+    def branch(a, p0, d, length, depth):
+        for _ in range(200):
+            v = zigzag_path(p0, d, length)
+            pts = _poly(v, b.step)
+            if well_posed(pts, p0):
+                break
+        else:  # (a bug in the model's parameters)
+            raise AssertionError("no well-posed branch found")
+        placed.append(pts)
+        e = b.node(v[-1])
+        b.curve(pts, a, e)
+        if depth == 0:
+            return
+        de = v[-1] - v[-2]
+        de = de / norm(de)
+        u = np.cross(de, rng.normal(size=3))
+        u = u / norm(u)
+        for sgn in (1.0, -1.0):
+            branch(e, v[-1], de + sgn * 1.0 * u, 0.8 * length, depth - 1)
+
+    root = b.node([0.0, 0.0, 0.0])
+    branch(root, np.zeros(3), np.array([0.0, 0.0, 1.0]), 45 * h, 3)
+    return b.build("neurites", "3D tree (valence 3) whose branches zigzag as traced neurites do: straight "
+                   "runs of 4-10h between bursts of 2-4 turns of 40-120 degrees every 1.6-3.7h; no part "
+                   "within 3h of another")
+
+
 def _outline() -> CurveNetwork:
     h = 0.02
     b = _Builder(h)
@@ -243,6 +318,7 @@ KIND_MODELS: dict[str, Callable[[], CurveNetwork]] = {
     "comb": _comb,
     "streets": _streets,
     "twigs": _twigs,
+    "neurites": _neurites,
     "outline": _outline,
     "tangent": _tangent,
     "plate": _plate,

@@ -7,9 +7,9 @@ to a free end, and the curve that carries on past it starts with a jump: from th
 over the spur's samples to its first sample beyond the spur's tip. The samples between the
 spur's tip and that first sample are in no curve.
 
-This stage reads that pattern from the finished curves (before the fit). At a node of valence 3
-with exactly one spur (a curve to a free end, at most ``SKIPPED.spur`` spacings long) and two
-other curves, the spur is the skipped stretch of one of the others when:
+This stage reads that pattern from the finished curves (before the fit). At a junction (valence
+3 or more, no loop) with a spur (a curve to a free end, at most ``SKIPPED.spur`` spacings long),
+the spur is the skipped stretch of one of the other curves when:
 
 * that curve's first sample lies farther from the node than the spur's tip (it jumped past the
   spur; on a twig at a junction the curves' first samples lie nearer the node than the twig's
@@ -25,9 +25,10 @@ other curves, the spur is the skipped stretch of one of the others when:
   spacings (the path runs outside the junction).
 
 Of the curves that qualify, the one with the shortest path takes the spur: the curve now runs
-from the node through the spur's samples and the path's samples to its own. The node is then
-of valence 2 and is dropped: that curve and the third are one curve (a loop through one node
-when their far ends are the same node). The spur's free end is dropped with it.
+from the node through the spur's samples and the path's samples to its own, and the spur's free
+end is dropped. A node of valence 3 is then of valence 2 and is dropped too: that curve and the
+third are one curve (a loop through one node when their far ends are the same node). A node of
+higher valence stays a junction.
 """
 
 from __future__ import annotations
@@ -88,7 +89,7 @@ def rejoin_skipped_stretches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
     free = (ends >= 0) & (valence[np.maximum(ends, 0)] == 1)
     one = np.flatnonzero(free.any(axis=1) & ~free.all(axis=1))
     at_j = np.where(free[one, 0], ends[one, 1], ends[one, 0])
-    keep = valence[at_j] == NODES.junction_valence
+    keep = valence[at_j] >= NODES.junction_valence
     cand = []
     for j, ci in zip(at_j[keep].tolist(), one[keep].tolist()):
         own = curves[ci].indices[curves[ci].indices >= 0]
@@ -110,37 +111,47 @@ def rejoin_skipped_stretches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
             if v >= 0:
                 at.setdefault(v, []).append(ci)
     dropped: list[int] = []
+    rejoined = 0
     for j, s in sorted(cand):
         inc = at.get(j, [])
-        if s not in inc or len(inc) != NODES.junction_valence or any(out[ci].start == out[ci].end for ci in inc):
+        if s not in inc or len(inc) < NODES.junction_valence or any(out[ci].start == out[ci].end for ci in inc):
             continue  # (a curve here changed in an earlier rejoin, or a loop at the node)
         sp = out[s]
         best = _best_bridge(P, h, nodes[j], j, sp, [(ci, out[ci]) for ci in inc if ci != s], used, spare, tree, link)
         if best is None:
             continue
         a, bridge = best
-        b = next(ci for ci in inc if ci not in (s, a))
-        merged = _merged(P, j, sp, bridge, out[a], out[b])
         tip_node = sp.end if sp.start == j else sp.start
         used[bridge] = True
-        for ci in (s, a, b):
+        if len(inc) == NODES.junction_valence:  # the node is left with two curves: they are one
+            b = next(ci for ci in inc if ci not in (s, a))
+            new = _merged(P, j, sp, bridge, out[a], out[b])
+            gone = (s, a, b)
+            dropped.append(j)
+            at.pop(j, None)
+        else:  # a junction still: the curve runs from it through the spur
+            new = _rerouted(P, j, sp, bridge, out[a])
+            gone = (s, a)
+        for ci in gone:
             out[ci] = None
-        out.append(merged)
+        out.append(new)
         k = len(out) - 1
-        for v in (merged.start, merged.end):
-            lst = at.setdefault(v, [])
-            for ci in (a, b):
+        for v in (new.start, new.end):
+            lst = at.get(v)
+            if lst is None:
+                continue
+            for ci in gone:
                 if ci in lst:
                     lst.remove(ci)
             if k not in lst:
                 lst.append(k)
-        at.pop(j, None)
         at.pop(tip_node, None)
-        dropped += [j, tip_node]
+        dropped.append(tip_node)
+        rejoined += 1
     if not dropped:
         return nodes, curves, 0
     X, final = renumbered(nodes, [c for c in out if c is not None], drop=dropped)
-    return X, final, len(dropped) // 2
+    return X, final, rejoined
 
 
 def _from(c: Curve, j: int) -> tuple[np.ndarray, np.ndarray]:
@@ -204,6 +215,18 @@ def _shortest_path(P, h, ids, link):
         walk.append(int(k))
         k = pred[k]
     return float(dist[m - 1]), ids[np.array(walk[::-1], dtype=np.int64)]
+
+
+def _rerouted(P, j, sp, bridge, ca) -> Curve:
+    """Curve ``ca`` from node ``j`` through the spur's samples and the bridge to its first
+    sample and on to its far end."""
+    _, sid = _from(sp, j)
+    sid = sid[sid >= 0]
+    pa, ia = _from(ca, j)
+    first = int(np.flatnonzero(ia >= 0)[0])
+    pts = np.vstack([pa[:1], P[sid], P[bridge], pa[first:]])
+    ind = np.r_[ia[:1], sid, bridge, ia[first:]].astype(np.int64)
+    return Curve(pts, j, ca.end if ca.start == j else ca.start, False, ind)
 
 
 def _merged(P, j, sp, bridge, ca, cb) -> Curve:

@@ -1026,8 +1026,8 @@ class Skipped(NamedTuple):
     """Stage 8c: a free spur that is the skipped first stretch of a neighbouring curve
     (:mod:`.skipped`)."""
 
-    #: a spur (a curve from a valence-3 node to a free end) is read as a skipped stretch only
-    #: when it is at most this many spacings long
+    #: a spur (a curve from a junction to a free end) is read as a skipped stretch only when it
+    #: is at most this many spacings long
     #: origin: set with the stage (issue 25, 5 December 2026), not tuned: the spurs seen on real
     #: neurons (zigzags of 50-110 degree turns every 2 h) were 2.9-5.5 h long
     spur: float = 8.0
