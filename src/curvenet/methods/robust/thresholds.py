@@ -1028,9 +1028,11 @@ class Skipped(NamedTuple):
 
     #: a spur (a curve from a junction to a free end) is read as a skipped stretch only when it
     #: is at most this many spacings long
-    #: origin: set with the stage (issue 25, 5 December 2026), not tuned: the spurs seen on real
-    #: neurons (zigzags of 50-110 degree turns every 2 h) were 2.9-5.5 h long
-    spur: float = 8.0
+    #: origin: benchmark (issue 25, 5 December 2026): the spurs seen on real neurons (zigzags of
+    #: 50-110 degree turns every 2 h) were 2.9-5.5 h long (8 h first); on the neurites kind at
+    #: noise 0.1 h spurs of 8.5 h that jump over a zigzag's lost samples: 12 h, with ``search``,
+    #: 6 more networks better and none worse on the 832-run harness, one CASSIE sketch better
+    spur: float = 12.0
     #: the samples bridging the spur's tip to the curve's first sample lie no nearer the node
     #: than the nearer of the two, less this many spacings (the bridge runs outside the
     #: junction's own samples)
@@ -1039,7 +1041,7 @@ class Skipped(NamedTuple):
     #: the samples of a bridging path are searched within this many spacings of the spur's tip
     #: (at least: farther when the curve's first sample lies farther)
     #: origin: set with the stage, not tuned: a skipped stretch about as long as a spur
-    search: float = 8.0
+    search: float = 12.0
     #: where the curve's first sample lies nearer the node than the spur's tip, the bridging
     #: path must be longer than the way through the node by this many spacings (it runs around
     #: the junction; a path straight through it is no skipped stretch)
