@@ -925,8 +925,9 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
         names_k = list(dict.fromkeys(r["model"] for r in kinds))
         L += ["", "## Analogues of real failure kinds (synthetic)", "",
               "Models of `curvenet.synth.kinds`: the structures that real networks have and the models above "
-              "lack (junctions a few spacings apart, twigs near junctions, short coplanar edges, lines leaving "
-              "arcs tangentially), sampled as the models above. Not part of the means above.", "",
+              "lack (junctions a few spacings apart, twigs near junctions, branches that zigzag, short coplanar "
+              "edges, lines leaving arcs tangentially), sampled as the models above. Not part of the means "
+              "above.", "",
               "| Model | dim | nodes | curves | valences | h | what it tests |", "|---|---|---|---|---|---|---|"]
         for name in names_k:
             t = synth.model(name)
