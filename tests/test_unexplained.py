@@ -204,7 +204,7 @@ def test_pairs_within_the_smaller_radius_match_a_plain_search(spread):
     X = rng.uniform(0, 10, size=(300, 3))
     r = np.full(300, 0.8)
     r[:5] *= spread
-    got, w = unexplained._pairs_within(X, r)
+    got, w = unexplained.pairs_within(X, r)
     D = np.linalg.norm(X[:, None] - X[None], axis=2)
     i, j = np.nonzero(np.triu(D <= np.minimum(r[:, None], r[None]), k=1))
     assert sorted(map(tuple, got.tolist())) == sorted(zip(i.tolist(), j.tolist()))

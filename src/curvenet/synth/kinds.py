@@ -176,7 +176,7 @@ def _neurites() -> CurveNetwork:
     def well_posed(pts, p0):
         # at least 3h from the other branches (away from the shared start) and from itself
         # (parts more than 6h apart along it)
-        far = norm(pts - p0) > 4.0 * h if pts.ndim == 1 else np.linalg.norm(pts - p0, axis=1) > 4.0 * h
+        far = np.linalg.norm(pts - p0, axis=1) > 4.0 * h
         q = pts[far]
         for other in placed:
             if len(q) and np.min(np.linalg.norm(q[:, None] - other[None, ::4], axis=2)) < 3.0 * h:

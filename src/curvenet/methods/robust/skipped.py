@@ -43,6 +43,7 @@ from ...network import Curve
 from ...neighbors import build_tree
 from .curves import renumbered
 from .thresholds import NODES, SKIPPED
+from .unexplained import pairs_within, walk_back
 
 __all__ = ["rejoin_skipped_stretches"]
 
@@ -196,25 +197,15 @@ def _shortest_path(P, h, ids, link):
     """(length, inner sample ids) of the shortest path from ``ids[0]`` to ``ids[-1]`` through
     ``ids`` with steps of at most ``link`` times the smaller spacing of their ends; None when
     there is none."""
-    X = P[ids]
-    r = link * float(h[ids].max())
-    pr = build_tree(X).query_pairs(r, output_type="ndarray")
+    pr, w = pairs_within(P[ids], link * h[ids])
     if len(pr) == 0:
         return None
-    w = np.linalg.norm(X[pr[:, 0]] - X[pr[:, 1]], axis=1)
-    ok = w <= link * np.minimum(h[ids[pr[:, 0]]], h[ids[pr[:, 1]]])
-    pr, w = pr[ok], w[ok]
     m = len(ids)
     G = coo_matrix((w, (pr[:, 0], pr[:, 1])), shape=(m, m)).tocsr()
     dist, pred = dijkstra(G, directed=False, indices=0, return_predecessors=True)
     if not np.isfinite(dist[m - 1]):
         return None
-    walk = []
-    k = pred[m - 1]
-    while k != 0:
-        walk.append(int(k))
-        k = pred[k]
-    return float(dist[m - 1]), ids[np.array(walk[::-1], dtype=np.int64)]
+    return float(dist[m - 1]), ids[walk_back(pred, m - 1, 0)[::-1][1:-1]]
 
 
 def _rerouted(P, j, sp, bridge, ca) -> Curve:
@@ -230,16 +221,9 @@ def _rerouted(P, j, sp, bridge, ca) -> Curve:
 
 
 def _merged(P, j, sp, bridge, ca, cb) -> Curve:
-    """One curve: ``cb`` from its far end to node ``j`` (the node's point left out), the spur's
-    samples, the bridge and ``ca`` from its first sample to its far end."""
+    """One curve: ``cb`` from its far end to node ``j`` (the node's point left out), then
+    :func:`_rerouted` ``ca`` without the node's point."""
     pb, ib = _from(cb, j)
-    pb, ib = pb[::-1][:-1], ib[::-1][:-1]
-    _, sid = _from(sp, j)
-    sid = sid[sid >= 0]
-    pa, ia = _from(ca, j)
-    first = int(np.flatnonzero(ia >= 0)[0])
-    pts = np.vstack([pb, P[sid], P[bridge], pa[first:]])
-    ind = np.r_[ib, sid, bridge, ia[first:]].astype(np.int64)
-    start = cb.end if cb.start == j else cb.start
-    end = ca.end if ca.start == j else ca.start
-    return Curve(pts, start, end, False, ind)
+    ra = _rerouted(P, j, sp, bridge, ca)
+    return Curve(np.vstack([pb[::-1][:-1], ra.points[1:]]), cb.end if cb.start == j else cb.start, ra.end, False,
+                 np.r_[ib[::-1][:-1], ra.indices[1:]].astype(np.int64))

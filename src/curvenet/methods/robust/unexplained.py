@@ -51,7 +51,7 @@ from ...neighbors import build_tree, query_threads
 from .curves import renumbered, segment_distance
 from .thresholds import NUMERIC, UNEXPLAINED
 
-__all__ = ["add_unexplained_branches", "network_distance"]
+__all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back"]
 
 
 class _Join(NamedTuple):
@@ -206,7 +206,7 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
     the two), and the path between the same two samples through every sample between them
     (the least sum of squared steps); each an array of point ids from the explained sample to
     the tip."""
-    pairs, _ = _pairs_within(P[un], UNEXPLAINED.group * h[un])
+    pairs, _ = pairs_within(P[un], UNEXPLAINED.group * h[un])
     n = len(un)
     A = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, group = connected_components(A, directed=False)
@@ -226,7 +226,7 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
     hl = h[local]
     # (steps in the smaller of the two spacings: a point alone in sparse surroundings, an
     # outlier the isolated-point rule kept, does not step far)
-    lp, w = _pairs_within(P[local], link * hl)
+    lp, w = pairs_within(P[local], link * hl)
     if len(lp) == 0:
         return []
     w = np.maximum(w, NUMERIC.tiny)
@@ -260,12 +260,12 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
                 continue
             # the nearest closely explained sample (ties: the lowest)
             j = int(cand[np.lexsort((perm[a + cand], dist[r][cand]))[0]])
-            found[k] = (local[perm[a + _walk(pred[r], j, int(srcs[r]))]],
-                        local[perm[a + _walk(pred2[r], j, int(srcs[r]))]])
+            found[k] = (local[perm[a + walk_back(pred[r], j, int(srcs[r]))]],
+                        local[perm[a + walk_back(pred2[r], j, int(srcs[r]))]])
     return [found[k] for k in sorted(found)]
 
 
-def _pairs_within(X: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pairs_within(X: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The pairs ``(i, j)``, ``i < j``, of the points ``X`` (m, d) at most the smaller of their
     radii ``r`` (m,) apart, as an (p, 2) array, and their distances (p,). All pairs within the
     largest radius are searched at once when it is at most ``UNEXPLAINED.pair_spread`` times
@@ -288,7 +288,7 @@ def _pairs_within(X: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return np.column_stack([i[ok], j[ok]]), w[ok]
 
 
-def _walk(pred: np.ndarray, j: int, s: int) -> np.ndarray:
+def walk_back(pred: np.ndarray, j: int, s: int) -> np.ndarray:
     """The vertices from ``j`` back to the source ``s`` of the predecessor row ``pred``."""
     path = [j]
     while path[-1] != s:
