@@ -178,3 +178,23 @@ def test_pruned_trees_of_many_sets_equal_each_alone():
     for X, cut, keep, adj in zip(sets, cuts, keeps, pruned_trees(sets, cuts, keeps)):
         assert adj == pruned_tree(X, cut, keep)
         assert any(len(a) > 2 for a in adj)  # the twig at x = 4 (5 spacings, over the cut) stays
+
+
+def test_split_plan_merges_two_cores_closer_than_sep_and_keeps_the_row():
+    # a comb whose last two teeth stand 2 h apart (under SPANNING.sep): that pair is read as one
+    # junction of valence 4, the rest of the row still splits (the whole row was left as one
+    # node of valence 6 when any two cores came that close)
+    rng = np.random.default_rng(2)
+    teeth = (0, 4, 8, 10)
+    assert 10 - 8 < SPANNING.sep
+    X = np.r_[_line((-12, 0), (22, 0)), *[_line((x, 1), (x, 12)) for x in teeth]]
+    X = X + rng.normal(0, 0.05, X.shape)
+    region = (np.abs(X[:, 1]) < 3.5) & (X[:, 0] > -3.5) & (X[:, 0] < 13.5)
+    outside = np.flatnonzero(~region)
+    d, _ = cKDTree(X[region]).query(X[outside])
+    plan = _plan(X, region, outside[d < 1.5])
+    assert plan is not None and len(plan.steps) == 2
+    assert sorted(len(v) for v in plan.ends.values()) == [1, 2, 3]  # middle tooth; left end; the pair and the spine's end
+    centres = np.array(list(plan.centres.values()))
+    gaps = np.linalg.norm(centres[:, None] - centres[None], axis=2)[np.triu_indices(3, 1)]
+    assert gaps.min() >= SPANNING.sep

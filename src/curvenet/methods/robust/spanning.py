@@ -18,7 +18,10 @@ between two close curves, not a junction.
 valence 3 to ``SPANNING.max_valence``: its share of the region's chain ends (the tree vertex of
 each end point goes to the nearest core along the tree) plus the tree paths to its neighbouring
 cores. A core of valence under 3 (a bend of the spine, or the region's end where the next
-junction is another region) is merged into its nearest neighbour first; a core of higher
+junction is another region) is merged into its nearest neighbour first; then two neighbouring
+cores under ``SPANNING.sep`` apart are one junction (the closest pair merged first, while more
+than ``SPANNING.min_cores`` are left: under noise one pair of a ladder's rail came 1.9 h apart
+and the whole row stayed one node); a core of higher
 valence is a hub of many strokes spread by the noise, and a region whose branches' lines all
 meet one point (:func:`.paired.meet_at_one_point`) is one junction: both are left whole.
 :func:`split_multiple_junctions` (a repair of :data:`.repairs.ORDER`, the first: before any
@@ -325,11 +328,20 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
                         live[int(np.argmin(np.linalg.norm(centre[live] - P[e], axis=1)))]
                         for j, e in zip(at.tolist(), end_points.tolist())], dtype=np.int64)
         val = {k: int(np.sum(own == k)) + len(nbr[k]) for k in live}
-        weak = [k for k in live if val[k] < NODES.junction_valence and nbr[k]]
-        if not weak or len(live) < min_cores:
+        if len(live) < min_cores:
             break
-        k = min(weak, key=lambda q: (val[q], q))
-        into = min(sorted(nbr[k]), key=lambda q: float(np.linalg.norm(centre[q] - centre[k])))
+        weak = [k for k in live if val[k] < NODES.junction_valence and nbr[k]]
+        if weak:
+            k = min(weak, key=lambda q: (val[q], q))
+            into = min(sorted(nbr[k]), key=lambda q: float(np.linalg.norm(centre[q] - centre[k])))
+        else:  # neighbouring cores under SPANNING.sep apart are one junction: the closest pair
+            close = [(float(np.linalg.norm(centre[a] - centre[b])), a, b) for a in live for b in sorted(nbr[a])
+                     if a < b and np.linalg.norm(centre[a] - centre[b]) < SPANNING.sep * hl
+                     ] if len(live) > SPANNING.min_cores else []
+            if not close:
+                break
+            _, a, b = min(close)
+            k, into = (a, b) if (val[a], a) <= (val[b], b) else (b, a)
         lab[lab == k] = into
         live.remove(k)
     if len(live) < min_cores or min(val.values()) < NODES.junction_valence:

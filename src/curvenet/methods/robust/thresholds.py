@@ -731,8 +731,12 @@ class Spanning(NamedTuple):
     #: origin: measured (issue 25), as ``clean_min_cores``: 3 or 4 points 0.624 / 0.8727, 6
     #: 0.623, 8 0.615, 12 (the noisy value) 0.608 / 0.8715
     clean_min_points: int = 4
-    #: the junctions lie at least this many spacings apart (the benchmark's rows: 3 to 5 h)
-    #: origin: set with the split (issue 25), not tuned
+    #: the junctions lie at least this many spacings apart (the benchmark's rows: 3 to 5 h):
+    #: two neighbouring cores nearer than this are one junction (merged while more than
+    #: ``min_cores`` are left; a row read whole was dropped before: a ladder's rail under noise
+    #: 0.2h, ten cores found and one pair 1.9 h apart, became a single node of valence 12)
+    #: origin: set with the split (issue 25), not tuned; the merge: 832-run harness 7 better, 0
+    #: worse (ladder, comb, outline under noise), CASSIE equal
     sep: float = 2.5
     #: the new chain between two junctions holds the region's points of the tree path between
     #: them farther than this many spacings (plus the noise) from both junctions' tree vertices
