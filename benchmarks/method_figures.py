@@ -94,6 +94,7 @@ SECTIONS = {
     "NODES": ("NODES",),
     "CURVES": ("CURVES", "FIT", "UNTANGLE"),
     "SKIPPED": ("SKIPPED",),
+    "EXCURSION": ("EXCURSION",),
     "UNEXPLAINED": ("UNEXPLAINED",),
     "NUMERIC": ("NUMERIC", "LINALG"),
 }

@@ -14,7 +14,9 @@ small example):
 6. :mod:`.nodes` -- node positions;
 7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
    by smoothing splines under noise; before the fit, :mod:`.skipped` makes a short free spur
-   that a neighbouring curve jumped over (a zigzag read as a junction) part of that curve;
+   that a neighbouring curve jumped over (a zigzag read as a junction) part of that curve, and
+   :mod:`.excursions` splits a curve that runs out along a twig and back into a junction and
+   that twig;
 8. :mod:`.unexplained` -- under noise, branches the network leaves unexplained (a twig whose
    junction the earlier stages missed), added.
 
@@ -48,6 +50,7 @@ from .junctions import junction_regions, shell_group_counts
 from .nodes import place_nodes
 from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
+from .excursions import split_excursions
 from .skipped import rejoin_skipped_stretches
 from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
@@ -214,6 +217,8 @@ def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates:
     del placement
     nodes, curves, rejoined = rejoin_skipped_stretches(P, h, nodes, curves, prm.link)  # 8c. skipped stretches
     params_out["stretches_rejoined"] = rejoined
+    nodes, curves, twigs = split_excursions(P, h, nodes, curves, noise, prm.min_spur)  # 8d. excursions
+    params_out["excursions_split"] = twigs
     tm["assemble"] = time.perf_counter() - t1
 
     fitted = (not clean) if prm.fit is None else prm.fit

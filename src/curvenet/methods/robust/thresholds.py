@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Skipped", "SKIPPED", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
+__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Skipped", "SKIPPED", "Excursion", "EXCURSION", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
 
 class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
@@ -1056,6 +1056,63 @@ class Skipped(NamedTuple):
 
 
 SKIPPED = Skipped()
+
+
+class Excursion(NamedTuple):
+    """Stage 8d: a curve that runs out along a twig and back (:mod:`.excursions`)."""
+
+    #: the twig's tip: the curve turns there by more than about 107 degrees (cosine under this)
+    #: origin: benchmark (issue 25, 5 December 2026): the tips seen on the twigs kind turn by
+    #: 110-160 degrees (cosine -0.34 to -0.94)
+    turn_cos: float = -0.3
+    #: the step the excursion interrupts: its two samples at most this many spacings apart ...
+    #: origin: benchmark (issue 25): the steps seen on the twigs kind were 1.0-1.4 h (one 1.8 h);
+    #: 2.5 h (the link length) also cut real neurons' narrow hairpins and the neurites' zigzags
+    #: (832-run harness 55 better, 50 worse), 1.5 h: 52 better, 8 worse
+    gap: float = 1.5
+    #: ... plus this many times the noise
+    #: origin: benchmark (issue 25): 2 cut a real neuron's hairpin at noise 0.2h (a step of
+    #: 1.86 h); 1: 52 better, 8 worse with ``gap``
+    gap_noise: float = 1.0
+    #: the curve's direction into and out of the step, over this many samples (samples)
+    #: origin: set with the stage, not tuned
+    dir_samples: int = 2
+    #: a curve of fewer samples holds no excursion: the directions' samples on both sides, the
+    #: step's two samples and a tip between them (samples)
+    #: origin: derived: ``2 dir_samples + 3``
+    min_samples: int = 7
+    #: ... agree within about 45 degrees (cosine): the curve runs on straight across the step
+    #: origin: set with the stage, not tuned (0.9: the twigs kind at noise 0.2h 0.62 -> 0.60)
+    through_cos: float = 0.7
+    #: the excursion reaches this many spacings off the step (a twig of 3 h leaving at 50
+    #: degrees reaches 2.3 h)
+    #: origin: set with the stage, not tuned
+    height: float = 2.0
+    #: ... within this many spacings of arc on either side of the tip (the skipped-stretch
+    #: stage's longest spur)
+    #: origin: set with the stage, not tuned
+    reach: float = 12.0
+    #: one side of the tip, from the step's sample to the tip, holds at most this many samples
+    #: (the way back from a twig's tip: the jump, or a few samples) (samples)
+    #: origin: set with the stage, not tuned: the ways back seen on the twigs kind held 1-2
+    back_samples: int = 4
+    #: ... the other at most this many (the twig's samples; implementation bound of the
+    #: vectorised test, above the samples of ``reach`` spacings at the benchmark's densities)
+    #: origin: set with the stage, not tuned
+    long_samples: int = 40
+    #: its samples lie within this many spacings of their principal line ...
+    #: origin: set with the stage, not tuned
+    line: float = 0.5
+    #: ... plus this many times the noise
+    #: origin: set with the stage, not tuned
+    line_noise: float = 2.0
+    #: the twig's line and the curve's are parallel when the squared sine of their angle is under
+    #: this (the junction then sits at the first twig sample's foot on the curve's line)
+    #: origin: a rounding guard, not a tuning
+    parallel: float = 1e-6
+
+
+EXCURSION = Excursion()
 
 
 class Unexplained(NamedTuple):
