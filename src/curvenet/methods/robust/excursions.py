@@ -20,8 +20,10 @@ curves the excursion interrupted and a twig from a new junction to a new free en
 * the curve runs on straight across the step: its direction into ``a`` and out of ``b`` (over
   ``EXCURSION.dir_samples`` samples) agree within ``EXCURSION.through_cos``;
 * the excursion's samples lie along one line (within ``EXCURSION.line`` spacings plus
-  ``EXCURSION.line_noise`` times the noise of their principal line), and the twig is at least
-  ``min_spur`` spacings long.
+  ``EXCURSION.line_noise`` times the noise of their principal line), the twig is at least
+  ``min_spur`` spacings long, and its tip is a free end: no sample of a curve but the twig's
+  lies a step (``gap``) from it ahead, within ``EXCURSION.ahead_cos`` of the twig's direction
+  (else the excursion ran part of the way along a curve between two junctions).
 
 The junction is placed on the curve's line through the step (the principal line of its samples
 ``dir_samples`` before ``a`` to ``a`` and ``b`` to ``dir_samples`` after ``b``), at its point
@@ -37,6 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...neighbors import build_tree
 from ...network import Curve
 from .chains import group_medians
 from .curves import renumbered
@@ -84,9 +87,21 @@ def split_excursions(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves: li
     out: list[Curve] = [c for c, m in zip(curves, maybe) if not m]
     work = [c for c, m in zip(curves, maybe) if m]
     split = 0
+    ptree = used = None
     while work:
         c = work.pop()
         cut = _excursion(c, h, noise, min_spur)
+        if cut is not None:  # the twig's tip is a free end: no sample a step ahead of it
+            if ptree is None:  # (the samples of the curves do not change below: a split keeps them)
+                ptree = build_tree(P)
+                used = np.zeros(len(P), dtype=bool)
+                ids = np.concatenate([q.indices for q in curves])
+                used[ids[ids >= 0]] = True
+            _, _, x, twig = cut
+            tip = int(c.indices[twig[-1]])
+            if _continued(P, ptree, tip, _unit(P[tip] - x), EXCURSION.gap * float(h[tip]) + EXCURSION.gap_noise * noise,
+                          c.indices[twig], used):
+                cut = None
         if cut is None:
             out.append(c)
             continue
@@ -104,6 +119,21 @@ def split_excursions(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves: li
         return nodes, curves, 0
     X, final = renumbered(np.asarray(node_list, dtype=float), out)
     return X, final, split
+
+
+def _continued(P: np.ndarray, ptree, tip: int, u: np.ndarray, r: float, own: np.ndarray,
+               used: np.ndarray) -> bool:
+    """Whether a sample of a curve (``used``: per point), not of the twig (``own``: its point
+    ids), lies within ``r`` of the twig's tip ``tip`` ahead of it, within ``EXCURSION.ahead_cos``
+    of the twig's direction ``u`` (unit): a curve goes on past the "tip" (the excursion ran part
+    of the way along a curve between two junctions), which is then no free end. (Samples of no
+    curve there are the twig's own, left out by the tracer.)"""
+    near = np.asarray(ptree.query_ball_point(P[tip], r), dtype=np.int64)
+    near = near[used[near] & ~np.isin(near, own)]
+    if not len(near):
+        return False
+    v = _unit(P[near] - P[tip])
+    return bool(np.any(v @ u >= EXCURSION.ahead_cos))
 
 
 def _candidates(curves: list[Curve], h: np.ndarray, noise: float) -> np.ndarray:
