@@ -4,21 +4,23 @@ Every radius is in units of the *local* sampling spacing ``h`` of a point, and g
 estimated noise. The stages, each a module of this package (docs/method.md shows each on a
 small example):
 
-1. :mod:`.frames` -- neighbours, local spacing, duplicate samples, points alone in space
-   (outliers), tangents, noise level;
-2. :mod:`.graph` -- links along the tangents (strand links cut under noise);
-3. :mod:`.junctions` -- the shell test: which points are junction points, and their regions;
-4. :mod:`.chains` -- the chains between regions, ordered;
-5. :mod:`.topology` and :mod:`.repairs` -- regions and chains as one topology object, repaired
+1-2. :mod:`.frames` -- neighbours, local spacing, duplicate samples, points alone in space
+   (outliers); tangents, noise level;
+3. :mod:`.graph` -- links along the tangents (strand links cut under noise);
+4. :mod:`.junctions` -- the shell test: which points are junction points, and their regions;
+5. :mod:`.chains` -- the chains between regions, ordered;
+6. :mod:`.topology` and :mod:`.repairs` -- regions and chains as one topology object, repaired
    where noise and sparse sampling broke it;
-6. :mod:`.nodes` -- node positions;
-7. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
-   by smoothing splines under noise; before the fit, :mod:`.skipped` makes a short free spur
-   that a neighbouring curve jumped over (a zigzag read as a junction) part of that curve, and
-   :mod:`.excursions` splits a curve that runs out along a twig and back into a junction and
-   that twig;
-8. :mod:`.unexplained` -- under noise, branches the network leaves unexplained (a twig whose
+7. :mod:`.nodes` -- node positions;
+8. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
+   by smoothing splines under noise (8b); before the fit, :mod:`.skipped` makes a short free
+   spur that a neighbouring curve jumped over (a zigzag read as a junction) part of that curve
+   (8c), and :mod:`.excursions` splits a curve that runs out along a twig and back into a
+   junction and that twig (8d);
+9. :mod:`.unexplained` -- under noise, branches the network leaves unexplained (a twig whose
    junction the earlier stages missed), added.
+
+(The numbers are those of docs/method.md's sections and of the comments below.)
 
 The result does not depend on the order of the input points: they are sorted by coordinates
 first and every tie is broken by that order. The fixed constants are in :mod:`.thresholds`,
