@@ -557,12 +557,13 @@ def _spd_solve(A, rhs: np.ndarray) -> np.ndarray:
 
 
 def segment_distance(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(n,) distance of each point ``x`` (n, d) to the segment from ``a`` (n, d) to ``b`` (n, d)
-    (a segment of length 0: the distance to its point)."""
+    """(...) distance of each point ``x`` (..., d) to the segment from ``a`` (..., d) to ``b``
+    (..., d), the three broadcast together, e.g. (n, d) each (a segment of length 0: the
+    distance to its point)."""
     ab = b - a
-    L2 = np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
-    t = np.clip(((x - a) * ab).sum(axis=1) / L2, 0.0, 1.0)
-    return np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
+    L2 = np.maximum((ab * ab).sum(axis=-1), NUMERIC.tiny)
+    t = np.clip(((x - a) * ab).sum(axis=-1) / L2, 0.0, 1.0)
+    return np.linalg.norm(x - (a + t[..., None] * ab), axis=-1)
 
 
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):

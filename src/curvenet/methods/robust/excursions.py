@@ -42,7 +42,7 @@ import numpy as np
 from ...neighbors import build_tree
 from ...network import Curve
 from .chains import group_medians
-from .curves import renumbered
+from .curves import renumbered, segment_distance
 from .thresholds import BRANCHED, EXCURSION
 
 __all__ = ["split_excursions"]
@@ -99,8 +99,7 @@ def split_excursions(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves: li
                 used[ids[ids >= 0]] = True
             _, _, x, twig = cut
             tip = int(c.indices[twig[-1]])
-            if _continued(P, ptree, tip, _unit(P[tip] - x), EXCURSION.gap * float(h[tip]) + EXCURSION.gap_noise * noise,
-                          c.indices[twig], used):
+            if _continued(P, ptree, tip, _unit(P[tip] - x), _step(float(h[tip]), noise), c.indices[twig], used):
                 cut = None
         if cut is None:
             out.append(c)
@@ -158,12 +157,10 @@ def _candidates(curves: list[Curve], h: np.ndarray, noise: float) -> np.ndarray:
     L = np.linalg.norm(D, axis=1)
     inner = cid[1:] == cid[:-1]  # steps within one curve
     L = np.where(inner, L, 0.0)
-    U = _unit(D)
-    turn = np.einsum("ij,ij->i", U[:-1], U[1:])
     tip = np.zeros(len(Q), dtype=bool)
-    tip[1:-1] = (turn < EXCURSION.turn_cos) & inner[:-1] & inner[1:] & (L[:-1] > 0) & (L[1:] > 0)
+    tip[1:-1] = _turns_back(_unit(D), L) & inner[:-1] & inner[1:]
     jump = np.zeros(len(Q), dtype=bool)
-    jump[:-1] = inner & (L >= BRANCHED.jump * np.maximum(hs[:-1], hs[1:]) + BRANCHED.jump_noise * noise)
+    jump[:-1] = inner & _jumps(L, hs, noise)
     # (the arc runs on over the curve boundaries: only differences within one curve are read)
     arc = np.r_[0.0, np.cumsum(L)]
     if not tip.any() or not jump.any():
@@ -215,25 +212,18 @@ def _candidates(curves: list[Curve], h: np.ndarray, noise: float) -> np.ndarray:
         ti, sb, dl, lo, hi, t, ac = ti[inside], sb[inside], dl[inside], lo[inside], hi[inside], t[inside], ac[inside]
         room = (np.minimum(ac, sb) >= lo) & (np.maximum(ac, sb) <= hi)
         G = np.linalg.norm(Q[ac] - Q[sb], axis=1)
-        ok = room & (G <= EXCURSION.gap * np.maximum(hs[ac], hs[sb]) + EXCURSION.gap_noise * noise)
-        ok &= _off_segment(Q[t], Q[ac], Q[sb]) >= H[ti]
+        ok = room & (G <= _step(np.maximum(hs[ac], hs[sb]), noise))
+        ok &= segment_distance(Q[t], Q[ac], Q[sb]) >= H[ti]
         hit[ti[ok]] = True
     out[use[np.unique(cid[tp[hit]])]] = True
     return out
 
 
-def _off_segment(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance of points ``x`` from segments ``a``-``b`` (arrays (..., d), broadcast)."""
-    ab = b - a
-    s2 = np.einsum("...i,...i->...", ab, ab)
-    t = np.clip(np.einsum("...i,...i->...", x - a, ab) / np.where(s2 > 0, s2, 1.0), 0.0, 1.0)
-    return np.linalg.norm(x - (a + t[..., None] * ab), axis=-1)
-
-
 def _flat_spacing(idx: np.ndarray, cid: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """The local spacing at each sample of curves laid end to end (``idx``: point ids, -1 at
-    computed nodes, which take the spacing of the nearest sample of their curve before them,
-    else after; ``cid``: each sample's curve, ascending; every curve holds a sample)."""
+    """The local spacing at each sample of curves laid end to end, or of one curve (``cid`` all
+    0) (``idx``: point ids, -1 at computed nodes, which take the spacing of the nearest sample
+    of their curve before them, else after; ``cid``: each sample's curve, ascending; every
+    curve holds a sample)."""
     has = idx >= 0
     ar = np.arange(len(idx))
     prev = np.maximum.accumulate(np.where(has, ar, -1))
@@ -243,15 +233,23 @@ def _flat_spacing(idx: np.ndarray, cid: np.ndarray, h: np.ndarray) -> np.ndarray
     return h[idx[src]]
 
 
-def _sample_spacing(idx: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """The local spacing at each sample of a curve (``idx``: its point ids, -1 at computed nodes,
-    which take the spacing of the nearest sample before them, else after)."""
-    has = idx >= 0
-    pos = np.where(has, np.arange(len(idx)), -1)
-    prev = np.maximum.accumulate(pos)
-    nxt = np.minimum.accumulate(np.where(has, np.arange(len(idx)), len(idx))[::-1])[::-1]
-    src = np.where(prev >= 0, prev, np.minimum(nxt, len(idx) - 1))
-    return h[np.maximum(idx[src], 0)]
+def _turns_back(U: np.ndarray, L: np.ndarray) -> np.ndarray:
+    """Per inner sample of a polyline (its unit steps ``U`` (m, d) and their lengths ``L``
+    (m,)): whether the curve turns back there (a turn whose cosine is under
+    ``EXCURSION.turn_cos``, between two steps of non-zero length)."""
+    return (np.einsum("ij,ij->i", U[:-1], U[1:]) < EXCURSION.turn_cos) & (L[:-1] > 0) & (L[1:] > 0)
+
+
+def _jumps(L: np.ndarray, hs: np.ndarray, noise: float) -> np.ndarray:
+    """Per step (lengths ``L`` (m,), spacings at its samples ``hs`` (m + 1,)): whether it is a
+    jump, over ``BRANCHED.jump`` local spacings plus ``BRANCHED.jump_noise`` times the noise."""
+    return L >= BRANCHED.jump * np.maximum(hs[:-1], hs[1:]) + BRANCHED.jump_noise * noise
+
+
+def _step(hs, noise: float):
+    """The longest regular step at local spacing ``hs``: ``EXCURSION.gap`` spacings plus
+    ``EXCURSION.gap_noise`` times the noise."""
+    return EXCURSION.gap * hs + EXCURSION.gap_noise * noise
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -275,14 +273,12 @@ def _excursion(c: Curve, h: np.ndarray, noise: float, min_spur: float):
     hl = float(np.median(h[own]))
     D = np.diff(Q, axis=0)
     L = np.linalg.norm(D, axis=1)
-    U = _unit(D)
-    turn = np.einsum("ij,ij->i", U[:-1], U[1:])  # at samples 1 .. n - 2
-    tips = np.flatnonzero((turn < EXCURSION.turn_cos) & (L[:-1] > 0) & (L[1:] > 0)) + 1
+    tips = np.flatnonzero(_turns_back(_unit(D), L)) + 1
     if not len(tips):
         return None
     arc = np.r_[0.0, np.cumsum(L)]
-    hs = _sample_spacing(c.indices, h)
-    big = L >= BRANCHED.jump * np.maximum(hs[:-1], hs[1:]) + BRANCHED.jump_noise * noise  # the jumps
+    hs = _flat_spacing(c.indices, np.zeros(n, dtype=np.int64), h)
+    big = _jumps(L, hs, noise)
     uin = np.zeros_like(Q)
     uin[k:] = _unit(Q[k:] - Q[:-k])  # direction into each sample
     uout = np.zeros_like(Q)
@@ -296,7 +292,7 @@ def _excursion(c: Curve, h: np.ndarray, noise: float, min_spur: float):
         if not len(A) or not len(B):
             continue
         G = np.linalg.norm(Q[A][:, None] - Q[B][None], axis=2)
-        ok = G <= EXCURSION.gap * np.maximum(hs[A][:, None], hs[B][None, :]) + EXCURSION.gap_noise * noise
+        ok = G <= _step(np.maximum(hs[A][:, None], hs[B][None, :]), noise)
         ok &= uin[A] @ uout[B].T >= EXCURSION.through_cos
         # one side of the tip is the way back: at most back_samples samples, a jump among them
         back = np.logical_or.accumulate(big[A[::-1]])[::-1]  # any of big[a .. t - 1]
@@ -304,7 +300,7 @@ def _excursion(c: Curve, h: np.ndarray, noise: float, min_spur: float):
         w = EXCURSION.back_samples
         ok &= ((t - A <= w) & back)[:, None] | ((B - t <= w) & fwd)[None, :]
         # the tip reaches height spacings off the step
-        ok &= _off_segment(Q[t], Q[A][:, None, :], Q[B][None, :, :]) >= EXCURSION.height * hl
+        ok &= segment_distance(Q[t], Q[A][:, None, :], Q[B][None, :, :]) >= EXCURSION.height * hl
         for ia, ib in zip(*np.nonzero(ok)):
             a, b = int(A[ia]), int(B[ib])
             cands.append((b - a, float(G[ia, ib]), a, b))
@@ -341,7 +337,7 @@ def _twig(Q: np.ndarray, a: int, b: int, hl: float, noise: float, min_spur: floa
     s = (cb * float(ut @ w0) - float(um @ w0)) / den if den > EXCURSION.parallel else float((Q[E[0]] - cm) @ um)
     # (kept within the step's reach: from a's foot on the line to b's, widened by a step)
     fa, fb = float((Q[a] - cm) @ um), float((Q[b] - cm) @ um)
-    gap = EXCURSION.gap * hl + EXCURSION.gap_noise * noise  # (a step's length: the clamp's margin)
+    gap = _step(hl, noise)  # (the clamp's margin)
     x = cm + min(max(s, min(fa, fb) - gap), max(fa, fb) + gap) * um
     # a step's sample that lies off the curve's line (the twig's first sample, where the curve
     # left the line a sample late or came back a sample early) belongs to the twig

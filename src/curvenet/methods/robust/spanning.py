@@ -335,9 +335,9 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
             k = min(weak, key=lambda q: (val[q], q))
             into = min(sorted(nbr[k]), key=lambda q: float(np.linalg.norm(centre[q] - centre[k])))
         else:  # neighbouring cores under SPANNING.sep apart are one junction: the closest pair
-            close = [(float(np.linalg.norm(centre[a] - centre[b])), a, b) for a in live for b in sorted(nbr[a])
-                     if a < b and np.linalg.norm(centre[a] - centre[b]) < SPANNING.sep * hl
-                     ] if len(live) > SPANNING.min_cores else []
+            pairs = [(float(np.linalg.norm(centre[a] - centre[b])), a, b) for a in live for b in sorted(nbr[a])
+                     if a < b] if len(live) > SPANNING.min_cores else []
+            close = [q for q in pairs if q[0] < SPANNING.sep * hl]
             if not close:
                 break
             _, a, b = min(close)
