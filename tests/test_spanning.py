@@ -198,3 +198,22 @@ def test_split_plan_merges_two_cores_closer_than_sep_and_keeps_the_row():
     centres = np.array(list(plan.centres.values()))
     gaps = np.linalg.norm(centres[:, None] - centres[None], axis=2)[np.triu_indices(3, 1)]
     assert gaps.min() >= SPANNING.sep
+
+
+def test_split_plan_parts_junctions_closer_than_two_core_radii():
+    """Teeth 3 h apart: the spine's two samples between two junctions each lie within the
+    core radius (``SPANNING.core_share`` of 3 h) of one of them; the new chain between them
+    is then the path's sample farthest from both (the row was left whole: the ladder kind's rails under noise
+    0.2h, two nodes of valence 12)."""
+    rng = np.random.default_rng(2)
+    X = np.r_[_line((-12, 0), (18, 0)), *[_line((x, 1), (x, 12)) for x in (0, 3, 6)]]
+    X = X + rng.normal(0, 0.05, X.shape)
+    region = (np.abs(X[:, 1]) < 3.5) & (X[:, 0] > -3.5) & (X[:, 0] < 9.5)
+    outside = np.flatnonzero(~region)
+    d, _ = cKDTree(X[region]).query(X[outside])
+    plan = _plan(X, region, outside[d < 1.5])
+    assert plan is not None and len(plan.steps) == 2
+    for _, _, _, seg in plan.steps:  # spine samples between the junctions, 1-2 h from both
+        assert len(seg) and np.all(np.abs(X[seg, 1]) < 0.5)
+        assert all(min(abs(x - t) for t in (0, 3, 6)) > 0.5 for x in X[seg, 0])
+    assert sorted(len(v) for v in plan.ends.values()) == [1, 2, 2]

@@ -27,7 +27,8 @@ meet one point (:func:`.paired.meet_at_one_point`) is one junction: both are lef
 :func:`split_multiple_junctions` (a repair of :data:`.repairs.ORDER`, the first: before any
 other repair reads the region) then splits the cores off the region one leaf of the core tree at
 a time (:meth:`.topology.Topology.split_region`), each joined to its neighbour by a new chain of
-the region's points along the tree path between them.
+the region's points along the tree path between them (those over a core radius from both, or,
+for junctions 3 h apart under noise, the one farthest from both).
 
 On noise-free input the shell is not widened (under low noise, ``NOISE.low``, little), but
 junctions 3-5 h apart still share one
@@ -371,10 +372,14 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
             return None
         ra = min(SPANNING.core * hl + noise, SPANNING.core_share * float(np.linalg.norm(X[a] - X[b])))
         pts = near[path]
-        far = (np.linalg.norm(P[pts] - X[a], axis=1) > ra) & (np.linalg.norm(P[pts] - X[b], axis=1) > ra)
-        seg = pts[far & np.isin(pts, region)]
-        if not len(seg):
-            return None
+        off = np.minimum(np.linalg.norm(P[pts] - X[a], axis=1), np.linalg.norm(P[pts] - X[b], axis=1))
+        held = np.isin(pts, region)
+        seg = pts[(off > ra) & held]
+        if not len(seg):  # junctions closer than two core radii: the path's middle point
+            mid = np.flatnonzero(held[1:-1]) + 1
+            if not len(mid):
+                return None
+            seg = pts[mid[[np.argmax(off[mid])]]]
         mine = np.isin(region, ids[owner == leaf]) & ~np.isin(region, seg)
         if not mine.any():  # (the core's points all on the chains: no region left for it)
             return None

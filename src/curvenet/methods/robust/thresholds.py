@@ -743,9 +743,13 @@ class Spanning(NamedTuple):
     #: (the region's other points go to the junction nearest along the tree) ...
     #: origin: set with the split (issue 25), not tuned
     core: float = 1.0
-    #: ... or than this share of the distance between the two vertices, if less
+    #: ... or than this share of the distance between the two vertices, if less; when no point
+    #: of the path lies that far, the chain is the path's region point farthest from both
+    #: (junctions 3 h apart under noise: the samples between lie 1 h from one or the other)
     #: origin: set with the split (issue 25): 2.8 h apart on the comb under noise 0.2h, a core
-    #: of 1.24 h left no point between two junctions
+    #: of 1.24 h left no point between two junctions; the farthest point: the ladder kind's rails
+    #: under noise 0.2h (10 junctions found, the row left whole: two nodes of valence 12);
+    #: 832-run harness 21 better, 1 worse (+7.05)
     core_share: float = 0.35
 
 
