@@ -503,3 +503,13 @@ def end_counts(P, h, lists, span):
     flat = np.concatenate(lists).astype(np.int64, copy=False)
     off = np.r_[0, np.cumsum([len(x) for x in lists])].astype(np.int64)
     return _k.end_counts(P, np.ascontiguousarray(h, dtype=np.float64), flat, off, float(span))
+
+
+def segment_distance(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(...) distance of each point ``x`` (..., d) to the segment from ``a`` (..., d) to ``b``
+    (..., d), the three broadcast together, e.g. (n, d) each (a segment of length 0: the
+    distance to its point)."""
+    ab = b - a
+    L2 = np.maximum((ab * ab).sum(axis=-1), NUMERIC.tiny)
+    t = np.clip(((x - a) * ab).sum(axis=-1) / L2, 0.0, 1.0)
+    return np.linalg.norm(x - (a + t[..., None] * ab), axis=-1)

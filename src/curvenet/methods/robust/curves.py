@@ -17,6 +17,7 @@ import numpy as np
 
 from ...network import Curve
 from . import kernels as _k
+from .chains import segment_distance
 from .nodes import Placement
 from .thresholds import CURVES, FIT, LAYOUT, NODES, NUMERIC
 
@@ -554,16 +555,6 @@ def _spd_solve(A, rhs: np.ndarray) -> np.ndarray:
     return _k.envelope_solve(low.indptr.astype(np.int64), low.indices.astype(np.int64),
                              np.ascontiguousarray(low.data, dtype=np.float64),
                              np.ascontiguousarray(rhs, dtype=np.float64))
-
-
-def segment_distance(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(...) distance of each point ``x`` (..., d) to the segment from ``a`` (..., d) to ``b``
-    (..., d), the three broadcast together, e.g. (n, d) each (a segment of length 0: the
-    distance to its point)."""
-    ab = b - a
-    L2 = np.maximum((ab * ab).sum(axis=-1), NUMERIC.tiny)
-    t = np.clip(((x - a) * ab).sum(axis=-1) / L2, 0.0, 1.0)
-    return np.linalg.norm(x - (a + t[..., None] * ab), axis=-1)
 
 
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):

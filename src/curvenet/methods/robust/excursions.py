@@ -41,8 +41,8 @@ import numpy as np
 
 from ...neighbors import build_tree
 from ...network import Curve
-from .chains import group_medians
-from .curves import renumbered, segment_distance
+from .chains import group_medians, segment_distance
+from .curves import renumbered
 from .thresholds import BRANCHED, EXCURSION
 
 __all__ = ["split_excursions"]

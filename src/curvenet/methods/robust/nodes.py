@@ -1,8 +1,9 @@
 """Stage 7: node placement: where each junction and free end sits.
 
 A region touched by one chain end is a free end: its points extend the chain and the node is
-the extreme point (:func:`free_end`), unless the region hides a whole fork
-(:func:`~.junctions.hidden_fork`). A region touched by 3 or more ends is a junction: every
+the extreme point ahead (:func:`free_end`), or, where the region bends (a traced neurite turning
+a few spacings before its tip), the point farthest along it (:func:`bent_tips`), unless the
+region hides a whole fork (:func:`~.junctions.hidden_fork`). A region touched by 3 or more ends is a junction: every
 incident branch is walked into the region, its line is fitted on its last
 ``NODES.fit_span h + NODES.fit_noise noise``, and the node is the least-squares intersection of
 those lines (:func:`junction_positions`, one compiled call for all junctions).
@@ -15,13 +16,13 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels as _k
-from .chains import Chain, end_counts, end_portion, group_medians
+from .chains import Chain, end_counts, end_portion, group_medians, segment_distance
 from .junctions import fork_possible, hidden_fork, region_paths, swallowed_branches
 from .params import RobustParams, Scales
 from .thresholds import CURVES, LINKS, NODES, NUMERIC, SHELL
 from .topology import Topology
 
-__all__ = ["Placement", "place_nodes", "free_end", "junction", "junction_positions"]
+__all__ = ["Placement", "place_nodes", "free_end", "bent_tips", "junction", "junction_positions"]
 
 
 class Placement(NamedTuple):
@@ -95,6 +96,7 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
     fr = [r for r in fr if fork_possible(P, sc, prm, fids[r], regions[r])]
     fpaths = dict(zip(fr, region_paths(P, sc, [(regions[r], int(fids[r][-1])) for r in fr])))
     fm = dict(zip(fids, end_counts(P, h, list(fids.values()), NODES.free_span).tolist()))  # free_end's
+    bent: list = []  # the free ends whose region may bend: (node, chain end, entry, region, ext)
     for r in range(len(regions)):
         if v[r] == 0:
             continue
@@ -113,6 +115,8 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
                 node_of[r] = len(node_pos) - 1
                 continue
             ext, pos = free_end(P, h, ids, regions[r], m=fm[r])
+            if len(regions[r]) >= NODES.fork_min_points:
+                bent.append((len(node_pos), (ci, s), ids[-1], regions[r], ext))
             end_ext[(ci, s)] = ext
             node_pos.append(pos)
         else:
@@ -121,6 +125,10 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
                 for br in swallowed_branches(P, sc, prm, live, inc, regions[r], node_pos[-1]):
                     extra.append((len(node_pos) - 1, br))
         node_of[r] = len(node_pos) - 1
+    for (j, end, _, _, _), tip in zip(bent, bent_tips(P, h, prm.link, sc.noise, prm.shell_outer,
+                                                    [(e, rid, node_pos[j], ext) for j, _, e, rid, ext in bent])):
+        if tip is not None:
+            end_ext[end], node_pos[j] = tip
     # a short free branch lying wholly inside its junction's region (sparse sampling: its
     # length is under the shell radius) gets its own curve to a free end at its tip
     extra_ids = []
@@ -164,6 +172,116 @@ def free_end(P, h, ids, rid, m=None):
     if len(ext) == 0:
         return ext, tip
     return ext, P[ext[-1]].copy()
+
+
+def bent_tips(P: np.ndarray, h: np.ndarray, link: float, noise: float, shell_outer: float,
+              items: list) -> list:
+    """Free ends whose region bends: the node at the point farthest along the region.
+
+    :func:`free_end` places the node at the region point farthest ahead of the chain's end
+    direction; where the region turns (a traced neurite's zigzag a few spacings before its
+    tip) that point is the turn, and the tail beyond it is lost. Here the region's points are
+    joined by steps of at most ``link`` spacings (the region's median; the chain's end joined
+    to its nearest region point), and the point with the longest shortest path from the
+    chain's end is the tip when: every region point reached lies within ``NODES.fork`` shell
+    radii of that path (the region is one path: a second tip there is a fork, read by
+    :func:`~.junctions.hidden_fork`, or left to it); the tip lies over ``NODES.bend`` spacings
+    from the straight-ahead one; and the region holds a sample farther along than the
+    straight-ahead tip per ``NODES.bend_step`` spacings of that distance (a lone outlier
+    beyond the tip is no tail). All regions' shortest paths in one call.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+        Local spacing.
+    link : float
+        The longest step (spacings).
+    noise : float
+        The noise scale (the shell's widening).
+    shell_outer : float
+        The outer shell radius (spacings).
+    items : list of (int, ndarray, (d,) ndarray, ndarray)
+        Per free end: the chain's end point, the region's points, the straight-ahead node and
+        its extension (:func:`free_end`).
+
+    Returns
+    -------
+    list of (ndarray, (d,) ndarray) or None
+        Per item, the extension (region points reached, ordered along the path lengths) and
+        the node; None where the straight-ahead placement stands.
+    """
+    out: list = [None] * len(items)
+    if not items:
+        return out
+    # the tip moves only to a region point over NODES.bend spacings from the straight-ahead
+    # one and NODES.bend_off off the straight approach (the segment from the chain's end to
+    # it, which the path would only run back along): the regions with none are left out first, at once
+    flat = np.concatenate([rid for _, rid, _, _ in items]).astype(np.int64)
+    lens = np.array([len(rid) for _, rid, _, _ in items], dtype=np.int64)
+    gi = np.repeat(np.arange(len(items)), lens)
+    hl = group_medians(h[flat], lens.tolist())
+    a = P[np.array([e for e, _, _, _ in items], dtype=np.int64)][gi]
+    b = np.array([pos for _, _, pos, _ in items])[gi]
+    X = P[flat]
+    off = segment_distance(X, a, b)
+    far = (np.linalg.norm(X - b, axis=1) > NODES.bend * hl[gi]) & (off > NODES.bend_off * hl[gi])
+    wide = np.flatnonzero(np.logical_or.reduceat(far, np.r_[0, np.cumsum(lens)[:-1]]))
+    for k, tip in zip(wide.tolist(), _bent_tips(P, h, link, noise, shell_outer, [items[k] for k in wide])):
+        out[k] = tip
+    return out
+
+
+def _bent_tips(P, h, link, noise, shell_outer, items) -> list:
+    """:func:`bent_tips` on the items that may move (same arguments and result)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
+    if not items:
+        return []
+    U = np.concatenate([np.r_[e, rid] for e, rid, _, _ in items]).astype(np.int64)
+    sizes = np.array([1 + len(rid) for _, rid, _, _ in items], dtype=np.int64)
+    start = np.r_[0, np.cumsum(sizes)[:-1]]
+    grp = np.repeat(np.arange(len(items)), sizes)
+    hl = group_medians(h[np.concatenate([rid for _, rid, _, _ in items])], (sizes - 1).tolist())
+    step = link * hl
+    pa, pb = cKDTree(P[U]).query_pairs(float(step.max()), output_type="ndarray").T
+    d = np.linalg.norm(P[U[pa]] - P[U[pb]], axis=1)
+    keep = (grp[pa] == grp[pb]) & (d <= step[grp[pa]])
+    pa, pb, d = pa[keep], pb[keep], d[keep]
+    # each chain end joined to its region's nearest point, however far
+    de = np.linalg.norm(P[U] - P[U[start[grp]]], axis=1)
+    de[start] = np.inf
+    near = np.array([s0 + 1 + int(np.argmin(de[s0 + 1:s0 + n])) for s0, n in zip(start.tolist(), sizes.tolist())])
+    pa, pb, d = np.r_[pa, start], np.r_[pb, near], np.r_[d, de[near]]
+    tiny = np.finfo(float).tiny  # (a zero length would be no edge)
+    G = coo_matrix((d + tiny, (pa, pb)), shape=(len(U), len(U))).tocsr()
+    g, pred, _ = dijkstra(G, directed=False, indices=start, min_only=True, return_predecessors=True)
+    out = []
+    for k, ((_, rid, pos, ext), s0, n) in enumerate(zip(items, start.tolist(), sizes.tolist())):
+        gl = g[s0 + 1:s0 + n]
+        reach = np.flatnonzero(np.isfinite(gl))
+        if not len(reach):
+            out.append(None)
+            continue
+        order = reach[np.argsort(gl[reach], kind="stable")]
+        far = s0 + 1 + int(order[-1])
+        path = [far]
+        while path[-1] != s0:
+            path.append(int(pred[path[-1]]))
+        X = P[rid[reach]]
+        off = np.min(np.linalg.norm(X[:, None] - P[U[path]][None], axis=2), axis=1)
+        hs = hl[k] + SHELL.widen * noise
+        moved = float(np.linalg.norm(P[U[far]] - pos))
+        at = gl[np.flatnonzero(rid == ext[-1])[0]] if len(ext) else 0.0
+        beyond = int(np.sum(gl[reach] > at))
+        if (off.max() <= NODES.fork * shell_outer * hs and moved > NODES.bend * hl[k]
+                and beyond >= moved / (NODES.bend_step * hl[k])):
+            out.append((rid[order], P[U[far]].copy()))
+        else:
+            out.append(None)
+    return out
 
 
 def junction(P, sc: Scales, prm: RobustParams, live, inc, rid):

@@ -48,7 +48,8 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ...network import Curve
 from ...neighbors import build_tree, query_threads
-from .curves import renumbered, segment_distance
+from .chains import segment_distance
+from .curves import renumbered
 from .thresholds import NUMERIC, UNEXPLAINED
 
 __all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back"]
