@@ -154,17 +154,22 @@ def test_junctions_a_close_scale_misses_stay_a_region(monkeypatch):
     # Since the re-tests count a group going on past their thin shell (goes_on, low noise), the
     # fine test sees those junctions itself (groups 3, not 0): the ladder is exact without the
     # rule too; with the groups read by the middle alone (as before) the rule still holds them
+    # Since the spanning-tree split reads regions that a chain leaves and re-enters (a rung
+    # between the two rails), it recovers that case without the rule too (5 December 2026);
+    # the rule still decides on a copy jittered by 1e-6 h (copy 6 of the 832-run harness:
+    # curve F1 0.53 with it, 0.31 without)
     now = _score("ladder")
     assert now["exact_topology"] and now["curve_f1"] == 1.0
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(hold_touches=10**6))
     assert _score("ladder")["exact_topology"]  # the fine test alone
-    shell_groups = junctions._k.shell_groups
-    monkeypatch.setattr(junctions._k, "shell_groups", lambda *a, **k: shell_groups(*a, **{**k, "goes_on": False}))
-    freed = _score("ladder")
-    assert not freed["exact_topology"] and freed["curve_f1"] < 0.95
+    truth = synth.model("ladder")
+    h = synth.h_of(truth)
+    pts, _ = synth.sample(truth, rng=bench.run_seed("kinds", "ladder", "clean"))
+    pts = pts + np.random.default_rng(6).normal(scale=1e-6 * h, size=pts.shape)
+    freed = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT)
-    held = _score("ladder")
-    assert held["exact_topology"] and held["curve_f1"] == 1.0
+    held = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert held["curve_f1"] >= freed["curve_f1"] + 0.1, (held["curve_f1"], freed["curve_f1"])
 
 
 def _fine_tests_by_the_middle(monkeypatch):
@@ -295,12 +300,14 @@ def test_no_free_branch_beside_a_one_sample_branch(monkeypatch):
     assert compare(reconstruct(pts, method="robust", fit=False), truth, h=synth.h_of(truth))["curve_f1"] < 1.0
 
 
-@pytest.mark.parametrize("name,offset", [("comb", 5), ("outline", 7)])
+@pytest.mark.parametrize("name,offset", [("comb", 1), ("outline", 7)])
 def test_low_noise_is_read_as_noise_free_by_the_junction_stages(monkeypatch, name, offset):
     # noise 0.1h is over the noise-free test (0.05 h) but low (NOISE.low): the links and the
     # junction stages read it as noise-free; with the noise-free test there instead (as before)
-    # the comb's teeth 3-5h apart merged (curve F1 0.72 -> 1.00) and the outline's corners
-    # (0.84 -> 0.96)
+    # the comb's teeth 3-5h apart merged (curve F1 0.72 -> 1.00 at offset 5, 0.74 -> 1.00 at
+    # offset 1) and the outline's corners (0.84 -> 0.96). (Offset 5 is read as well the noisy
+    # way since the spanning split reads regions of 8 points, 5 December 2026: 1.00 both; of
+    # offsets 0-15 the low-noise reading is still better on 11, equal on the other 5.)
     from curvenet.methods.robust import estimate, params
     from curvenet.methods.robust.params import Estimates
 
