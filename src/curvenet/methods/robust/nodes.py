@@ -188,7 +188,9 @@ def bent_tips(P: np.ndarray, h: np.ndarray, link: float, noise: float, shell_out
     :func:`~.junctions.hidden_fork`, or left to it); the tip lies over ``NODES.bend`` spacings
     from the straight-ahead one; and the region holds a sample farther along than the
     straight-ahead tip per ``NODES.bend_step`` spacings of that distance (a lone outlier
-    beyond the tip is no tail). All regions' shortest paths in one call.
+    beyond the tip is no tail). All regions' shortest paths in one call. (Not the linked graph
+    of :func:`~.junctions.region_paths`: at a sharp turn under noise the links break, and the
+    tail is unreachable there.)
 
     Parameters
     ----------
@@ -227,13 +229,14 @@ def bent_tips(P: np.ndarray, h: np.ndarray, link: float, noise: float, shell_out
     off = segment_distance(X, a, b)
     far = (np.linalg.norm(X - b, axis=1) > NODES.bend * hl[gi]) & (off > NODES.bend_off * hl[gi])
     wide = np.flatnonzero(np.logical_or.reduceat(far, np.r_[0, np.cumsum(lens)[:-1]]))
-    for k, tip in zip(wide.tolist(), _bent_tips(P, h, link, noise, shell_outer, [items[k] for k in wide])):
+    for k, tip in zip(wide.tolist(), _bent_tips(P, hl[wide], link, noise, shell_outer, [items[k] for k in wide])):
         out[k] = tip
     return out
 
 
-def _bent_tips(P, h, link, noise, shell_outer, items) -> list:
-    """:func:`bent_tips` on the items that may move (same arguments and result)."""
+def _bent_tips(P, hl, link, noise, shell_outer, items) -> list:
+    """:func:`bent_tips` on the items that may move (its arguments and result, with ``hl`` the
+    median spacing of each item's region instead of every point's)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
     from scipy.spatial import cKDTree
@@ -244,7 +247,6 @@ def _bent_tips(P, h, link, noise, shell_outer, items) -> list:
     sizes = np.array([1 + len(rid) for _, rid, _, _ in items], dtype=np.int64)
     start = np.r_[0, np.cumsum(sizes)[:-1]]
     grp = np.repeat(np.arange(len(items)), sizes)
-    hl = group_medians(h[np.concatenate([rid for _, rid, _, _ in items])], (sizes - 1).tolist())
     step = link * hl
     pa, pb = cKDTree(P[U]).query_pairs(float(step.max()), output_type="ndarray").T
     d = np.linalg.norm(P[U[pa]] - P[U[pb]], axis=1)

@@ -375,7 +375,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         off = np.minimum(np.linalg.norm(P[pts] - X[a], axis=1), np.linalg.norm(P[pts] - X[b], axis=1))
         held = np.isin(pts, region)
         seg = pts[(off > ra) & held]
-        if not len(seg):  # junctions closer than two core radii: the path's middle point
+        if not len(seg):  # junctions closer than two core radii: the path's point farthest from both
             mid = np.flatnonzero(held[1:-1]) + 1
             if not len(mid):
                 return None
