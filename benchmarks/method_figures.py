@@ -95,6 +95,7 @@ SECTIONS = {
     "CURVES": ("CURVES", "FIT", "UNTANGLE"),
     "SKIPPED": ("SKIPPED",),
     "EXCURSION": ("EXCURSION",),
+    "WALKIN": ("WALKIN",),
     "UNEXPLAINED": ("UNEXPLAINED",),
     "NUMERIC": ("NUMERIC", "LINALG"),
 }

@@ -15,8 +15,9 @@ small example):
 8. :mod:`.curves` -- curves ending exactly at their nodes, without spikes (outliers), fitted
    by smoothing splines under noise (8b); before the fit, :mod:`.skipped` makes a short free
    spur that a neighbouring curve jumped over (a zigzag read as a junction) part of that curve
-   (8c), and :mod:`.excursions` splits a curve that runs out along a twig and back into a
-   junction and that twig (8d);
+   (8c), :mod:`.excursions` splits a curve that runs out along a twig and back into a
+   junction and that twig (8d), and :mod:`.walkins` runs a curve that jumped from its
+   junction's node over samples of no curve through them (8e);
 9. :mod:`.unexplained` -- under noise, branches the network leaves unexplained (a twig whose
    junction the earlier stages missed), added.
 
@@ -54,6 +55,7 @@ from .params import Estimates, RobustParams, Scales
 from .repairs import run_repairs
 from .excursions import split_excursions
 from .skipped import rejoin_skipped_stretches
+from .walkins import walk_into_junctions
 from .thresholds import DEFAULTS, LAYOUT, NOISE, SPACING
 from .topology import Topology
 from .unexplained import add_unexplained_branches
@@ -221,6 +223,8 @@ def _stages(P0: np.ndarray, prep: Prepared | None, prm: RobustParams, estimates:
     params_out["stretches_rejoined"] = rejoined
     nodes, curves, twigs = split_excursions(P, h, nodes, curves, noise, prm.min_spur)  # 8d. excursions
     params_out["excursions_split"] = twigs
+    curves, walked = walk_into_junctions(P, h, nodes, curves, prm.link, prm.shell_outer, noise)  # 8e. walk-ins
+    params_out["ends_walked"] = walked
     tm["assemble"] = time.perf_counter() - t1
 
     fitted = (not clean) if prm.fit is None else prm.fit

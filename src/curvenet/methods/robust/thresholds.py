@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Skipped", "SKIPPED", "Excursion", "EXCURSION", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
+__all__ = ["Defaults", "DEFAULTS", "Layout", "LAYOUT", "Spacing", "SPACING", "Tangents", "TANGENTS", "Strip", "STRIP", "Noisy", "NOISY", "Vote", "VOTE", "Noise", "NOISE", "Links", "LINKS", "Strand", "STRAND", "Shell", "SHELL", "Split", "SPLIT", "Chains", "CHAINS", "Ends", "ENDS", "Repairs", "REPAIRS", "Paired", "PAIRED", "Spanning", "SPANNING", "Branched", "BRANCHED", "Nodes", "NODES", "Curves", "CURVES", "Fit", "FIT", "Untangle", "UNTANGLE", "Skipped", "SKIPPED", "Excursion", "EXCURSION", "WalkIn", "WALKIN", "Unexplained", "UNEXPLAINED", "Numeric", "NUMERIC", "Linalg", "LINALG"]
 
 class Defaults(NamedTuple):
     """The defaults of the user's keywords (:class:`~.params.RobustParams`)."""
@@ -1143,6 +1143,28 @@ class Excursion(NamedTuple):
 
 
 EXCURSION = Excursion()
+
+
+class WalkIn(NamedTuple):
+    """Stage 8e: a curve that jumps from its junction's node over samples of no curve
+    (:mod:`.walkins`)."""
+
+    #: the path through the samples of no curve ends this many spacings from the node or nearer
+    #: (it arrives at the junction)
+    #: origin: set with the stage (issue 25), the metric's curve tolerance (2 h): nearer than
+    #: that the last straight step is within it. 832-run harness with this and ``off``: 9
+    #: networks better (neurites kind under noise, e.g. noise 0.1 h 0.65 -> 0.75), none worse
+    arrive: float = 2.0
+    #: the path is taken when one of its samples lies over this many spacings off the straight
+    #: line from the first sample to the node (nearer, the line is within the curve tolerance)
+    #: origin: set with the stage (issue 25), the metric's curve tolerance; with 1 h, and the
+    #: first sample read from 2-3 h out instead of beyond the shell, clean neurites and tangent
+    #: junctions lost curves (a node placed 1.7 h off, the walk then hooked to it; the other
+    #: branch's samples beside a tangent one): 11 better, 10 worse
+    off: float = 2.0
+
+
+WALKIN = WalkIn()
 
 
 class Unexplained(NamedTuple):
