@@ -87,6 +87,19 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
     jr = [r for r in range(len(regions)) if v[r] >= 2]
     JX, JMAYBE = junction_positions(P, sc, prm, [(live, inc_at[r], regions[r]) for r in jr])
     jpos = {r: i for i, r in enumerate(jr)}
+    # a node off the samples (its region's and its branches') moves to the region's median
+    # point, where the region holds more than the junction (a chain end lies beyond the shell
+    # radius of that point; in a small region the node may lie off the samples: strokes
+    # drawn short of each other)
+    hr = [r for r in jr if v[r] >= NODES.junction_valence and len(regions[r])]
+    off = [r for r in hr if np.min(np.linalg.norm(P[np.concatenate([regions[r], *(live[ci].ids for ci, _ in inc_at[r])])]
+                                                  - JX[jpos[r]], axis=1))
+           > NODES.off_region * float(np.median(h[regions[r]])) + NODES.off_noise * sc.noise]
+    ends = {r: [int(live[ci].ids[-1 if s == 1 else 0]) for ci, s in inc_at[r]] for r in off}
+    for r, q in zip(off, median_points(P, h, prm.link, [(ends[r], regions[r]) for r in off])):
+        if q is not None and (np.max(np.linalg.norm(P[ends[r]] - P[q], axis=1))
+                              > prm.shell_outer * (float(np.median(h[regions[r]])) + SHELL.widen * sc.noise)):
+            JX[jpos[r]] = P[q]
     # the region paths of all free ends that may hide a fork, in one call
     fr = [r for r in range(len(regions)) if v[r] == 1]
     fids = {}
@@ -283,6 +296,54 @@ def _bent_tips(P, hl, link, noise, shell_outer, items) -> list:
             out.append((rid[order], P[U[far]].copy()))
         else:
             out.append(None)
+    return out
+
+
+def median_points(P: np.ndarray, h: np.ndarray, link: float, items: list) -> list:
+    """Per junction, its region's point with the least sum of path lengths from its branches.
+
+    The least-squares meeting point of the branches' lines (:func:`junction_positions`) can
+    lie off the samples where a branch's line is read far from the junction (a region that
+    runs 10 h out along a zigzag): there the node moves to the region point that the chain
+    ends reach with the least summed length of shortest paths through the region's points
+    (steps of at most ``link`` spacings, the region's median; each chain end joined to its
+    region's nearest point). Along a tree of samples that point is where the branches meet.
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    h : (N,) ndarray
+        Local spacing.
+    link : float
+        The longest step (spacings).
+    items : list of (list of int, ndarray)
+        Per junction: its chain ends' points and its region's points.
+
+    Returns
+    -------
+    list of int or None
+        Per junction, the median point (None where a chain end reaches no region point).
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
+    out: list = []
+    for ends, rid in items:
+        ends = np.asarray(ends, dtype=np.int64)
+        U = np.r_[ends, rid].astype(np.int64)
+        k = len(ends)
+        step = link * float(np.median(h[rid]))
+        pa, pb = cKDTree(P[U]).query_pairs(step, output_type="ndarray").T
+        d = np.linalg.norm(P[U[pa]] - P[U[pb]], axis=1)
+        de = np.linalg.norm(P[rid][None] - P[ends][:, None], axis=2)
+        near = k + np.argmin(de, axis=1)
+        pa, pb = np.r_[pa, np.arange(k)], np.r_[pb, near]
+        d = np.r_[d, de[np.arange(k), near - k]]
+        G = coo_matrix((d + NUMERIC.tiny, (pa, pb)), shape=(len(U), len(U))).tocsr()
+        D = dijkstra(G, directed=False, indices=np.arange(k))[:, k:]
+        total = D.sum(axis=0)
+        out.append(int(rid[np.argmin(total)]) if np.isfinite(total).any() else None)
     return out
 
 
