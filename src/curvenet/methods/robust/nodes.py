@@ -92,13 +92,22 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
     # radius of that point; in a small region the node may lie off the samples: strokes
     # drawn short of each other)
     hr = [r for r in jr if v[r] >= NODES.junction_valence and len(regions[r])]
-    off = [r for r in hr if np.min(np.linalg.norm(P[np.concatenate([regions[r], *(live[ci].ids for ci, _ in inc_at[r])])]
-                                                  - JX[jpos[r]], axis=1))
-           > NODES.off_region * float(np.median(h[regions[r]])) + NODES.off_noise * sc.noise]
+    off, hl_of = [], {}
+    if hr:  # (all junctions at once: each one's samples, their distances to its node)
+        pieces = [[regions[r], *(live[ci].ids for ci, _ in inc_at[r])] for r in hr]
+        sizes = np.array([sum(len(x) for x in pc) for pc in pieces], dtype=np.int64)
+        near = np.concatenate([x for pc in pieces for x in pc]).astype(np.int64)
+        at = np.repeat(np.array([jpos[r] for r in hr], dtype=np.int64), sizes)
+        gap = np.minimum.reduceat(np.linalg.norm(P[near] - JX[at], axis=1), np.r_[0, np.cumsum(sizes)[:-1]])
+        hl = group_medians(h[np.concatenate([regions[r] for r in hr])], [len(regions[r]) for r in hr])
+        for r, g, hk in zip(hr, gap.tolist(), hl.tolist()):
+            if g > NODES.off_region * hk + NODES.off_noise * sc.noise:
+                off.append(r)
+                hl_of[r] = hk
     ends = {r: [int(live[ci].ids[-1 if s == 1 else 0]) for ci, s in inc_at[r]] for r in off}
     for r, q in zip(off, median_points(P, h, prm.link, [(ends[r], regions[r]) for r in off])):
         if q is not None and (np.max(np.linalg.norm(P[ends[r]] - P[q], axis=1))
-                              > prm.shell_outer * (float(np.median(h[regions[r]])) + SHELL.widen * sc.noise)):
+                              > prm.shell_outer * (hl_of[r] + SHELL.widen * sc.noise)):
             JX[jpos[r]] = P[q]
     # the region paths of all free ends that may hide a fork, in one call
     fr = [r for r in range(len(regions)) if v[r] == 1]
