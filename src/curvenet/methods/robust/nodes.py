@@ -88,9 +88,9 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
     JX, JMAYBE = junction_positions(P, sc, prm, [(live, inc_at[r], regions[r]) for r in jr])
     jpos = {r: i for i, r in enumerate(jr)}
     # a node off the samples (its region's and its branches') moves to the region's median
-    # point, where the region holds more than the junction (a chain end lies beyond the shell
-    # radius of that point; in a small region the node may lie off the samples: strokes
-    # drawn short of each other)
+    # point; on noise-free input only where the region holds more than the junction (a chain
+    # end lies beyond the shell radius of that point): there the lines are sure, and a node
+    # off the samples of a small region is where sketched strokes stop short of each other
     hr = [r for r in jr if v[r] >= NODES.junction_valence and len(regions[r])]
     off, hl_of = [], {}
     if hr:  # (all junctions at once: each one's samples, their distances to its node)
@@ -106,7 +106,7 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
                 hl_of[r] = hk
     ends = {r: [int(live[ci].ids[-1 if s == 1 else 0]) for ci, s in inc_at[r]] for r in off}
     for r, q in zip(off, median_points(P, h, prm.link, [(ends[r], regions[r]) for r in off])):
-        if q is not None and (np.max(np.linalg.norm(P[ends[r]] - P[q], axis=1))
+        if q is not None and (not sc.clean or np.max(np.linalg.norm(P[ends[r]] - P[q], axis=1))
                               > prm.shell_outer * (hl_of[r] + SHELL.widen * sc.noise)):
             JX[jpos[r]] = P[q]
     # the region paths of all free ends that may hide a fork, in one call

@@ -860,12 +860,14 @@ class Nodes(NamedTuple):
     bend_off: float = 1.0
     #: a junction's node over this many spacings (plus ``off_noise`` noise scales) from every
     #: point of its region and of its branches' chains is off the samples: it moves to the
-    #: region's median point (:func:`.nodes.median_points`) when a chain end lies beyond the
-    #: shell radius of that point (the region holds more than the junction)
+    #: region's median point (:func:`.nodes.median_points`); on noise-free input only when a
+    #: chain end lies beyond the shell radius of that point (the region holds more than the
+    #: junction)
     #: origin: set with the median point (issue 25): the least-squares node lay 1.0 h or less
     #: from the samples on the synthetic models at noise 0.2 h and with outliers, up to 1.54 h
-    #: at noise 0.3 h + x3 (3 samplings each); 880-run harness with ``off_noise``: 1.5 h 20
-    #: better, 0 worse (2 h: 19 better); without the shell condition 43 better, 3 worse, but a
+    #: at noise 0.3 h + x3 (3 samplings each); 880-run harness with ``off_noise``: 1.5 h with
+    #: the shell condition everywhere 20 better, 0 worse (2 h: 19 better), then without it under
+    #: noise 25 better, 3 worse by 0.004-0.011 (+2.30); without it on noise-free input too, a
     #: CASSIE study sketch whose strokes stop short of their junction lost its node; 1 h (no
     #: noise term) broke the synthetic eye's crossings under noise
     off_region: float = 1.5
