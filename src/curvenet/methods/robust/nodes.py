@@ -331,7 +331,8 @@ def median_points(P: np.ndarray, h: np.ndarray, link: float, items: list) -> lis
     Returns
     -------
     list of int or None
-        Per junction, the median point (None where a chain end reaches no region point).
+        Per junction, the median point (None where no region point is reached from every
+        chain end: a region in pieces farther apart than a step).
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra

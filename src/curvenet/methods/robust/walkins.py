@@ -80,7 +80,7 @@ def walk_into_junctions(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves:
     ci = np.repeat(np.arange(m, dtype=np.int64), 2)
     side = np.tile(np.array([0, 1], dtype=np.int64), m)
     j = ends.ravel()
-    first = np.fromiter((c.indices[1] if s == 0 else c.indices[-2] if len(c.indices) >= 2 else -1
+    first = np.fromiter(((c.indices[1] if s == 0 else c.indices[-2]) if len(c.indices) >= 2 else -1
                          for c, s in zip((curves[k] for k in ci.tolist()), side.tolist())), dtype=np.int64, count=2 * m)
     ok = (j >= 0) & (first >= 0)
     ok[ok] = valence[j[ok]] >= 2
@@ -115,12 +115,12 @@ def walk_into_junctions(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves:
     widest[nz] = np.maximum.reduceat(off, starts[nz])
     target = np.full(len(cnt), -1, dtype=np.int64)
     o = np.lexsort((s, dn, g))  # per end, its samples nearest the node first
-    firsts = np.r_[0, np.cumsum(cnt)[:-1]]
-    target[nz] = s[o[firsts[nz]]]
+    target[nz] = s[o[starts[nz]]]
     read = np.flatnonzero(keep & (widest > WALKIN.off * h[first]) & (nearest <= WALKIN.arrive * h[np.maximum(target, 0)]))
     if not len(read):
         return curves, 0
-    paths = _paths(P, h, link, first[read], [s[g == k] for k in read.tolist()], target[read])
+    sets = np.split(s, starts[1:])  # (each end's samples)
+    paths = _paths(P, h, link, first[read], [sets[k] for k in read.tolist()], target[read])
     out = list(curves)
     walked = 0
     for k in np.lexsort((side[read], ci[read], j[read])).tolist():
