@@ -21,7 +21,8 @@ from .chains import segment_distance
 from .nodes import Placement
 from .thresholds import CURVES, FIT, LAYOUT, NODES, NUMERIC
 
-__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "renumbered", "fit_curves", "drop_spikes"]
+__all__ = ["build_curves", "open_curves", "untangle_loops", "sort_curves", "renumbered", "end_nodes", "fit_curves",
+           "drop_spikes"]
 
 
 def build_curves(P: np.ndarray, h: np.ndarray, pl: Placement) -> list[Curve]:
@@ -221,6 +222,28 @@ def sort_curves(curves):
     X = np.round(np.stack([c.points[min(1, len(c.points) - 1)] for c in curves]), CURVES.round_decimals)
     o = np.lexsort(tuple(X[:, j] for j in range(X.shape[1] - 1, -1, -1)) + (en, st))
     return [curves[i] for i in o.tolist()]
+
+
+def end_nodes(curves: list[Curve], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The node ids at both ends of every curve and the valence of every node.
+
+    Parameters
+    ----------
+    curves : list of Curve
+    n : int
+        The number of nodes.
+
+    Returns
+    -------
+    ends : (len(curves), 2) ndarray of int64
+        Start and end node of each curve (-1: none, a loop without node).
+    valence : (n,) ndarray of int64
+        The number of curve ends at each node.
+    """
+    m = len(curves)
+    ends = np.fromiter(itertools.chain.from_iterable((-1 if c.start is None else c.start, -1 if c.end is None else c.end)
+                                                     for c in curves), dtype=np.int64, count=2 * m).reshape(m, 2)
+    return ends, np.bincount(ends[ends >= 0], minlength=n)
 
 
 def renumbered(X: np.ndarray, curves: list[Curve], drop=()) -> tuple[np.ndarray, list[Curve]]:

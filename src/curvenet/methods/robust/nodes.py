@@ -6,7 +6,8 @@ a few spacings before its tip), the point farthest along it (:func:`bent_tips`),
 region hides a whole fork (:func:`~.junctions.hidden_fork`). A region touched by 3 or more ends is a junction: every
 incident branch is walked into the region, its line is fitted on its last
 ``NODES.fit_span h + NODES.fit_noise noise``, and the node is the least-squares intersection of
-those lines (:func:`junction_positions`, one compiled call for all junctions).
+those lines (:func:`junction_positions`, one compiled call for all junctions), or the region's
+median point where that intersection lies off the samples (:func:`median_points`).
 """
 
 from __future__ import annotations

@@ -33,15 +33,13 @@ higher valence stays a junction.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from ...network import Curve
 from ...neighbors import build_tree
-from .curves import renumbered
+from .curves import end_nodes, renumbered
 from .thresholds import NODES, SKIPPED
 from .unexplained import pairs_within, walk_back
 
@@ -81,10 +79,7 @@ def rejoin_skipped_stretches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
     n = len(nodes)
     if not curves or n == 0:
         return nodes, curves, 0
-    m = len(curves)
-    ends = np.fromiter(itertools.chain.from_iterable((-1 if c.start is None else c.start, -1 if c.end is None else c.end)
-                                                     for c in curves), dtype=np.int64, count=2 * m).reshape(m, 2)
-    valence = np.bincount(ends[ends >= 0], minlength=n)
+    ends, valence = end_nodes(curves, n)
     # candidates: a node of the smallest junction valence (a spur and two curves) at one end of
     # a curve whose other end is free and which is short
     free = (ends >= 0) & (valence[np.maximum(ends, 0)] == 1)

@@ -33,9 +33,10 @@ import numpy as np
 
 from ...network import Curve
 from ...neighbors import build_tree, query_threads
-from .thresholds import NUMERIC, SHELL, WALKIN
-from .unexplained import pairs_within, walk_back
 from .chains import segment_distance
+from .curves import end_nodes
+from .thresholds import NUMERIC, SHELL, WALKIN
+from .unexplained import walk_back
 
 __all__ = ["walk_into_junctions"]
 
@@ -73,9 +74,7 @@ def walk_into_junctions(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, curves:
     n, m = len(nodes), len(curves)
     if not m or n == 0:
         return curves, 0
-    ends = np.fromiter(itertools.chain.from_iterable((-1 if c.start is None else c.start, -1 if c.end is None else c.end)
-                                                     for c in curves), dtype=np.int64, count=2 * m).reshape(m, 2)
-    valence = np.bincount(ends[ends >= 0], minlength=n)
+    ends, valence = end_nodes(curves, n)
     # the curve ends at nodes that are no free end, with their first sample
     ci = np.repeat(np.arange(m, dtype=np.int64), 2)
     side = np.tile(np.array([0, 1], dtype=np.int64), m)
