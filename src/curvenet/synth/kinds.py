@@ -23,7 +23,7 @@ from ..network import CurveNetwork
 from .arith import matmul, matvec, norm
 from .models import _Builder, _param, _poly, _rot
 
-__all__ = ["KIND_MODELS", "TANGENT_ANGLES"]
+__all__ = ["KIND_MODELS", "TANGENT_ANGLES", "tangent_circle"]
 
 #: Angles (degrees) between the arc's tangent and the line leaving it at the junctions of the
 #: ``tangent`` model (0: exactly tangent, as where a fillet meets a straight edge).
@@ -272,6 +272,51 @@ def _tangent() -> CurveNetwork:
     b.curve(_poly([p_a, b.nodes[ga]], b.step), na, ga)
     return b.build("tangent", "CAD-like: lines leaving a circle at 0, 5, 10 and 20 degrees from its "
                    "tangent, a fillet whose straight edge continues past it (a tangent T junction)")
+
+
+def tangent_circle(radius: float, angles, length: float = 20.0, h: float = 0.02) -> CurveNetwork:
+    """A circle with straight lines leaving it almost tangentially: one family of CAD feature
+    curves (a hole or boss outline and the edges that leave it).
+
+    Parameters
+    ----------
+    radius : float
+        The circle's radius, in spacings ``h`` (a fillet or a small hole: 5-15; the ``tangent``
+        kind's circle: 30).
+    angles : sequence of float
+        One line per angle (degrees between the circle's tangent and the line, leaving it
+        outwards), at junctions spread evenly round the circle (the first at 20 degrees).
+    length : float
+        Each line's length, in spacings.
+    h : float
+        The spacing.
+
+    Returns
+    -------
+    CurveNetwork
+        ``len(angles)`` junctions of valence 3 and as many free ends; ``parameters["h"]`` is
+        ``h``.
+    """
+    b = _Builder(h)
+    R = radius * h
+    L = length * h
+    circ = lambda t: np.column_stack([R * np.cos(t), R * np.sin(t), 0.0 * t])
+    k = len(angles)
+    base = np.deg2rad(360.0 / k * np.arange(k) + 20.0)
+    ids = [b.node(circ(np.array([t]))[0]) for t in base]
+    for i in range(k):
+        t0, t1 = base[i], base[(i + 1) % k] + (2 * np.pi if i == k - 1 else 0.0)
+        b.param(circ, t0, t1, ids[i], ids[(i + 1) % k])
+    for i, ang in enumerate(angles):
+        p = b.nodes[ids[i]]
+        tan = np.array([-np.sin(base[i]), np.cos(base[i]), 0.0])
+        out = np.array([np.cos(base[i]), np.sin(base[i]), 0.0])
+        a = np.deg2rad(ang)
+        e = b.node(p + L * (np.cos(a) * tan + np.sin(a) * out))
+        b.curve(_poly([p, b.nodes[e]], b.step), ids[i], e)
+    names = ", ".join("%g" % a for a in angles)
+    return b.build(f"tangent_circle_r{radius:g}", f"CAD-like: a circle of radius {radius:g}h with lines "
+                   f"leaving it at {names} degrees from its tangent")
 
 
 def _plate() -> CurveNetwork:

@@ -911,8 +911,9 @@ class Nodes(NamedTuple):
     #: near-tangent branches: a junction whose lines' normal matrix (the sum of ``I - u u^T``
     #: over its branches, without the anchor's pull) has its smallest eigenvalue under this many
     #: times the number of branches (unitless; 2 collinear branches and a third at 28 degrees
-    #: give 0.05) is placed where the branches' circles meet along that eigenvector
-    #: (``kernels/nodes._tangent_node``)
+    #: give 0.05) is placed where the branches' circles meet along that eigenvector, with
+    #: circles on 2 branches or more (``kernels/nodes._tangent_node``; any other junction only
+    #: when every branch gets its circle)
     #: origin: benchmark: kinds model tangent (lines leaving a circle at 0-20 degrees, 0.005-0.03)
     #: against all junctions of the other kinds and synthetic models, clean (0.25 and more)
     tangent_weak: float = 0.05
@@ -923,6 +924,12 @@ class Nodes(NamedTuple):
     #: ... of at least this many points (points)
     #: origin: set with the tangent placement; no measurement of this value
     tangent_points: int = 5
+    #: ... and fitting it within this many spacings (root mean square offset of its points; h):
+    #: a circle fitted across a corner, or on a stroke that wiggles, is no model of the branch
+    #: origin: benchmark (curved-branch placement, issue 25): without it CASSIE 01-1-1 clean
+    #: 0.671 -> 0.631; the 880-run harness the same either way; the tangent family
+    #: (benchmarks/tangent_family.py) 1 sampling better, 1 worse
+    tangent_fit: float = 0.1
     #: ... only where the noise is at most this many local spacings (unitless): under noise the
     #: curvature over 8 h is not measurable; the noise estimate of clean samplings is 0.01-0.03 h,
     #: of noise 0.1h 0.12-0.19 h, of 0.2h and of 0.3h + x3 both about 0.37 h

@@ -393,6 +393,16 @@ def _arc_resid(x, mu, U, cf, e, J):  # pragma: no cover - compiled
     return f
 
 
+def _arc_rms(P, ids, m, mu, U, cf, e, J):  # pragma: no cover - compiled
+    """Root mean square offset (:func:`_arc_resid`) of the last ``m`` points of ``ids`` from the
+    circle ``mu, U, cf`` of :func:`_arc_fit` (``e``, ``J``: scratch)."""
+    n = ids.shape[0]
+    acc = 0.0
+    for q in range(n - m, n):
+        acc += _arc_resid(P[ids[q]], mu, U, cf, e, J)
+    return np.sqrt(acc / m)
+
+
 def _arc_profile(x0, w, Q, t, MU, UU, CF, nm, x, e, J, H, g, z, iters):  # pragma: no cover - compiled
     """The least sum of squared offsets of the point ``x0 + t w + Q y`` from the ``nm`` circles
     ``MU[k], UU[k], CF[k]`` (:func:`_arc_resid`) over ``y`` (Gauss-Newton, ``iters`` steps from
@@ -434,20 +444,27 @@ def _arc_profile(x0, w, Q, t, MU, UU, CF, nm, x, e, J, H, g, z, iters):  # pragm
 
 
 def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - compiled
-    """Where near-tangent branches meet: the node ``x`` of :func:`_junction_nodes` moved along
+    """Where the branches' circles meet: the node ``x`` of :func:`_junction_nodes` moved along
     the weak direction of the lines' normal matrix ``A`` (without the anchor's pull; overwritten).
 
-    When the smallest eigenvalue of ``A`` is under ``nd.tangent_weak`` times the number of
-    branches, the lines cannot place the node along its eigenvector ``w`` (the branches are
-    near-tangent there; their straight lines, fitted on chords of curved branches, even cross at
-    the wrong place). Each branch (``flat[off[b]:off[b + 1]]``, not walked into the region) is
-    then fitted by a circle over its last ``nd.tangent_span`` spacings (:func:`_arc_fit`), and
-    the node is where those circles meet: the point ``x + t w + (normal to w)`` whose summed
-    squared offsets from them is least over the normal part, walked downhill in ``t`` from 0 by
-    steps of ``nd.tangent_step hl`` (at most ``nd.tangent_reach hl`` away) to the nearest local
-    minimum. Kept only when the circles meet there within ``nd.tangent_meet hl`` (root mean
-    square) and at least 2 circles were fitted; else ``x`` is left as it is. Returns whether
-    ``x`` moved.
+    Two cases. (a) Near-tangent branches: the smallest eigenvalue of ``A`` under
+    ``nd.tangent_weak`` times the number of branches; the lines cannot place the node along its
+    eigenvector ``w`` (their straight lines, fitted on chords of curved branches, even cross at
+    the wrong place). (b) Curved branches: any other junction, when every branch gets a circle
+    (below); a line fitted on the chord of a branch curving with a radius of a few spacings
+    lies a spacing or more off the branch at the junction, and the lines meet off the node
+    (circles of radius 8 h with lines leaving at 0-3 degrees: 2.0-2.3 h off). Each branch
+    (``flat[off[b]:off[b + 1]]``, not walked into the region) of at least ``nd.tangent_points``
+    points is fitted by a circle over its last ``nd.tangent_span`` spacings (:func:`_arc_fit`),
+    kept when its points lie within ``nd.tangent_fit hl`` of it (root mean square: a circle
+    across a corner or a stroke's wiggle is no model of the branch). Then the node is where
+    those circles meet: the point ``x + t w + (normal to w)`` whose summed squared offsets from
+    them is least over the normal part, walked downhill in ``t`` from 0 by steps of
+    ``nd.tangent_step hl`` (at most ``nd.tangent_reach hl`` away) to the nearest local minimum.
+    Kept only when the circles meet there within ``nd.tangent_meet hl`` (root mean square) and
+    at least 2 circles were fitted in case (a), every branch's in case (b) (two circles of four
+    branches always meet somewhere: a crossing whose short branches got none moved 1.4 h off);
+    else ``x`` is left as it is. Returns whether ``x`` moved.
     """
     nbr = off.shape[0] - 1
     d = P.shape[1]
@@ -456,8 +473,9 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
     V = np.zeros((d, d))
     ev = np.zeros(d)
     _eig_sym(A, V, ev, la)
-    if not ev[0] < nd.tangent_weak * nbr:
-        return False
+    weak = ev[0] < nd.tangent_weak * nbr
+    e = np.zeros(d - 1)
+    J = np.zeros((d - 1, d))
     MU = np.zeros((nbr, d))
     UU = np.zeros((nbr, d, d))
     CF = np.zeros((nbr, ARC_COEFS))
@@ -470,11 +488,15 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
         ids = flat[off[bi]:off[bi + 1]]
         n = ids.shape[0]
         if n < nd.tangent_points:
+            if not weak:
+                return False
             continue
         m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
-        if m >= nd.tangent_points:
+        if m >= nd.tangent_points and _arc_rms(P, ids, m, MU[nm], UU[nm], CF[nm], e, J) <= nd.tangent_fit * hl:
             nm += 1
-    if nm < 2:
+        elif not weak:  # (b) needs every branch's circle
+            return False
+    if nm < 2 or (not weak and nm < nbr):
         return False
     w = np.zeros(d)
     Q = np.zeros((d, d - 1))
@@ -485,8 +507,6 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
     x0 = x.copy()
     xb = np.zeros(d)
     xt = np.zeros(d)
-    e = np.zeros(d - 1)
-    J = np.zeros((d - 1, d))
     H = np.zeros((d - 1, d - 1))
     g = np.zeros(d - 1)
     z = np.zeros(d - 1)
@@ -664,8 +684,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         if not ok or not np.sqrt(dist2) <= far * hl:
             for c in range(d):
                 x[c] = anchor[c]
-        # near-tangent branches (without noise: their curvature is then measurable): where
-        # their circles meet, when no farther from the anchor than the lines' node may be
+        # near-tangent or curved branches (without noise: their curvature is then measurable):
+        # where their circles meet, when no farther from the anchor than the lines' node may be
         if noise <= nd.tangent_noise * hl:
             for c in range(d):
                 xs[c] = x[c]
