@@ -352,3 +352,42 @@ def test_the_outline_clean_is_exact():
     # rounding tolerance (kernels/shell.py), every sampling is exact
     got = _score("outline")
     assert got["exact_topology"] and got["curve_f1"] == 1.0
+
+
+def _junction_kernel_with(monkeypatch, **fields):
+    """The junction-node kernel run with these ``thresholds.NODES`` fields replaced (its
+    settings reach it as arguments, compiled or not)."""
+    from types import MappingProxyType
+
+    from curvenet.methods.robust.kernels import registry as KR
+
+    k = KR.KERNELS["junction_nodes"]
+    groups = tuple(g._replace(**fields) if type(g) is type(thresholds.NODES) else g for g in k.groups)
+    monkeypatch.setattr(KR, "KERNELS", MappingProxyType({**KR.KERNELS, "junction_nodes": k._replace(groups=groups)}))
+
+
+def _tangent_circle_runs(radius, angles, samplings=3):
+    from curvenet.synth.kinds import tangent_circle
+
+    truth = tangent_circle(radius, angles)
+    h = synth.h_of(truth)
+    out = []
+    for s in range(samplings):
+        pts, _ = synth.sample(truth, rng=s)
+        pts = pts + np.random.default_rng(s).normal(scale=1e-6 * h, size=pts.shape)
+        net = reconstruct(pts, method="robust")
+        off = np.linalg.norm(truth.nodes[:len(angles), None] - net.nodes[None], axis=2).min(axis=1) / h
+        out.append((compare(net, truth, h=h)["curve_f1"], float(off.max())))
+    return out
+
+
+def test_curved_branches_meet_where_their_circles_meet(monkeypatch):
+    # a circle 8h in radius (a small hole or fillet) with lines leaving it at 0-3 degrees,
+    # noise-free: the lines fitted on the arcs' chords meet 2.0-2.3h off every junction (curve
+    # F1 0.12 in each of 3 samplings), the branches' circles meet within 0.75h of it
+    for f1, worst in _tangent_circle_runs(8, (0, 1, 2, 3)):
+        assert f1 == 1.0 and worst <= 0.75, (f1, worst)
+    # the counterfactual: no circle kept (none fits within 0h), the lines' nodes
+    _junction_kernel_with(monkeypatch, tangent_fit=0.0)
+    for f1, worst in _tangent_circle_runs(8, (0, 1, 2, 3), samplings=1):
+        assert f1 < 0.5 and worst > 2.0, (f1, worst)

@@ -442,7 +442,7 @@ def test_near_tangent_junction_is_where_the_circles_meet(d, ang):
     args = _tangent_junction(d, ang)
     X, _ = _plain("junction_nodes")(*args)
     assert np.linalg.norm(X[0]) < 0.1, X[0]
-    off = NODES._replace(tangent_weak=0.0)  # the lines' node alone
+    off = NODES._replace(tangent_fit=0.0)  # no circle kept: the lines' node alone
     k = KR.KERNELS["junction_nodes"]
     X0, _ = k.plain(*args, ENDS, off, LINALG)
     assert np.linalg.norm(X0[0]) > 0.5, X0[0]
@@ -460,7 +460,7 @@ def test_near_tangent_placement_needs_the_circles_to_meet():
     args[0] = P
     k = KR.KERNELS["junction_nodes"]
     X, _ = k.plain(*args, *k.groups)
-    X0, _ = k.plain(*args, ENDS, NODES._replace(tangent_weak=0.0), LINALG)
+    X0, _ = k.plain(*args, ENDS, NODES._replace(tangent_fit=0.0), LINALG)
     assert np.array_equal(X, X0)
 
 

@@ -926,9 +926,13 @@ class Nodes(NamedTuple):
     tangent_points: int = 5
     #: ... and fitting it within this many spacings (root mean square offset of its points; h):
     #: a circle fitted across a corner, or on a stroke that wiggles, is no model of the branch
-    #: origin: benchmark (curved-branch placement, issue 25): without it CASSIE 01-1-1 clean
-    #: 0.671 -> 0.631; the 880-run harness the same either way; the tangent family
-    #: (benchmarks/tangent_family.py) 1 sampling better, 1 worse
+    #: (a branch is curved when its points lie over this far from its line, see
+    #: ``kernels/nodes._tangent_node``)
+    #: origin: benchmark (curved-branch placement, issue 25): without the fit test CASSIE 01-1-1
+    #: clean 0.671 -> 0.631; the 880-run harness the same either way; the tangent family
+    #: (benchmarks/tangent_family.py) 1 sampling better, 1 worse. The curved test: noisy
+    #: straight branches read as noise-free (tests/test_robust_kernels.py's junctions, noise
+    #: 0.03) moved 0.06 -> 0.07 off on average without it; every figure above the same with it
     tangent_fit: float = 0.1
     #: ... only where the noise is at most this many local spacings (unitless): under noise the
     #: curvature over 8 h is not measurable; the noise estimate of clean samplings is 0.01-0.03 h,

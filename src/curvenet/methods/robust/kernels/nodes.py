@@ -451,7 +451,9 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
     ``nd.tangent_weak`` times the number of branches; the lines cannot place the node along its
     eigenvector ``w`` (their straight lines, fitted on chords of curved branches, even cross at
     the wrong place). (b) Curved branches: any other junction, when every branch gets a circle
-    (below); a line fitted on the chord of a branch curving with a radius of a few spacings
+    (below) and one at least is curved (its points lie over ``nd.tangent_fit hl`` from their
+    line, root mean square: noisy straight branches read as noise-free keep their lines); a
+    line fitted on the chord of a branch curving with a radius of a few spacings
     lies a spacing or more off the branch at the junction, and the lines meet off the node
     (circles of radius 8 h with lines leaving at 0-3 degrees: 2.0-2.3 h off). Each branch
     (``flat[off[b]:off[b + 1]]``, not walked into the region) of at least ``nd.tangent_points``
@@ -484,6 +486,7 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
     M3 = np.zeros((ARC_COEFS, ARC_COEFS))
     r3 = np.zeros(ARC_COEFS)
     nm = 0
+    curved = False
     for bi in range(nbr):
         ids = flat[off[bi]:off[bi + 1]]
         n = ids.shape[0]
@@ -493,10 +496,16 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
             continue
         m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
         if m >= nd.tangent_points and _arc_rms(P, ids, m, MU[nm], UU[nm], CF[nm], e, J) <= nd.tangent_fit * hl:
+            # the portion's offsets from its line: the scatter's eigenvalues but the largest
+            off2 = 0.0
+            for c in range(d - 1):
+                off2 += ev2[c]
+            if off2 > m * (nd.tangent_fit * hl) ** 2:
+                curved = True
             nm += 1
         elif not weak:  # (b) needs every branch's circle
             return False
-    if nm < 2 or (not weak and nm < nbr):
+    if nm < 2 or (not weak and (nm < nbr or not curved)):
         return False
     w = np.zeros(d)
     Q = np.zeros((d, d - 1))
