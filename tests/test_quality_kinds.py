@@ -391,3 +391,18 @@ def test_curved_branches_meet_where_their_circles_meet(monkeypatch):
     _junction_kernel_with(monkeypatch, tangent_fit=0.0)
     for f1, worst in _tangent_circle_runs(8, (0, 1, 2, 3), samplings=1):
         assert f1 < 0.5 and worst > 2.0, (f1, worst)
+
+
+def test_near_tangent_junctions_under_noise_meet_where_their_circles_meet(monkeypatch):
+    # the tangent kind at noise 0.1h, 4 samplings: each branch's circle fitted over the longest
+    # span its points fit (a curvature over 8h is not measurable under this noise), the node the
+    # middle of the valley where they meet (curve F1 0.73-1.00 each); the lines' nodes lie
+    # 3-5h along the tangent from the 0-degree junctions (0.09-0.55)
+    truth = synth.model("tangent")
+    h = synth.h_of(truth)
+    clouds = [synth.sample(truth, rng=bench.run_seed("tangent", "noise 0.1h") + s, noise=0.1)[0] for s in range(4)]
+    now = [compare(reconstruct(p, method="robust"), truth, h=h)["curve_f1"] for p in clouds]
+    _junction_kernel_with(monkeypatch, tangent_rc=0.0)  # no circle fits under the noise: the lines
+    lines = [compare(reconstruct(p, method="robust"), truth, h=h)["curve_f1"] for p in clouds]
+    assert np.mean(now) >= np.mean(lines) + 0.15, (now, lines)
+    assert min(n - l for n, l in zip(now, lines)) >= 0.0, (now, lines)

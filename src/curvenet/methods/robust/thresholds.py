@@ -934,9 +934,11 @@ class Nodes(NamedTuple):
     #: straight branches read as noise-free (tests/test_robust_kernels.py's junctions, noise
     #: 0.03) moved 0.06 -> 0.07 off on average without it; every figure above the same with it
     tangent_fit: float = 0.1
-    #: ... only where the noise is at most this many local spacings (unitless): under noise the
-    #: curvature over 8 h is not measurable; the noise estimate of clean samplings is 0.01-0.03 h,
-    #: of noise 0.1h 0.12-0.19 h, of 0.2h and of 0.3h + x3 both about 0.37 h
+    #: ... as here where the noise is at most this many local spacings (unitless); above it only
+    #: near-tangent junctions, with the circles fitted as the noise allows (``tangent_rc`` and
+    #: after): the curvature over 8 h is not measurable under noise; the noise estimate of clean
+    #: samplings is 0.01-0.03 h, of noise 0.1h 0.12-0.19 h, of 0.2h and of 0.3h + x3 both about
+    #: 0.37 h
     #: origin: benchmark: kinds tangent, curve F1 without / with the placement: span 8 h, noise
     #: 0.1h 0.55 / 0.27, 0.2h 0.09 / 0.09 (nodes farther off); span 8 h + 60 noise levels: 0.1h
     #: 0.55 / 0.55, 0.2h 0.09 / 0.45, but 0.3h + x3 0.09 / 0.00 (not told apart from 0.2h)
@@ -956,6 +958,35 @@ class Nodes(NamedTuple):
     #: (ladder) misses by 1.4 h
     #: origin: benchmark: kinds ladder clean (curve F1 0.519 -> 0.481 without this test)
     tangent_meet: float = 0.1
+    #: ... plus, under noise, this many noise scales
+    #: origin: benchmark (noisy tangent placement, issue 25; 880-run harness against the
+    #: placement off under noise): 1.0 22 better, 9 worse (neurons at noise 0.2 h); 0.5 23 / 3;
+    #: 0.25 (with tangent_mid 0.5) 23 / 2; then on the final settings 0.5: 2 better, 1 worse
+    tangent_meet_noise: float = 0.25
+    #: under noise each circle is fitted over the longest span whose points lie within this
+    #: many noise scales of it (root mean square; the noise scale of a sampling at noise 0.1 h is
+    #: about 0.13 h) (``kernels/nodes._arc_fit_grown``)
+    #: origin: benchmark (880-run harness): 1.5 -> 2.0 4 better, 1 worse; 1.2: 3 better, 6 worse;
+    #: 2.5: 0 better, 2 worse (all on the tangent kind)
+    tangent_rc: float = 2.0
+    #: ... the span grown from ``tangent_span`` by this many spacings at a time (h)
+    #: origin: benchmark (880-run harness): 2 h 1 better, 1 worse (-0.03), twice the fits
+    tangent_grow: float = 4.0
+    #: ... to at most this many spacings (h): over 8 h a curvature of 1 / 30 h has a sagitta of
+    #: 0.27 h, within the noise; over 30-60 h it is measured
+    #: origin: benchmark (880-run harness): 30 h 1 better, 16 worse; 90 h 1 better, 2 worse
+    tangent_span_max: float = 60.0
+    #: ... a line where the circle's one more coefficient does not reduce the squared offsets by
+    #: this F statistic (a line's curvature fitted on noise bends its extrapolation to the node
+    #: by 0.1-0.2 h over 10 h)
+    #: origin: benchmark (880-run harness): 2: 0 better, 1 worse; 8: 1 better, 1 worse (an F
+    #: quantile of about 5% for 10-40 points is 4)
+    tangent_sel: float = 4.0
+    #: ... and the node is the middle of the stretch along the weak direction where the circles
+    #: meet within this many squared noise scales (per circle) of the best
+    #: origin: benchmark (880-run harness): 0 (the lowest point): 3 better, 2 worse; 1: 0
+    #: better, 6 worse
+    tangent_mid: float = 0.5
 
 
 NODES = Nodes()

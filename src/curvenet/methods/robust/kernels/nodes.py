@@ -403,6 +403,47 @@ def _arc_rms(P, ids, m, mu, U, cf, e, J):  # pragma: no cover - compiled
     return np.sqrt(acc / m)
 
 
+def _arc_fit_grown(P, ids, hend, tol, mu, U, cf, C, ev, M3, r3, e, J, nd, la):  # pragma: no cover - compiled
+    """:func:`_arc_fit` over the longest span (``nd.tangent_span`` spacings ``hend``, then
+    ``nd.tangent_grow`` more at a time, at most ``nd.tangent_span_max``) whose points lie within
+    ``tol`` of the circle (root mean square); a line (``cf = 0``: the portion's principal axis)
+    where the circle does not fit its points better by ``nd.tangent_sel`` (the F statistic of
+    the one more coefficient). Returns the points of the span kept (0: none fits)."""
+    n = ids.shape[0]
+    d = P.shape[1]
+    mb = 0
+    mu2 = np.zeros(d)
+    U2 = np.zeros((d, d))
+    cf2 = np.zeros(ARC_COEFS)
+    sp = nd.tangent_span
+    while sp <= nd.tangent_span_max:
+        m = _arc_fit(P, ids, sp * hend, mu2, U2, cf2, C, ev, M3, r3, la)
+        if m < ARC_COEFS:
+            break
+        rss = 0.0
+        for q in range(n - m, n):
+            rss += _arc_resid(P[ids[q]], mu2, U2, cf2, e, J)
+        if mb > 0 and rss > m * tol * tol:
+            break
+        lin = 0.0
+        for c in range(d - 1):
+            lin += ev[c]
+        mb = m
+        for c in range(d):
+            mu[c] = mu2[c]
+            for a in range(d):
+                U[c, a] = U2[c, a]
+        for a in range(ARC_COEFS):
+            cf[a] = cf2[a]
+        if m > ARC_COEFS and not (lin - rss) > nd.tangent_sel * rss / (m - ARC_COEFS):
+            for a in range(ARC_COEFS):
+                cf[a] = 0.0
+        if m >= n:
+            break
+        sp += nd.tangent_grow
+    return mb
+
+
 def _arc_profile(x0, w, Q, t, MU, UU, CF, nm, x, e, J, H, g, z, iters):  # pragma: no cover - compiled
     """The least sum of squared offsets of the point ``x0 + t w + Q y`` from the ``nm`` circles
     ``MU[k], UU[k], CF[k]`` (:func:`_arc_resid`) over ``y`` (Gauss-Newton, ``iters`` steps from
@@ -443,7 +484,7 @@ def _arc_profile(x0, w, Q, t, MU, UU, CF, nm, x, e, J, H, g, z, iters):  # pragm
     return f
 
 
-def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - compiled
+def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover - compiled
     """Where the branches' circles meet: the node ``x`` of :func:`_junction_nodes` moved along
     the weak direction of the lines' normal matrix ``A`` (without the anchor's pull; overwritten).
 
@@ -467,6 +508,16 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
     at least 2 circles were fitted in case (a), every branch's in case (b) (two circles of four
     branches always meet somewhere: a crossing whose short branches got none moved 1.4 h off);
     else ``x`` is left as it is. Returns whether ``x`` moved.
+
+    Under noise (``noise`` over ``nd.tangent_noise hl``: the noise scale, absolute) only case
+    (a), with every branch's circle, and the circles measured as the noise allows: each fitted
+    over the longest span whose points lie within ``nd.tangent_rc`` noise scales of it
+    (:func:`_arc_fit_grown`: a curvature over 8 h is not measurable under noise 0.1 h, over
+    20-40 h it is), a line where the circle does not fit significantly better, the circles'
+    meeting widened by ``nd.tangent_meet_noise`` noise scales, and the node the middle of the
+    stretch where the circles meet within ``nd.tangent_mid`` squared noise scales (per circle)
+    of the best: near-tangent circles meet along a valley as flat as the noise of their fits,
+    whose lowest point falls anywhere in it.
     """
     nbr = off.shape[0] - 1
     d = P.shape[1]
@@ -476,6 +527,14 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
     ev = np.zeros(d)
     _eig_sym(A, V, ev, la)
     weak = ev[0] < nd.tangent_weak * nbr
+    noisy = noise > nd.tangent_noise * hl
+    if noisy and not weak:  # (b): noise-free input only
+        return False
+    # under noise: each circle fitted over the longest span its points still fit, a line where
+    # the circle is no better, and the fits' tolerance widened for the noise
+    tol = nd.tangent_fit * hl
+    if noisy and nd.tangent_rc * noise > tol:
+        tol = nd.tangent_rc * noise
     e = np.zeros(d - 1)
     J = np.zeros((d - 1, d))
     MU = np.zeros((nbr, d))
@@ -491,11 +550,14 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
         ids = flat[off[bi]:off[bi + 1]]
         n = ids.shape[0]
         if n < nd.tangent_points:
-            if not weak:
+            if noisy or not weak:
                 return False
             continue
-        m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
-        if m >= nd.tangent_points and _arc_rms(P, ids, m, MU[nm], UU[nm], CF[nm], e, J) <= nd.tangent_fit * hl:
+        if noisy:
+            m = _arc_fit_grown(P, ids, h[ids[n - 1]], tol, MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, e, J, nd, la)
+        else:
+            m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
+        if m >= nd.tangent_points and _arc_rms(P, ids, m, MU[nm], UU[nm], CF[nm], e, J) <= tol:
             # the portion's offsets from its line: the scatter's eigenvalues but the largest
             off2 = 0.0
             for c in range(d - 1):
@@ -503,9 +565,9 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
             if off2 > m * (nd.tangent_fit * hl) ** 2:
                 curved = True
             nm += 1
-        elif not weak:  # (b) needs every branch's circle
+        elif noisy or not weak:  # (b), and (a) under noise, need every branch's circle
             return False
-    if nm < 2 or (not weak and (nm < nbr or not curved)):
+    if nm < 2 or ((noisy or not weak) and nm < nbr) or (not weak and not curved):
         return False
     w = np.zeros(d)
     Q = np.zeros((d, d - 1))
@@ -539,8 +601,20 @@ def _tangent_node(P, h, flat, off, x, hl, A, nd, la):  # pragma: no cover - comp
         k += 1
         for c in range(d):
             xb[c] = xt[c]
-    if not fb <= nd.tangent_meet * nd.tangent_meet * nm * hl * hl:
+    meet = nd.tangent_meet * hl + (nd.tangent_meet_noise * noise if noisy else 0.0)
+    if not fb <= meet * meet * nm:
         return False
+    if noisy and nd.tangent_mid > 0.0:
+        # the valley of near-tangent circles is flat within the fits' noise: its middle
+        lim = fb + nd.tangent_mid * nm * noise * noise
+        tb = k * sgn * step
+        lo = tb
+        while lo - step >= -kmax * step and _arc_profile(x0, w, Q, lo - step, MU, UU, CF, nm, xt, e, J, H, g, z, it) <= lim:
+            lo -= step
+        hi = tb
+        while hi + step <= kmax * step and _arc_profile(x0, w, Q, hi + step, MU, UU, CF, nm, xt, e, J, H, g, z, it) <= lim:
+            hi += step
+        _arc_profile(x0, w, Q, 0.5 * (lo + hi), MU, UU, CF, nm, xb, e, J, H, g, z, it)
     for c in range(d):
         x[c] = xb[c]
     return True
@@ -693,21 +767,20 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         if not ok or not np.sqrt(dist2) <= far * hl:
             for c in range(d):
                 x[c] = anchor[c]
-        # near-tangent or curved branches (without noise: their curvature is then measurable):
-        # where their circles meet, when no farther from the anchor than the lines' node may be
-        if noise <= nd.tangent_noise * hl:
+        # near-tangent or curved branches: where their circles meet, when no farther from the
+        # anchor than the lines' node may be
+        for c in range(d):
+            xs[c] = x[c]
+        if _tangent_node(P, h, flat, off, x, hl, noise, A0, nd, la):
+            dist2 = 0.0
             for c in range(d):
-                xs[c] = x[c]
-            if _tangent_node(P, h, flat, off, x, hl, A0, nd, la):
-                dist2 = 0.0
+                if not np.isfinite(x[c]):
+                    dist2 = np.inf
+                else:
+                    dist2 += (x[c] - anchor[c]) ** 2
+            if not np.sqrt(dist2) <= far * hl:
                 for c in range(d):
-                    if not np.isfinite(x[c]):
-                        dist2 = np.inf
-                    else:
-                        dist2 += (x[c] - anchor[c]) ** 2
-                if not np.sqrt(dist2) <= far * hl:
-                    for c in range(d):
-                        x[c] = xs[c]
+                    x[c] = xs[c]
         for c in range(d):
             X[j, c] = x[c]
         # a free branch hidden in the region: some region point far from the node, in a
