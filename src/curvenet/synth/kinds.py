@@ -237,19 +237,18 @@ def _outline() -> CurveNetwork:
                    "right-angle corners 4-5h apart), hipped roof, a window loop 4h from the wall's edges")
 
 
-def _tangent() -> CurveNetwork:
-    h = 0.02
-    b = _Builder(h)
-    R = 30 * h
-    L = 30 * h
+def _circle_with_lines(b: _Builder, R: float, L: float, angles) -> None:
+    """A circle of radius ``R`` about the origin (in the xy plane) and one straight line of
+    length ``L`` per angle of ``angles`` (degrees from the circle's tangent, leaving it
+    outwards), at junctions spread evenly round it, the first at 20 degrees."""
     circ = lambda t: np.column_stack([R * np.cos(t), R * np.sin(t), 0.0 * t])
-    k = len(TANGENT_ANGLES)
-    base = np.deg2rad(90.0 * np.arange(k) + 20.0)
+    k = len(angles)
+    base = np.deg2rad(360.0 / k * np.arange(k) + 20.0)
     ids = [b.node(circ(np.array([t]))[0]) for t in base]
     for i in range(k):
         t0, t1 = base[i], base[(i + 1) % k] + (2 * np.pi if i == k - 1 else 0.0)
         b.param(circ, t0, t1, ids[i], ids[(i + 1) % k])
-    for i, ang in enumerate(TANGENT_ANGLES):
+    for i, ang in enumerate(angles):
         p = b.nodes[ids[i]]
         tan = np.array([-np.sin(base[i]), np.cos(base[i]), 0.0])  # direction of increasing t
         out = np.array([np.cos(base[i]), np.sin(base[i]), 0.0])
@@ -257,6 +256,13 @@ def _tangent() -> CurveNetwork:
         d = np.cos(a) * tan + np.sin(a) * out  # leaves outwards, `ang` from the arc's tangent
         e = b.node(p + L * d)
         b.curve(_poly([p, b.nodes[e]], b.step), ids[i], e)
+
+
+def _tangent() -> CurveNetwork:
+    h = 0.02
+    b = _Builder(h)
+    R = 30 * h
+    _circle_with_lines(b, R, 30 * h, TANGENT_ANGLES)
     # a fillet: two lines joined by an arc, tangent at both ends; one of the lines continues
     # straight past the arc (a T junction whose arc leaves the line tangentially)
     r = 10 * h
@@ -298,22 +304,7 @@ def tangent_circle(radius: float, angles, length: float = 20.0, h: float = 0.02)
         ``h``.
     """
     b = _Builder(h)
-    R = radius * h
-    L = length * h
-    circ = lambda t: np.column_stack([R * np.cos(t), R * np.sin(t), 0.0 * t])
-    k = len(angles)
-    base = np.deg2rad(360.0 / k * np.arange(k) + 20.0)
-    ids = [b.node(circ(np.array([t]))[0]) for t in base]
-    for i in range(k):
-        t0, t1 = base[i], base[(i + 1) % k] + (2 * np.pi if i == k - 1 else 0.0)
-        b.param(circ, t0, t1, ids[i], ids[(i + 1) % k])
-    for i, ang in enumerate(angles):
-        p = b.nodes[ids[i]]
-        tan = np.array([-np.sin(base[i]), np.cos(base[i]), 0.0])
-        out = np.array([np.cos(base[i]), np.sin(base[i]), 0.0])
-        a = np.deg2rad(ang)
-        e = b.node(p + L * (np.cos(a) * tan + np.sin(a) * out))
-        b.curve(_poly([p, b.nodes[e]], b.step), ids[i], e)
+    _circle_with_lines(b, radius * h, length * h, angles)
     names = ", ".join("%g" % a for a in angles)
     return b.build(f"tangent_circle_r{radius:g}", f"CAD-like: a circle of radius {radius:g}h with lines "
                    f"leaving it at {names} degrees from its tangent")

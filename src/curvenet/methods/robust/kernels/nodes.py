@@ -558,12 +558,13 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
         else:
             m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
         if m >= nd.tangent_points and _arc_rms(P, ids, m, MU[nm], UU[nm], CF[nm], e, J) <= tol:
-            # the portion's offsets from its line: the scatter's eigenvalues but the largest
-            off2 = 0.0
-            for c in range(d - 1):
-                off2 += ev2[c]
-            if off2 > m * (nd.tangent_fit * hl) ** 2:
-                curved = True
+            if not noisy:  # (case (b) only, read noise-free: ev2 is then this span's scatter)
+                # the portion's offsets from its line: the scatter's eigenvalues but the largest
+                off2 = 0.0
+                for c in range(d - 1):
+                    off2 += ev2[c]
+                if off2 > m * (nd.tangent_fit * hl) ** 2:
+                    curved = True
             nm += 1
         elif noisy or not weak:  # (b), and (a) under noise, need every branch's circle
             return False
