@@ -73,7 +73,8 @@ def junction_regions(P: np.ndarray, nb: Neighbours, fr: Frames, graph: Graph, pr
     flagged, reg, n_reg = split_large_regions(P, hs, graph.indptr, graph.indices, flagged, ka, kb, prm,
                                               noisy=not fr.low, noise=NOISE.scale * fr.sigma)
     flagged, reg, n_reg, close = separate_close_junctions(P, hs, graph.indptr, graph.indices, flagged, reg, n_reg,
-                                                          ka, kb, prm, noisy=not fr.clean)
+                                                          ka, kb, prm, noisy=not fr.clean, low=fr.low,
+                                                          noise=NOISE.scale * fr.sigma)
     return Regions(groups, flagged, reg, n_reg, close)
 
 
@@ -200,7 +201,7 @@ def _split_pass(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: Robust
 
 
 def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb, prm: RobustParams,
-                             noisy: bool = False):
+                             noisy: bool = False, low: bool = True, noise: float = 0.0):
     """The junction flags, with regions holding several junctions a few spacings apart separated.
 
     Junctions 3-5 h apart (a facade's ladder, a comb, short links of a street grid) lie
@@ -224,9 +225,18 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     junctions). A chain of those freed points that touches ``SPLIT.hold_touches`` or more of
     the candidates kept and the branches leaving the region (:func:`_junction_left`) holds
     junctions the scale missed (the shell's radii fall between the samples there): it stays a
-    region of its own, for the spanning tree to split (:mod:`.spanning`). Noisy input is left as it is: noise blurs a junction over more than these
-    shells resolve, and they split one (the benchmark's crossings and fans under noise 0.2 h
-    and 0.3 h lost their exact topology).
+    region of its own, for the spanning tree to split (:mod:`.spanning`).
+
+    Under noise above ``NOISE.low`` (where the spanning tree no longer reads pairs of junctions,
+    so a region this test leaves whole stays one node) the same test runs with two guards, as
+    the region splits have them: a scale re-tests only the regions whose inner shell radius
+    there is over ``SPLIT.fine_noise`` noise scales (a finer shell inside the noise's blur splits
+    one junction: the benchmark's crossings and fans under noise 0.2 h and 0.3 h lost their
+    exact topology without it), and a scale resolves a region only when each of its candidates
+    has the size of one junction (radius at most ``SPLIT.close_radius`` outer radii of that
+    scale): a candidate holding two junctions would replace them by one node, where leaving the
+    region whole lets the later repairs part it. Low noise is left as it is (the spanning tree
+    reads its pairs as on noise-free input).
 
     Parameters
     ----------
@@ -245,7 +255,11 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     prm : RobustParams
         ``shell_inner``, ``shell_outer``.
     noisy : bool
-        The input is noisy (nothing is separated).
+        The input is not noise-free.
+    low : bool
+        Its noise is low (``NOISE.low``): with ``noisy``, nothing is separated.
+    noise : float
+        The noise scale (absolute units), for the guards under noise.
 
     Returns
     -------
@@ -256,7 +270,7 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     """
     N = len(P)
     none = (flagged, reg, n_reg, np.zeros(n_reg, dtype=bool))
-    if n_reg == 0 or noisy or not SPLIT.close_scales:
+    if n_reg == 0 or (noisy and low) or not SPLIT.close_scales:
         return none
     ids = np.flatnonzero(flagged)
     r = reg[ids]
@@ -293,7 +307,11 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
             np.maximum.at(vmax, inv.ravel(), fine[sub][ing])
             tot = np.bincount(u[:, 0], weights=vmax, minlength=n_reg)
             n_cand[(n_cand >= 2) & (tot - 2 * (n_cand - 1) > exits)] = 0
+            if noisy:  # (the guards under noise: every candidate one junction's size)
+                n_cand[_holding_several(P, hs, sub[ing], rsub[ing], cand[sub][ing], sc, prm)] = 0
         better = big & (n_cand > best)
+        if noisy:  # (... and a shell clear of the noise's blur)
+            better &= sc * prm.shell_inner * hmean > SPLIT.fine_noise * noise
         best[better] = n_cand[better]
         pick[better] = k
     if not (pick >= 0).any():
@@ -423,6 +441,17 @@ def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
                 n_cand[g] = 0
                 break
     return n_cand
+
+
+def _holding_several(P, hs, pts, rs, labels, sc, prm) -> np.ndarray:
+    """The regions (ids, unique) that have a candidate wider than one junction at shell scale
+    ``sc``: radius over ``SPLIT.close_radius`` outer radii of that scale. ``pts``: the
+    candidates' points, ``rs`` their regions and ``labels`` their candidates."""
+    u, inv = np.unique(labels, return_inverse=True)
+    inv = inv.ravel()
+    rad, hmean = _region_sizes(P, hs, pts, inv, len(u))
+    wide = rad > SPLIT.close_radius * sc * prm.shell_outer * hmean
+    return np.unique(rs[wide[inv]])
 
 
 def _exits(indptr, indices, flagged, sub, rs, ka, kb, n_reg):

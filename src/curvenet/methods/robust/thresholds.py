@@ -288,7 +288,8 @@ class Noise(NamedTuple):
     #: input as noise-free (no strand test between parallel strands; the region splits, the
     #: spanning-tree reading of pairs and the free-end rules of noise-free input),
     #: while the tangents, the multi-scale separation of close junctions, the duplicate rule
-    #: and the fit keep the noise-free test (``SPACING.dedup_noise``)
+    #: and the fit keep the noise-free test (``SPACING.dedup_noise``); the separation of close
+    #: junctions also runs above this level, with guards (low noise has the spanning tree's pairs)
     #: origin: benchmark (issue 25, 4 December 2026), A/B against 0.05 (the noise-free test,
     #: which these stages read before): see docs/method.md, "Noise-free, low noise, noisy"
     low: float = 0.15
@@ -441,8 +442,11 @@ class Split(NamedTuple):
     fine_min_points: int = 3
     #: ... and only where their inner shell radius is over this many times the noise scale (a
     #: finer shell inside the noise's blur splits one junction: noise 0.3h with density x3
-    #: lost junctions; noise 0.2h keeps the finer scale) (benchmark)
-    #: origin: benchmark: the sweep under noise 0.3h + x3 back to 0.961 (67077db)
+    #: lost junctions; noise 0.2h keeps the finer scale) (benchmark); the same guard for the
+    #: close-junction scales under noise (``junctions.separate_close_junctions``)
+    #: origin: benchmark: the sweep under noise 0.3h + x3 back to 0.961 (67077db); for the close
+    #: scales under noise the same value, not tuned (issue 25, 5 December 2026: with it, of 256
+    #: kind runs 15 better / 3 worse, without 24 / 25)
     fine_noise: float = 6.0
     #: more than this many fine outer radii apart
     #: origin: benchmark: 1.5 -> 1.2, fork stress test under noise 53 -> 57 of 90 (17e065f)
@@ -450,8 +454,12 @@ class Split(NamedTuple):
     #: junctions a few spacings apart (a facade's ladder, a comb, short street links): a region
     #: still wider than one junction after the splits, its radius over this many outer shell
     #: radii (2.4 h by default: one junction's region measures at most 2.3 h on the speed
-    #: benchmark's clean clouds, two junctions 3-5 h apart 2.4 h and more on the kinds) ...
-    #: origin: measured: region radii on the speed clouds (1e5 clean) and the kinds (issue 25, junc25)
+    #: benchmark's clean clouds, two junctions 3-5 h apart 2.4 h and more on the kinds) ...;
+    #: under noise also the widest a candidate junction of the re-test may be (in outer radii
+    #: of its scale) for the scale to resolve its region
+    #: origin: measured: region radii on the speed clouds (1e5 clean) and the kinds (issue 25, junc25);
+    #: the candidates' bound under noise the same value, not tuned (5 December 2026: 0.4, 0.44,
+    #: 0.45 and 0.5 give the same kind runs but one or two of 256)
     close_radius: float = 0.44
     #: ... is re-tested on shells these many times the size (about 1.4 to 3.3 h: a junction's
     #: flagged points stay within about 1.5 h of it); the scale separating the most junctions
@@ -460,7 +468,8 @@ class Split(NamedTuple):
     close_scales: tuple = (0.6, 0.55, 0.5)
     #: ... its points flagged at that scale, joined by links of at most this many h (the
     #: next sample along a curve, not the one after), form one junction each; the region is
-    #: replaced by them when two or more hold a junction point (noise-free input only)
+    #: replaced by them when two or more hold a junction point (noise-free input, and noise
+    #: above ``NOISE.low`` with the guards of ``fine_noise`` and ``close_radius``)
     #: origin: benchmark: kinds ladder, comb (1.2 kept fewer, junc25)
     close_link: float = 1.5
     #: ... and two of them joined by a segment lie more than this many h apart (centroids): the
