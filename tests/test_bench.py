@@ -230,6 +230,10 @@ def test_seed_spread_scores_every_sampling():
     md = bench.write_markdown([], None, spread=sp)
     assert "## Seed spread (2 samplings, `robust`)" in md
     assert md.count("\n| noise 0.3h + density x3 |") == 1
+    assert "analogues of real failure kinds" not in md
+    both = bench.write_markdown([], None, spread=sp, kind_spread=sp[:1])
+    assert "## Seed spread, analogues of real failure kinds (2 samplings, `robust`)" in both
+    assert both.count("\n| clean |") == 2 and both.count("\n| noise 0.3h + density x3 |") == 1
 
 
 def test_study_sketches_are_a_separate_check():

@@ -820,9 +820,23 @@ def _head_to_head_lines(rows: list[dict]) -> list[str]:
     return L
 
 
+def _spread_lines(title: str, lead: str, spread: list[dict]) -> list[str]:
+    """The Markdown section of a :func:`seed_spread` result: ``title``, ``lead`` (the text before
+    "with seed offsets 0 to ..."), one row per condition."""
+    L = ["", title, "",
+         f"{lead} with seed offsets 0 to {spread[0]['seeds'] - 1}: mean curve F1 over every model and sampling, "
+         "the mean of the worst sampling, the share with exact topology, and every run below F1 1.",
+         "", "| Condition | curve F1, offset 0 | curve F1, all | worst sampling | exact | runs below F1 1 |",
+         "|---|---|---|---|---|---|"]
+    for sp in spread:
+        L.append(f"| {sp['condition']} | {sp['seed0']:.3f} | {sp['mean']:.3f} | {sp['worst_seed']:.3f} | "
+                 f"{100 * sp['exact']:.0f}% | {', '.join(sp['misses']) or 'none'} |")
+    return L
+
+
 def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, info: dict | None = None,
                    elapsed: float | None = None, command: str | None = None, tune_on: str = "clean",
-                   spread: list[dict] | None = None) -> str:
+                   spread: list[dict] | None = None, kind_spread: list[dict] | None = None) -> str:
     """The benchmark report in Markdown (tables in the form of the paper's Table 1).
 
     Parameters
@@ -843,6 +857,8 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
         How ``paper-tuned`` was tuned (see :func:`run_bench`), for the text.
     spread : list of dict, optional
         :func:`seed_spread`, written as its own section.
+    kind_spread : list of dict, optional
+        :func:`seed_spread` on the analogues of real failure kinds, its own section too.
 
     Returns
     -------
@@ -946,15 +962,13 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
     L += _outlier_lines(rows)
     L += _head_to_head_lines(rows)
     if spread:
-        L += ["", f"## Seed spread ({spread[0]['seeds']} samplings, `robust`)", "",
-              "The tables use one sampling per model and condition (seed offset 0). The same models sampled "
-              f"with seed offsets 0 to {spread[0]['seeds'] - 1}: mean curve F1 over every model and sampling, "
-              "the mean of the worst sampling, the share with exact topology, and every run below F1 1.",
-              "", "| Condition | curve F1, offset 0 | curve F1, all | worst sampling | exact | runs below F1 1 |",
-              "|---|---|---|---|---|---|"]
-        for sp in spread:
-            L.append(f"| {sp['condition']} | {sp['seed0']:.3f} | {sp['mean']:.3f} | {sp['worst_seed']:.3f} | "
-                     f"{100 * sp['exact']:.0f}% | {', '.join(sp['misses']) or 'none'} |")
+        L += _spread_lines(f"## Seed spread ({spread[0]['seeds']} samplings, `robust`)", "The tables use one "
+                           "sampling per model and condition (seed offset 0). The same models sampled", spread)
+    if kind_spread:
+        L += _spread_lines(f"## Seed spread, analogues of real failure kinds ({kind_spread[0]['seeds']} samplings, "
+                           "`robust`)", "The kinds' tables above use one sampling per model and condition (seed "
+                           "offset 0), which moves their means by several hundredths. The same eight models "
+                           "sampled", kind_spread)
     if figures:
         L += ["", "## Figures", ""]
         for title, rel in figures.items():
@@ -1046,7 +1060,8 @@ def run_all(
     """Run the benchmark and write ``benchmarks.md``, ``benchmarks.json`` and figures into ``out``.
 
     ``spread_seeds`` samplings of every synthetic model and condition are also scored with
-    ``robust`` alone (:func:`seed_spread`; 0 or a quick run: none).
+    ``robust`` alone (:func:`seed_spread`; 0 or a quick run: none), and, with ``cassie`` (the
+    real data and the kinds), of every model of :data:`curvenet.synth.KIND_MODELS`.
 
     Returns
     -------
@@ -1073,9 +1088,11 @@ def run_all(
         rows += run_realdev(methods, progress=progress)
         if "robust" in _check_methods(methods):
             rows += run_outliers(progress=progress)
-    spread = None
+    spread = kind_spread = None
     if spread_seeds and not quick and "robust" in _check_methods(methods):
         spread = seed_spread("robust", spread_seeds, models, conditions, progress=progress)
+        if cassie:  # (the kinds go with the real data, above)
+            kind_spread = seed_spread("robust", spread_seeds, list(synth.KIND_MODELS), conditions, progress=progress)
     figs: dict[str, str] = {}
     files = []
     if figures:
@@ -1104,10 +1121,11 @@ def run_all(
     info = machine()
     md = out / "benchmarks.md"
     write_markdown(rows, md, figures=figs, info=info, elapsed=elapsed, command=command, tune_on=tune_on,
-                   spread=spread)
+                   spread=spread, kind_spread=kind_spread)
     js = out / "benchmarks.json"
     write_json(rows, js, extra={"machine": info, "summary": summarize(rows), "elapsed": elapsed,
-                                "conditions": CONDITIONS, "paper_grid": PAPER_GRID, "seed_spread": spread})
+                                "conditions": CONDITIONS, "paper_grid": PAPER_GRID, "seed_spread": spread,
+                                "seed_spread_kinds": kind_spread})
     files = [md, js] + files
     return {"rows": rows, "summary": summarize(rows), "files": files, "elapsed": elapsed}
 
