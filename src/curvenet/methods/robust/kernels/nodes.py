@@ -509,15 +509,20 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     branches always meet somewhere: a crossing whose short branches got none moved 1.4 h off);
     else ``x`` is left as it is. Returns whether ``x`` moved.
 
-    Under noise (``noise`` over ``nd.tangent_noise hl``: the noise scale, absolute) only case
-    (a), with every branch's circle, and the circles measured as the noise allows: each fitted
+    Under noise (``noise`` over ``nd.tangent_noise hl``: the noise scale, absolute) every
+    branch needs its circle, and the circles are measured as the noise allows: each fitted
     over the longest span whose points lie within ``nd.tangent_rc`` noise scales of it
     (:func:`_arc_fit_grown`: a curvature over 8 h is not measurable under noise 0.1 h, over
-    20-40 h it is), a line where the circle does not fit significantly better, the circles'
-    meeting widened by ``nd.tangent_meet_noise`` noise scales, and the node the middle of the
-    stretch where the circles meet within ``nd.tangent_mid`` squared noise scales (per circle)
-    of the best: near-tangent circles meet along a valley as flat as the noise of their fits,
-    whose lowest point falls anywhere in it.
+    20-40 h it is), a line where the circle does not fit significantly better, and the circles'
+    meeting widened by ``nd.tangent_meet_noise`` noise scales. In case (a) the node is the middle
+    of the stretch where the circles meet within ``nd.tangent_mid`` squared noise scales (per
+    circle) of the best: near-tangent circles meet along a valley as flat as the noise of their
+    fits, whose lowest point falls anywhere in it. Case (b) runs only on junctions whose smallest
+    eigenvalue is under ``nd.tangent_weak_noisy`` times the number of branches (a branch within
+    about 50 degrees of two collinear ones: a fillet's arc and its straight edge), a branch being
+    curved where its fit kept the circle: a circle fitted over a long span of a strongly curved
+    branch (a mug's handle, a semicircle leaving its side at a right angle) misses the junction
+    by a few spacings, where the lines already meet well.
     """
     nbr = off.shape[0] - 1
     d = P.shape[1]
@@ -528,7 +533,7 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     _eig_sym(A, V, ev, la)
     weak = ev[0] < nd.tangent_weak * nbr
     noisy = noise > nd.tangent_noise * hl
-    if noisy and not weak:  # (b): noise-free input only
+    if noisy and not weak and not ev[0] < nd.tangent_weak_noisy * nbr:  # (b) under noise: a band
         return False
     # under noise: each circle fitted over the longest span its points still fit, a line where
     # the circle is no better, and the fits' tolerance widened for the noise
@@ -558,7 +563,11 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
         else:
             m = _arc_fit(P, ids, nd.tangent_span * h[ids[n - 1]], MU[nm], UU[nm], CF[nm], C, ev2, M3, r3, la)
         if m >= nd.tangent_points and _arc_rms(P, ids, m, MU[nm], UU[nm], CF[nm], e, J) <= tol:
-            if not noisy:  # (case (b) only, read noise-free: ev2 is then this span's scatter)
+            if noisy:  # (case (b): a branch is curved where its fit kept the circle)
+                for a in range(ARC_COEFS):
+                    if CF[nm, a] != 0.0:
+                        curved = True
+            else:  # (case (b) only, read noise-free: ev2 is then this span's scatter)
                 # the portion's offsets from its line: the scatter's eigenvalues but the largest
                 off2 = 0.0
                 for c in range(d - 1):
@@ -586,6 +595,7 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     step = nd.tangent_step * hl
     kmax = int(nd.tangent_reach / nd.tangent_step)
     fb = _arc_profile(x0, w, Q, 0.0, MU, UU, CF, nm, xb, e, J, H, g, z, it)
+    f0 = fb
     fm = _arc_profile(x0, w, Q, -step, MU, UU, CF, nm, xt, e, J, H, g, z, it)
     fp = _arc_profile(x0, w, Q, step, MU, UU, CF, nm, xt, e, J, H, g, z, it)
     sgn = 0
@@ -605,8 +615,11 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     meet = nd.tangent_meet * hl + (nd.tangent_meet_noise * noise if noisy else 0.0)
     if not fb <= meet * meet * nm:
         return False
-    if noisy and nd.tangent_mid > 0.0:
-        # the valley of near-tangent circles is flat within the fits' noise: its middle
+    if noisy and not weak and f0 <= fb + nd.tangent_mid * nm * noise * noise:
+        return False  # (b) under noise: the lines' node lies in the circles' meeting already
+    if noisy and weak and nd.tangent_mid > 0.0:
+        # the valley of near-tangent circles is flat within the fits' noise: its middle (case
+        # (b)'s circles cross, at its lowest point)
         lim = fb + nd.tangent_mid * nm * noise * noise
         tb = k * sgn * step
         lo = tb
