@@ -276,6 +276,8 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     r = reg[ids]
     rad, hmean = _region_sizes(P, hs, ids, r, n_reg)
     big = rad > SPLIT.close_radius * prm.shell_outer * hmean
+    if noisy:  # (no region whose shell is clear of the noise's blur at any scale: nothing to do)
+        big &= max(SPLIT.close_scales) * prm.shell_inner * hmean > SPLIT.fine_noise * noise
     if not big.any():
         return none
     sel = big[r]
@@ -294,6 +296,12 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     found = []
     exits, exit_of = _exits(indptr, indices, flagged, sub, rsub, ka, kb, n_reg)
     for k, sc in enumerate(SPLIT.close_scales):
+        # under noise a scale re-tests only the regions whose shell there is clear of the
+        # noise's blur: a scale with none is not computed (the same result, sooner)
+        clear = big & (sc * prm.shell_inner * hmean > SPLIT.fine_noise * noise) if noisy else big
+        if not clear.any():
+            found.append((None, None))
+            continue
         cand, good, fine = _close_candidates(P, hs, indptr, indices, sub, fa, fb, prm, sc)
         found.append((cand, good))
         n_cand = _candidates_per_region(P, hs, indptr, indices, sub, rsub, cand, good, n_reg)
@@ -309,9 +317,7 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
             n_cand[(n_cand >= 2) & (tot - 2 * (n_cand - 1) > exits)] = 0
             if noisy:  # (the guards under noise: every candidate one junction's size)
                 n_cand[_holding_several(P, hs, sub[ing], rsub[ing], cand[sub][ing], sc, prm)] = 0
-        better = big & (n_cand > best)
-        if noisy:  # (... and a shell clear of the noise's blur)
-            better &= sc * prm.shell_inner * hmean > SPLIT.fine_noise * noise
+        better = clear & (n_cand > best)  # (... and, under noise, a shell clear of its blur)
         best[better] = n_cand[better]
         pick[better] = k
     if not (pick >= 0).any():
@@ -321,7 +327,7 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
     hold = np.zeros(N, dtype=bool)  # freed points that still hold a junction (kept as regions)
     for k, (cand, good) in enumerate(found):
         at = ids[pick[r] == k]  # the points of the regions resolved at this scale
-        if not len(at):
+        if not len(at):  # (always so for a scale not computed)
             continue
         out[at] = False
         keep = at[np.isin(cand[at], good)]
