@@ -412,12 +412,11 @@ def test_near_tangent_junctions_under_noise_meet_where_their_circles_meet(monkey
 
 
 def _seeded(name, condition, seeds):
-    truth = synth.model(name)
-    h = synth.h_of(truth)
+    """Curve F1 of ``robust`` on the samplings ``seeds`` (offsets, :func:`_sampled`)."""
     out = []
     for s in seeds:
-        pts, _ = synth.sample(truth, rng=bench.run_seed(name, condition) + s, **bench.CONDITIONS[condition])
-        out.append(compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"])
+        pts, truth = _sampled(name, condition, s)
+        out.append(compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"])
     return np.array(out)
 
 
@@ -450,13 +449,11 @@ def _tangent_junction_offsets(monkeypatch, junction, seeds, **nodes):
     found, at noise 0.2h, per sampling; ``nodes``: NODES fields changed."""
     if nodes:
         _junction_kernel_with(monkeypatch, **nodes)
-    truth = synth.model("tangent")
-    h = synth.h_of(truth)
     out = []
     for s in seeds:
-        pts, _ = synth.sample(truth, rng=bench.run_seed("tangent", "noise 0.2h") + s, **bench.CONDITIONS["noise 0.2h"])
+        pts, truth = _sampled("tangent", "noise 0.2h", s)
         F = np.asarray(reconstruct(pts, method="robust").nodes)
-        out.append(np.min(np.linalg.norm(F - truth.nodes[junction], axis=1)) / h)
+        out.append(np.min(np.linalg.norm(F - truth.nodes[junction], axis=1)) / synth.h_of(truth))
     return np.array(out)
 
 
@@ -477,8 +474,7 @@ def test_under_noise_curved_branches_move_only_junctions_near_tangent(monkeypatc
     # lines' smallest eigenvalue is 0.2 per branch, over NODES.tangent_weak_noisy (0.15), so the
     # lines place it (curve F1 1.00 at noise 0.2h, sampling 1); read as a curved junction its
     # circle, fitted over the long span the noise allows, meets the side 7.4h up (F1 0.80)
-    truth = synth.model("mug")
-    pts, _ = synth.sample(truth, rng=bench.run_seed("mug", "noise 0.2h") + 1, **bench.CONDITIONS["noise 0.2h"])
+    pts, truth = _sampled("mug", "noise 0.2h", 1)
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] == 1.0
     _junction_kernel_with(monkeypatch, tangent_weak_noisy=0.25)
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] < 0.9
