@@ -307,16 +307,18 @@ def separate_close_junctions(P, hs, indptr, indices, flagged, reg, n_reg, ka, kb
         n_cand = _candidates_per_region(P, hs, indptr, indices, sub, rsub, cand, good, n_reg)
         # branch count: the candidates' branches, less the two ends of each segment joining
         # them, are at most the region's own
-        ing = np.isin(cand[sub], good)
+        cs = cand[sub]
+        ing = np.isin(cs, good)
         if ing.any():
-            key = np.stack([rsub[ing], cand[sub][ing]], axis=1)
-            u, inv = np.unique(key, axis=0, return_inverse=True)
+            # the candidates (region, label), each candidate point's among them
+            u, inv = np.unique(np.stack([rsub[ing], cs[ing]], axis=1), axis=0, return_inverse=True)
+            inv = inv.ravel()
             vmax = np.zeros(len(u), dtype=np.int64)
-            np.maximum.at(vmax, inv.ravel(), fine[sub][ing])
+            np.maximum.at(vmax, inv, fine[sub][ing])
             tot = np.bincount(u[:, 0], weights=vmax, minlength=n_reg)
             n_cand[(n_cand >= 2) & (tot - 2 * (n_cand - 1) > exits)] = 0
             if noisy:  # (the guards under noise: every candidate one junction's size)
-                n_cand[_holding_several(P, hs, sub[ing], rsub[ing], cand[sub][ing], sc, prm)] = 0
+                n_cand[_holding_several(P, hs, sub[ing], inv, u[:, 0], sc, prm)] = 0
         better = clear & (n_cand > best)  # (... and, under noise, a shell clear of its blur)
         best[better] = n_cand[better]
         pick[better] = k
@@ -449,15 +451,14 @@ def _candidates_per_region(P, hs, indptr, indices, sub, rs, cand, good, n_reg):
     return n_cand
 
 
-def _holding_several(P, hs, pts, rs, labels, sc, prm) -> np.ndarray:
+def _holding_several(P, hs, pts, inv, regions, sc, prm) -> np.ndarray:
     """The regions (ids, unique) that have a candidate wider than one junction at shell scale
     ``sc``: radius over ``SPLIT.close_radius`` outer radii of that scale. ``pts``: the
-    candidates' points, ``rs`` their regions and ``labels`` their candidates."""
-    u, inv = np.unique(labels, return_inverse=True)
-    inv = inv.ravel()
-    rad, hmean = _region_sizes(P, hs, pts, inv, len(u))
+    candidates' points, ``inv`` the candidate of each (0 to ``len(regions) - 1``), ``regions``
+    the region of each candidate."""
+    rad, hmean = _region_sizes(P, hs, pts, inv, len(regions))
     wide = rad > SPLIT.close_radius * sc * prm.shell_outer * hmean
-    return np.unique(rs[wide[inv]])
+    return np.unique(regions[wide])
 
 
 def _exits(indptr, indices, flagged, sub, rs, ka, kb, n_reg):
