@@ -1009,6 +1009,38 @@ class Nodes(NamedTuple):
     #: with it (and the lines kept where they already lie in the circles' meeting) 928 + 352 runs: 9
     #: better, none worse; CASSIE 64 sketches at noise 0.1, 0.2, 0.3 h: every run equal
     tangent_weak_noisy: float = 0.15
+    #: under noise, a junction in that band (near-collinear branches) moves to where the samples
+    #: per length along the branches' common direction step up (one curve on one side of the
+    #: junction, two on the other: ``kernels/nodes._strand_change``), the step searched within
+    #: ``tangent_reach`` spacings of the node and counted over this many spacings more on each
+    #: side (h)
+    #: origin: benchmark (issue 25, 5 December 2026; 928-run harness, with tangent_keep 1): 6 h
+    #: 24 better / 10 worse, 8 h 22 / 8 (kinds at noise 0.2 h equal); 2 and 4 h left a
+    #: 0-degree junction 6.8 h from the node without samples beyond it (tangent kind, sampling 5)
+    tangent_window: float = 6.0
+    #: ... where the lone branch's side holds at most 1 / this many times the samples per length
+    #: of the other (unitless: one curve against two gives 2)
+    #: origin: below the ratios at the tangent kind's junctions under noise 0.2 h (1.7-2.5);
+    #: no other value measured
+    tangent_ratio: float = 1.5
+    #: ... and only where the step lies over this many spacings from the node (h): nearer, the
+    #: node is as sure as the step (whose error on the tangent kind at noise 0.2 h is at most
+    #: 1.7 h over 8 samplings)
+    #: origin: benchmark (928-run harness): 1 h 24 better / 10 worse (neuron forks at noise 0.2 h
+    #: moved 2-2.5 h off: nrn_c12877), 2 h 23 / 8, 2.5 h 20 / 6 (kinds at noise 0.2 h equal)
+    tangent_keep: float = 2.0
+    #: ... counting a branch's samples from its end out while it runs within this cosine of that
+    #: direction (unitless; 0.5: 60 degrees, beyond the band's 49), measured on the chord to the
+    #: sample ``tangent_lag`` samples back
+    #: origin: the fillet of the tangent kind (radius 10 h, its edge square to the line after
+    #: the arc): counting every branch sample within the window left its junction 4-13 h off in
+    #: 5 of 8 samplings at noise 0.2 h, the turn rule 1 of 8 (that one outside the band); no
+    #: other value measured
+    tangent_turn: float = 0.5
+    #: ... that chord spanning this many samples (count; two spacings: under noise 0.2 h its
+    #: direction wanders by about 8 degrees, one spacing's by about 16)
+    #: origin: set with the turn rule from that wander; no measurement of this value
+    tangent_lag: int = 2
 
 
 NODES = Nodes()

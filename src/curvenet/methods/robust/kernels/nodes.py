@@ -634,6 +634,226 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     return True
 
 
+def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, noise, nd, la):  # pragma: no cover - compiled
+    """Under noise, a near-tangent junction's node moved to where the number of strands changes.
+
+    Where branches leave each other at a few degrees (a line leaving a circle tangentially, a
+    fillet's arc leaving its straight edge), noise hides for several spacings which samples are
+    whose: the circles and lines fitted to the branches meet along a stretch as long as that,
+    and a line fitted slightly askew crosses its circle twice, a few spacings either side of
+    the junction. The samples still tell it: on one side of a valence-3 junction run one curve's
+    samples, on the other two curves' (the branches that have not parted yet), so the samples
+    per unit length along the branches' common direction step up by about two there.
+
+    ``A`` (d, d, overwritten): the lines' normal matrix; its eigenvector of the smallest
+    eigenvalue ``w`` is that direction. The test runs (under noise: the caller's test) only
+    where that eigenvalue is under ``nd.tangent_weak_noisy`` times the number of branches (the
+    lines cannot place the node along ``w``), with region points (without them the samples
+    near the node are missing), on 3 branches or more, each running along ``w``
+    for ``nd.tangent_points`` samples at least (a stub, or a branch turning away at once, is no
+    strand), one alone on its side of ``x`` (where along ``w`` its sample the window's length
+    from its end lies; a crossing, two and two, has no step). Spacing ``hb``: the median of
+    ``h`` over the branches' last ``nd.tangent_window`` region spacings ``hl``. The samples:
+    the region points ``rid``, each branch's points (``flat[off[b]:off[b + 1]]``, from its end
+    out) while the chord to the sample ``nd.tangent_lag`` back keeps within the cosine
+    ``nd.tangent_turn`` of ``w`` (a fillet's arc turning square to its edge would pile samples
+    up at one position along ``w``), and their neighbours in the linked graph (``indptr``,
+    ``indices``, when ``use_graph``: the junction's samples held by a chain running past the
+    node), all within
+    ``(nd.tangent_reach + nd.tangent_window) hb`` of ``x`` along ``w``; the window ends where
+    the lone branch's samples counted end on its side, and where the first of the others' end
+    on the other. The step is the maximum likelihood split of their positions along ``w`` into
+    two stretches of constant density (Poisson), at most ``nd.tangent_reach hb`` from ``x``,
+    with ``nd.tangent_points`` samples or more on each side, and the lone branch's side at most
+    1 / ``nd.tangent_ratio`` as dense as the other. The node moves (to the mean of the samples
+    within ``hb`` of the step along ``w``) when the step lies over ``nd.tangent_keep hb`` from
+    ``x`` (nearer, the node is as sure as the step). Returns whether ``x`` moved.
+    """
+    nbr = off.shape[0] - 1
+    d = P.shape[1]
+    if d < 2 or nbr < nd.junction_valence or rid.shape[0] == 0:  # (without its region: a hole)
+        return False
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    _eig_sym(A, V, ev, la)
+    if not ev[0] < nd.tangent_weak_noisy * nbr:
+        return False
+    w = np.zeros(d)
+    for c in range(d):
+        w[c] = V[c, 0]
+    # the strands' spacing: the branches' ends (outside the region, where the doubled side's
+    # samples are denser than one curve's; the median holds the single side's too)
+    nh = 0
+    for bi in range(nbr):
+        ids = flat[off[bi]:off[bi + 1]]
+        nh += _end_count(P, ids, nd.tangent_window * hl)
+    if nh == 0:
+        return False
+    hv = np.empty(nh)
+    k = 0
+    for bi in range(nbr):
+        ids = flat[off[bi]:off[bi + 1]]
+        n = ids.shape[0]
+        m = _end_count(P, ids, nd.tangent_window * hl)
+        for q in range(n - m, n):
+            hv[k] = h[ids[q]]
+            k += 1
+    hb = np.median(hv)
+    R = nd.tangent_reach * hb
+    W = R + nd.tangent_window * hb
+    # the side the one branch comes from (where along w its sample the window's length from
+    # its end lies: a branch may end past the node): the step is from one curve there to two
+    # on the other side (a crossing, two and two, has none)
+    below = 0
+    above = 0
+    b_lo = -1
+    b_hi = -1
+    for bi in range(nbr):
+        ids = flat[off[bi]:off[bi + 1]]
+        n = ids.shape[0]
+        m = _end_count(P, ids, W)
+        if m < nd.tangent_points:  # (a stub is no strand: its side is unknown)
+            return False
+        t = 0.0
+        for c in range(d):
+            t += (P[ids[n - m], c] - x[c]) * w[c]
+        if t < 0.0:
+            below += 1
+            b_lo = bi
+        else:
+            above += 1
+            b_hi = bi
+    if below == 1 and above >= 2:
+        sgn = 1.0
+        stem = b_lo
+    elif above == 1 and below >= 2:
+        sgn = -1.0
+        stem = b_hi
+    else:
+        return False
+    # the samples within the window: the region's, and each branch's from its end out while it
+    # runs along w (a branch turning away, e.g. a fillet's arc turning square to its edge,
+    # would pile its samples up at one position along w) ...
+    nr = rid.shape[0]
+    cid = np.empty(nr + flat.shape[0], dtype=np.int64)
+    n = 0
+    for q in range(nr):
+        t = 0.0
+        for c in range(d):
+            t += (P[rid[q], c] - x[c]) * w[c]
+        if -W <= t <= W:
+            cid[n] = rid[q]
+            n += 1
+    # the window ends where the branches' samples counted end (a branch ending or turning away
+    # within it would read as fewer curves there): on the one branch's side where its samples
+    # end, on the other where the first of the others' ends
+    lag = nd.tangent_lag
+    a = -W
+    b = W
+    for bi in range(nbr):
+        ids = flat[off[bi]:off[bi + 1]]
+        nb = ids.shape[0]
+        reach = 0.0
+        run = 0
+        for q in range(nb - 1, -1, -1):
+            if q + lag < nb:
+                a2 = 0.0
+                al = 0.0
+                for c in range(d):
+                    dc = P[ids[q], c] - P[ids[q + lag], c]
+                    a2 += dc * dc
+                    al += dc * w[c]
+                if al * al < nd.tangent_turn * nd.tangent_turn * a2:
+                    break
+            t = 0.0
+            for c in range(d):
+                t += (P[ids[q], c] - x[c]) * w[c]
+            if not -W <= t <= W:
+                break
+            cid[n] = ids[q]
+            if bi == stem and sgn * t < reach or bi != stem and sgn * t > reach:
+                reach = sgn * t
+            n += 1
+            run += 1
+        if run < nd.tangent_points:  # (a branch turning away at once: no strand along w)
+            return False
+        if bi == stem and reach > a:
+            a = reach
+        elif bi != stem and reach < b:
+            b = reach
+    # ... and their linked neighbours within it (samples of the junction's curves that a chain
+    # running past the node, or a spur dropped there, holds: without them the count has a hole)
+    m = 0
+    if use_graph:
+        for q in range(n):
+            m += indptr[cid[q] + 1] - indptr[cid[q]]
+    ids = np.empty(n + m, dtype=np.int64)
+    ids[:n] = cid[:n]
+    k = n
+    for q in range(n if use_graph else 0):
+        p = cid[q]
+        for e in range(indptr[p], indptr[p + 1]):
+            j = indices[e]
+            t = 0.0
+            for c in range(d):
+                t += (P[j, c] - x[c]) * w[c]
+            if not -W <= t <= W:
+                continue
+            seen = False
+            for r in range(k):
+                if ids[r] == j:
+                    seen = True
+                    break
+            if not seen:
+                ids[k] = j
+                k += 1
+    n = k
+    tv = np.empty(n)
+    for q in range(n):
+        t = 0.0
+        for c in range(d):
+            t += (P[ids[q], c] - x[c]) * w[c]
+        tv[q] = sgn * t
+    if n < 2 * nd.tangent_points:
+        return False
+    ts = np.sort(tv[:n])
+    i0 = 0
+    while i0 < n and ts[i0] < a:
+        i0 += 1
+    i1 = n
+    while i1 > i0 and ts[i1 - 1] > b:
+        i1 -= 1
+    best = -np.inf
+    split = 0.0
+    for i in range(i0 + nd.tangent_points, i1 - nd.tangent_points + 1):
+        s = 0.5 * (ts[i - 1] + ts[i])
+        if not (-R <= s <= R) or ts[i] == ts[i - 1]:
+            continue
+        r1 = (i - i0) / (s - a)
+        r2 = (i1 - i) / (b - s)
+        if not r2 >= nd.tangent_ratio * r1:
+            continue
+        ll = (i - i0) * np.log(r1) + (i1 - i) * np.log(r2)
+        if ll > best:
+            best = ll
+            split = s
+    if best == -np.inf or not abs(split) > nd.tangent_keep * hb:
+        return False
+    split = sgn * split
+    xm = np.zeros(d)
+    cnt = 0
+    for q in range(n):
+        if abs(tv[q] - sgn * split) <= hb:
+            for c in range(d):
+                xm[c] += P[ids[q], c]
+            cnt += 1
+    if cnt == 0:
+        return False
+    for c in range(d):
+        x[c] = xm[c] / cnt
+    return True
+
+
 def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise,  # pragma: no cover - compiled
                     jp, en, nd, la):
     """Node position of many junctions at once (see ``nodes.junction_positions``).
@@ -681,6 +901,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     x = np.zeros(d)
     xs = np.zeros(d)
     A0 = np.zeros((d, d))
+    A1 = np.zeros((d, d))
     anchor = np.zeros(d)
     for j in range(nj):
         b0 = jb[j]
@@ -781,11 +1002,17 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         if not ok or not np.sqrt(dist2) <= far * hl:
             for c in range(d):
                 x[c] = anchor[c]
-        # near-tangent or curved branches: where their circles meet, when no farther from the
-        # anchor than the lines' node may be
+        # near-tangent or curved branches: where their circles meet, and under noise where the
+        # strands step from one to two (_strand_change), when no farther from the anchor than
+        # the lines' node may be
         for c in range(d):
             xs[c] = x[c]
-        if _tangent_node(P, h, flat, off, x, hl, noise, A0, nd, la):
+            for a in range(d):
+                A1[c, a] = A0[c, a]  # (_tangent_node overwrites A0)
+        moved = _tangent_node(P, h, flat, off, x, hl, noise, A0, nd, la)
+        if noise > nd.tangent_noise * hl and _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A1, hl, noise, nd, la):
+            moved = True
+        if moved:
             dist2 = 0.0
             for c in range(d):
                 if not np.isfinite(x[c]):
