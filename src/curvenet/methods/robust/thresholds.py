@@ -1009,15 +1009,23 @@ class Nodes(NamedTuple):
     #: with it (and the lines kept where they already lie in the circles' meeting) 928 + 352 runs: 9
     #: better, none worse; CASSIE 64 sketches at noise 0.1, 0.2, 0.3 h: every run equal
     tangent_weak_noisy: float = 0.15
-    #: under noise, a junction in that band (near-collinear branches) moves to where the samples
-    #: per length along the branches' common direction step up (one curve on one side of the
-    #: junction, two on the other: ``kernels/nodes._strand_change``), the step searched within
+    #: under noise, a junction of near-collinear branches moves to where the samples per length
+    #: along the branches' common direction step up (one curve on one side of the junction, two
+    #: on the other: ``kernels/nodes._strand_change``), the step searched within
     #: ``tangent_reach`` spacings of the node and counted over this many spacings more on each
     #: side (h)
     #: origin: benchmark (issue 25, 5 December 2026; 928-run harness, with tangent_keep 1): 6 h
     #: 24 better / 10 worse, 8 h 22 / 8 (kinds at noise 0.2 h equal); 2 and 4 h left a
     #: 0-degree junction 6.8 h from the node without samples beyond it (tangent kind, sampling 5)
     tangent_window: float = 6.0
+    #: ... on junctions whose lines' smallest eigenvalue is under this many times the number of
+    #: branches (unitless; two collinear branches and a third at about 65 degrees give 0.25: a
+    #: quick test, the turn rule of ``tangent_turn`` (60 degrees) decides)
+    #: origin: benchmark (928-run harness against the band of ``tangent_weak_noisy``, 0.15): 0.25,
+    #: 0.35 and 10 (every junction) the same 2 better, none worse (the tangent kind's fillet,
+    #: eigenvalue 0.22 per branch in sampling 3, 5.5 -> 0.8 h); CASSIE 64 at noise 0.1-0.3 h and
+    #: with outliers (320 runs) 4 better / 6 worse, +0.16 in all (06-2-1 at 0.3 h 0.84 -> 0.78)
+    tangent_weak_step: float = 0.25
     #: ... where the lone branch's side holds at most 1 / this many times the samples per length
     #: of the other (unitless: one curve against two gives 2)
     #: origin: below the ratios at the tangent kind's junctions under noise 0.2 h (1.7-2.5);

@@ -647,8 +647,8 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
 
     ``A`` (d, d, overwritten): the lines' normal matrix; its eigenvector of the smallest
     eigenvalue ``w`` is that direction. The test runs (under noise: the caller's test) only
-    where that eigenvalue is under ``nd.tangent_weak_noisy`` times the number of branches (the
-    lines cannot place the node along ``w``), with region points (without them the samples
+    where that eigenvalue is under ``nd.tangent_weak_step`` times the number of branches (the
+    lines place the node poorly along ``w``), with region points (without them the samples
     near the node are missing), on 3 branches or more, each running along ``w``
     for ``nd.tangent_points`` samples at least (a stub, or a branch turning away at once, is no
     strand), one alone on its side of ``x`` (where along ``w`` its sample the window's length
@@ -676,7 +676,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
     V = np.zeros((d, d))
     ev = np.zeros(d)
     _eig_sym(A, V, ev, la)
-    if not ev[0] < nd.tangent_weak_noisy * nbr:
+    if not ev[0] < nd.tangent_weak_step * nbr:
         return False
     w = np.zeros(d)
     for c in range(d):
