@@ -3,11 +3,13 @@
 A circle of radius R spacings with four straight lines leaving it almost tangentially
 (``curvenet.synth.kinds.tangent_circle``), for R from a small fillet to a large hole and two sets
 of angles, each sampled three times: noise-free with a jitter of 1e-6 h (as a CAD export's
-rounding; an exact grid of samples would decide ties by luck) and with a density ratio of 3.
+rounding; an exact grid of samples would decide ties by luck), with a density ratio of 3, and
+with noise of 0.2 h per coordinate (issue 25's noisy condition; ``--conditions``).
 Prints, per model and condition, the curve F1 of each sampling, whether the topology is exact and
 the largest distance (in spacings) from a true junction to the nearest node found.
 
     python benchmarks/tangent_family.py [--radii 5,8,10,15,30,60] [--samplings 3]
+                                        [--conditions clean,x3,noise]
 """
 
 from __future__ import annotations
@@ -27,9 +29,13 @@ ANGLE_SETS = ((0.0, 1.0, 2.0, 3.0), (5.0, 7.0, 10.0, 15.0))
 JITTER = 1e-6
 #: The density ratio of the uneven samplings.
 DENSITY = 3.0
+#: The noise of the noisy samplings, in spacings per coordinate.
+NOISE = 0.2
+#: The conditions, by name.
+CONDITIONS = ("clean", "x3", "noise")
 
 
-def run(radii, samplings: int) -> None:
+def run(radii, samplings: int, conditions=CONDITIONS) -> None:
     print(f"{'R (h)':>6} {'angles':>14} {'condition':>10}  curve F1 per sampling  exact  "
           "worst junction offset (h)")
     tot = {}
@@ -38,14 +44,16 @@ def run(radii, samplings: int) -> None:
             truth = tangent_circle(R, angles)
             h = truth.parameters["h"]
             junctions = truth.nodes[: len(angles)]  # (the circle's nodes come first)
-            for cond in ("clean", "x3"):
+            for cond in conditions:
                 f1s, exact, worst = [], 0, 0.0
                 for s in range(samplings):
                     if cond == "clean":
                         P, _ = sample(truth, rng=s)
                         P = P + np.random.default_rng(s).normal(scale=JITTER * h, size=P.shape)
-                    else:
+                    elif cond == "x3":
                         P, _ = sample(truth, rng=s, density_ratio=DENSITY)
+                    else:
+                        P, _ = sample(truth, rng=s, noise=NOISE)
                     net = reconstruct(P)
                     m = compare(net, truth, h=h)
                     f1s.append(m["curve_f1"])
@@ -67,8 +75,13 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--radii", default="5,8,10,15,30,60")
     ap.add_argument("--samplings", type=int, default=3)
+    ap.add_argument("--conditions", default=",".join(CONDITIONS))
     a = ap.parse_args(argv)
-    run([float(r) for r in a.radii.split(",")], a.samplings)
+    conds = a.conditions.split(",")
+    bad = [c for c in conds if c not in CONDITIONS]
+    if bad:
+        ap.error(f"unknown condition {bad[0]!r} (one of {', '.join(CONDITIONS)})")
+    run([float(r) for r in a.radii.split(",")], a.samplings, conds)
 
 
 if __name__ == "__main__":
