@@ -496,6 +496,25 @@ def test_under_noise_a_tangent_junction_is_where_one_strand_becomes_two(monkeypa
     assert f1_now >= 0.9 and f1_now >= f1_off + 0.3, (f1_now, f1_off)
 
 
+def test_a_chain_running_past_its_node_onto_a_notch_is_trimmed(monkeypatch):
+    # the building outline with 2% outliers and noise 0.1h, sampling 0: at two notches (junctions
+    # 4h apart) a chain ran on past its node round the corner onto the short segment, so its
+    # line's end portion bends back over the node and the segment's samples are the chain's,
+    # not the region's: the pair stayed one node (curve F1 0.81). With PAIRED.behind and the
+    # trim (paired._overruns, Topology.trim_end) both notches part (0.91)
+    from curvenet.methods.robust import paired
+
+    truth = synth.model("outline")
+    cond = {**bench.CONDITIONS, **bench.EXTRA_CONDITIONS}["outliers 2% + noise 0.1h"]
+    pts, _ = synth.sample(truth, rng=bench.run_seed("outline", "outliers 2% + noise 0.1h"), **cond)
+    h = synth.h_of(truth)
+    now = compare(reconstruct(pts, method="robust"), truth, h=h)
+    monkeypatch.setattr(paired, "PAIRED", paired.PAIRED._replace(behind=0.0))
+    before = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert now["curve_f1"] >= 0.9 and now["n_nodes_found"] >= before["n_nodes_found"] + 2, (now, before)
+    assert before["curve_f1"] <= 0.85, before
+
+
 def test_a_stub_or_a_crossing_gets_no_strand_step(monkeypatch):
     # the step moves a node only where one strand meets two: a junction with a one-sample
     # branch (real-dev nrn_c11471 at noise 0.2h, sampling 3: the stub's side is unknown) keeps

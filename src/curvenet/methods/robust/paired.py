@@ -186,7 +186,7 @@ def _meets_all(L: Lines, x: np.ndarray) -> np.ndarray:
     along = np.einsum("ij,ij->i", r, L.u)
     dist = np.sqrt(np.maximum(np.einsum("ij,ij->i", r, r) - along * along, 0.0))
     lim = np.maximum(L.lim, REPAIRS.merge_tan * np.linalg.norm(x - L.tip, axis=1))
-    ahead = np.einsum("ij,ij->i", L.tip - L.c, L.u) * along >= 0
+    ahead = np.sign(np.einsum("ij,ij->i", L.tip - L.c, L.u)) * along >= -PAIRED.behind * lim
     return (dist <= lim) & ahead
 
 
@@ -410,10 +410,34 @@ def _segment(P: np.ndarray, rid: np.ndarray, xa: np.ndarray, xb: np.ndarray, lim
     return ids, t
 
 
+def _overruns(P: np.ndarray, topo: Topology, inc: list[tuple[int, int]], xa: np.ndarray, xb: np.ndarray,
+              lim: float) -> list[int]:
+    """Per chain end ``inc`` at a region: how many of its last points lie on the segment
+    ``xa``-``xb`` (strictly between the two points, within ``lim`` of the line): a chain that
+    ran on past its node, round the corner onto the short segment to the next junction."""
+    e = xb - xa
+    L = float(np.linalg.norm(e))
+    e = e / L
+    out = []
+    for i, s in inc:
+        ids = topo.end_ids(i, s)[::-1]  # (from the end)
+        R = P[ids] - xa
+        t = R @ e
+        d = np.sqrt(np.maximum(np.einsum("ij,ij->i", R, R) - t * t, 0.0))
+        on = (t > 0) & (t < L) & (d <= lim)
+        k = int(np.argmin(on)) if not on.all() else len(on)
+        out.append(k)
+    return out
+
+
 def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     """Every region of valence ``PAIRED.min_valence`` or more whose branches meet at two points
     (:func:`best_pair`), joined by region points along the segment between them, becomes two
     junctions joined by a chain of those points.
+
+    Where the segment's points are a chain's that ran on past its node round the corner onto
+    it (:func:`_overruns`; its line may then meet its point up to ``PAIRED.behind`` strip
+    half-widths behind its end portion), they join the region first (``Topology.trim_end``).
 
     The region's other points go to the nearer junction (by their projection on the segment).
     A chain with both ends at the region (it leaves and comes back: a street block's side)
@@ -452,6 +476,13 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
         mask, xa, xb, lim = found[j]
         rid = topo.regions[r]
         seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
+        if seg is None:  # the segment's samples may end a chain that ran on past its node
+            tails = _overruns(P, topo, inc, xa, xb, lim)
+            for (i, s), k in zip(inc, tails):
+                topo.trim_end(i, s, k)
+            if any(tails):
+                rid = topo.regions[r]
+                seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
         if seg is None:
             continue
         rest = ~np.isin(rid, seg)

@@ -129,6 +129,21 @@ class Topology:
         self.regions[r] = np.r_[self.regions[r], self.chains[i].ids].astype(np.int64)
         self._changed()
 
+    def trim_end(self, i: int, s: int, k: int) -> None:
+        """The ``k`` points of chain ``i`` at its side ``s`` (0: its start) join the region that
+        end is at (a chain that ran on past its node); the chain keeps at least one point."""
+        c = self.chains[i]
+        k = min(k, len(c.ids) - 1)
+        if k <= 0:
+            return
+        if s == 1:
+            moved, c.ids = c.ids[len(c.ids) - k:], c.ids[:len(c.ids) - k].copy()
+        else:
+            moved, c.ids = c.ids[:k], c.ids[k:].copy()
+        r = c.ends[s]
+        self.regions[r] = np.r_[self.regions[r], moved].astype(np.int64)
+        self._changed()
+
     def drop(self, i: int) -> None:
         """Chain ``i`` dies (its ends leave the valence of their regions)."""
         c = self.chains[i]
