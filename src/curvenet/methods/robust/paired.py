@@ -413,8 +413,9 @@ def _segment(P: np.ndarray, rid: np.ndarray, xa: np.ndarray, xb: np.ndarray, lim
 def _overruns(P: np.ndarray, topo: Topology, inc: list[tuple[int, int]], xa: np.ndarray, xb: np.ndarray,
               lim: float) -> list[int]:
     """Per chain end ``inc`` at a region: how many of its last points lie on the segment
-    ``xa``-``xb`` (strictly between the two points, within ``lim`` of the line): a chain that
-    ran on past its node, round the corner onto the short segment to the next junction."""
+    ``xa``-``xb`` (strictly between the two points, within ``lim`` of the line; all but its
+    first at most): a chain that ran on past its node, round the corner onto the short segment
+    to the next junction."""
     e = xb - xa
     L = float(np.linalg.norm(e))
     e = e / L
@@ -426,7 +427,7 @@ def _overruns(P: np.ndarray, topo: Topology, inc: list[tuple[int, int]], xa: np.
         d = np.sqrt(np.maximum(np.einsum("ij,ij->i", R, R) - t * t, 0.0))
         on = (t > 0) & (t < L) & (d <= lim)
         k = int(np.argmin(on)) if not on.all() else len(on)
-        out.append(k)
+        out.append(min(k, len(ids) - 1))  # (a chain keeps a point: Topology.trim_end)
     return out
 
 
@@ -437,7 +438,8 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
 
     Where the segment's points are a chain's that ran on past its node round the corner onto
     it (:func:`_overruns`; its line may then meet its point up to ``PAIRED.behind`` strip
-    half-widths behind its end portion), they join the region first (``Topology.trim_end``).
+    half-widths behind its end portion), they join the region first (``Topology.trim_end``),
+    when the segment is then whole (else nothing changes).
 
     The region's other points go to the nearer junction (by their projection on the segment).
     A chain with both ends at the region (it leaves and comes back: a street block's side)
@@ -478,11 +480,14 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
         seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
         if seg is None:  # the segment's samples may end a chain that ran on past its node
             tails = _overruns(P, topo, inc, xa, xb, lim)
-            for (i, s), k in zip(inc, tails):
-                topo.trim_end(i, s, k)
             if any(tails):
-                rid = topo.regions[r]
-                seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
+                more = [topo.end_ids(i, s)[len(topo.end_ids(i, s)) - k:] for (i, s), k in zip(inc, tails) if k]
+                seg, t = _segment(P, np.concatenate([rid, *more]), xa, xb, lim, prm.link * hr[j])
+                if seg is not None:  # (trimmed only when the segment is then whole)
+                    for (i, s), k in zip(inc, tails):
+                        topo.trim_end(i, s, k)
+                    rid = topo.regions[r]
+                    seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
         if seg is None:
             continue
         rest = ~np.isin(rid, seg)

@@ -663,11 +663,11 @@ class Paired(NamedTuple):
     #: under noise) bends its end portion back over the node; :func:`.paired.split_paired_junctions`
     #: then trims such a chain's points on the segment into the region (``Topology.trim_end``)
     #: origin: benchmark (issue 25, 5 December 2026; with the trim): kinds, real-dev and synthetic,
-    #: 928 + 352 runs: 11 better, 2 worse (outline with outliers + noise 0.1 h samplings 0 and 2
-    #: 0.81 -> 0.91, 0.85 -> 0.91; ladder at density x3 0.62 -> 0.71; plate at density x3
-    #: sampling 3 0.91 -> 0.84); CASSIE 64 x 5 conditions (clean to noise 0.3 h) 0 better, 3
-    #: worse (06-1-2 at noise 0.1 h 0.49 -> 0.45, two by 0.01); sweep digests equal; other
-    #: values not measured
+    #: 928 + 352 runs: 7 better, none worse (outline with outliers + noise 0.1 h samplings 0 and
+    #: 2 0.81 -> 0.91, 0.85 -> 0.91; ladder at density x3 0.62 -> 0.71); CASSIE 64 x 5
+    #: conditions (clean to noise 0.3 h) 0 better, 3 worse (06-1-2 at noise 0.1 h 0.49 -> 0.45,
+    #: two by 0.01); sweep digests equal; other values not measured. The trim applied also
+    #: where the segment stays broken moved plate junctions (density x3, 0.91 -> 0.84)
     behind: float = 2.0
     #: lines within this cosine of parallel are one direction (about 18 degrees): a line along the
     #: segment between the two points, rungs parallel to each other
