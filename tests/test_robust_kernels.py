@@ -939,6 +939,19 @@ def test_noisy_network_does_not_depend_on_openblas_s_processor_kernels():
     assert output_under("Haswell", code) == output_under("SkylakeX", code)
 
 
+def _node_offsets(args, nodes_off):
+    """Distance from the origin (the true node) of the junction_nodes kernel's first node, with
+    the settings as they are and with ``nodes_off`` as the NODES group; the compiled run (when
+    numba is there) checked to give the plain run's bits."""
+    k = KR.KERNELS["junction_nodes"]
+    X, _ = k.plain(*args, *k.groups)
+    Xo, _ = k.plain(*args, ENDS, nodes_off, LINALG)
+    if k.compiled is not None:
+        Xc, _ = k.compiled(*args, *k.groups)
+        assert np.array_equal(Xc, X)
+    return np.linalg.norm(X[0]), np.linalg.norm(Xo[0])
+
+
 @pytest.mark.parametrize("ang", [0.0, 3.0, 10.0])
 def test_near_tangent_junction_under_noise(ang):
     # the junction of test_near_tangent_junction_is_where_the_circles_meet with noise 0.1 on
@@ -946,19 +959,14 @@ def test_near_tangent_junction_under_noise(ang):
     # each fitted over the longest span its points fit, place the node within 1.5 of it (0.02
     # to 1.46), the lines' node (no circle fits: tangent_rc 0) lies 0.3-4.4 off; compiled and
     # plain runs give the same bits
-    k = KR.KERNELS["junction_nodes"]
     now, lines = [], []
     for seed in range(4):
         args = list(_tangent_junction(2, ang))
         args[0] = args[0] + np.random.default_rng(seed).normal(scale=0.1, size=args[0].shape)
         args[11] = 0.13
-        X, _ = k.plain(*args, *k.groups)
-        X0, _ = k.plain(*args, ENDS, NODES._replace(tangent_rc=0.0), LINALG)
-        now.append(np.linalg.norm(X[0]))
-        lines.append(np.linalg.norm(X0[0]))
-        if k.compiled is not None:
-            Xc, _ = k.compiled(*args, *k.groups)
-            assert np.array_equal(Xc, X)
+        a, b = _node_offsets(args, NODES._replace(tangent_rc=0.0))
+        now.append(a)
+        lines.append(b)
     assert max(now) < 1.5 and np.mean(now) + 1.0 < np.mean(lines), (now, lines)
 
 
@@ -993,15 +1001,9 @@ def test_strand_step_places_a_near_tangent_junction_under_noise(ang):
     # lies over NODES.tangent_keep from the circles' node (measured: mean 1.05 at 0 degrees and
     # 1.07 at 5, against 1.91 and 1.92 with the step off, 1.9-2.6 with the lines alone);
     # compiled and plain runs give the same bits
-    k = KR.KERNELS["junction_nodes"]
     now, off = [], []
     for seed in range(6):
-        args = _strand_junction(ang, 0.2, seed)
-        X, _ = k.plain(*args, *k.groups)
-        Xo, _ = k.plain(*args, ENDS, NODES._replace(tangent_ratio=np.inf), LINALG)
-        now.append(np.linalg.norm(X[0]))
-        off.append(np.linalg.norm(Xo[0]))
-        if k.compiled is not None:
-            Xc, _ = k.compiled(*args, *k.groups)
-            assert np.array_equal(Xc, X)
+        a, b = _node_offsets(_strand_junction(ang, 0.2, seed), NODES._replace(tangent_ratio=np.inf))
+        now.append(a)
+        off.append(b)
     assert max(now) < 3.0 and np.mean(now) + 0.5 < np.mean(off), (now, off)

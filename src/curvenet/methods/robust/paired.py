@@ -394,13 +394,8 @@ def _segment(P: np.ndarray, rid: np.ndarray, xa: np.ndarray, xb: np.ndarray, lim
     """The region points along the segment ``xa``-``xb``, ordered from ``xa``: those strictly
     between the two points (projection) within ``lim`` of the line; None when there are none or
     when two consecutive ones (or the ends and their nearest) lie over ``gap`` apart."""
-    e = xb - xa
-    L = float(np.linalg.norm(e))
-    e = e / L
-    R = P[rid] - xa
-    t = R @ e
-    d = np.sqrt(np.maximum(np.einsum("ij,ij->i", R, R) - t * t, 0.0))
-    on = (t > 0) & (t < L) & (d <= lim)
+    on, t = _on_segment(P, rid, xa, xb, lim)
+    L = float(np.linalg.norm(xb - xa))
     if not on.any():
         return None, t
     ids = rid[on][np.lexsort((rid[on], t[on]))]
@@ -410,24 +405,28 @@ def _segment(P: np.ndarray, rid: np.ndarray, xa: np.ndarray, xb: np.ndarray, lim
     return ids, t
 
 
-def _overruns(P: np.ndarray, topo: Topology, inc: list[tuple[int, int]], xa: np.ndarray, xb: np.ndarray,
-              lim: float) -> list[int]:
-    """Per chain end ``inc`` at a region: how many of its last points lie on the segment
-    ``xa``-``xb`` (strictly between the two points, within ``lim`` of the line; all but its
-    first at most): a chain that ran on past its node, round the corner onto the short segment
-    to the next junction."""
+def _on_segment(P: np.ndarray, ids: np.ndarray, xa: np.ndarray, xb: np.ndarray, lim: float):
+    """Which points ``ids`` lie on the segment ``xa``-``xb`` (strictly between the two points by
+    their projection, within ``lim`` of the line), and their projections ``t`` from ``xa``."""
     e = xb - xa
     L = float(np.linalg.norm(e))
-    e = e / L
+    R = P[ids] - xa
+    t = R @ (e / L)
+    d = np.sqrt(np.maximum(np.einsum("ij,ij->i", R, R) - t * t, 0.0))
+    return (t > 0) & (t < L) & (d <= lim), t
+
+
+def _overruns(P: np.ndarray, topo: Topology, inc: list[tuple[int, int]], xa: np.ndarray, xb: np.ndarray,
+              lim: float) -> list[np.ndarray]:
+    """Per chain end ``inc`` at a region: its last points that lie on the segment ``xa``-``xb``
+    (:func:`_on_segment`; all but its first at most), from the end: a chain that ran on past
+    its node, round the corner onto the short segment to the next junction."""
     out = []
     for i, s in inc:
         ids = topo.end_ids(i, s)[::-1]  # (from the end)
-        R = P[ids] - xa
-        t = R @ e
-        d = np.sqrt(np.maximum(np.einsum("ij,ij->i", R, R) - t * t, 0.0))
-        on = (t > 0) & (t < L) & (d <= lim)
+        on, _ = _on_segment(P, ids, xa, xb, lim)
         k = int(np.argmin(on)) if not on.all() else len(on)
-        out.append(min(k, len(ids) - 1))  # (a chain keeps a point: Topology.trim_end)
+        out.append(ids[:min(k, len(ids) - 1)])  # (a chain keeps a point: Topology.trim_end)
     return out
 
 
@@ -480,13 +479,12 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
         seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
         if seg is None:  # the segment's samples may end a chain that ran on past its node
             tails = _overruns(P, topo, inc, xa, xb, lim)
-            if any(tails):
-                more = [topo.end_ids(i, s)[len(topo.end_ids(i, s)) - k:] for (i, s), k in zip(inc, tails) if k]
-                seg, t = _segment(P, np.concatenate([rid, *more]), xa, xb, lim, prm.link * hr[j])
+            if any(len(x) for x in tails):
+                seg, t = _segment(P, np.concatenate([rid, *tails]), xa, xb, lim, prm.link * hr[j])
                 if seg is not None:  # (trimmed only when the segment is then whole)
-                    for (i, s), k in zip(inc, tails):
-                        topo.trim_end(i, s, k)
-                    rid = topo.regions[r]
+                    for (i, s), x in zip(inc, tails):
+                        topo.trim_end(i, s, len(x))
+                    rid = topo.regions[r]  # (the same points in the trims' order: t again)
                     seg, t = _segment(P, rid, xa, xb, lim, prm.link * hr[j])
         if seg is None:
             continue

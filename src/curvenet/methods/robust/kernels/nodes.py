@@ -634,6 +634,14 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     return True
 
 
+def _along(P, p, x, w):  # pragma: no cover - compiled
+    """Position of sample ``p`` along the unit direction ``w`` from the point ``x``."""
+    t = 0.0
+    for c in range(P.shape[1]):
+        t += (P[p, c] - x[c]) * w[c]
+    return t
+
+
 def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, noise, nd, la):  # pragma: no cover - compiled
     """Under noise, a near-tangent junction's node moved to where the number of strands changes.
 
@@ -683,22 +691,17 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
         w[c] = V[c, 0]
     # the strands' spacing: the branches' ends (outside the region, where the doubled side's
     # samples are denser than one curve's; the median holds the single side's too)
-    nh = 0
-    for bi in range(nbr):
-        ids = flat[off[bi]:off[bi + 1]]
-        nh += _end_count(P, ids, nd.tangent_window * hl)
-    if nh == 0:
-        return False
-    hv = np.empty(nh)
+    hv = np.empty(flat.shape[0])
     k = 0
     for bi in range(nbr):
         ids = flat[off[bi]:off[bi + 1]]
         n = ids.shape[0]
-        m = _end_count(P, ids, nd.tangent_window * hl)
-        for q in range(n - m, n):
+        for q in range(n - _end_count(P, ids, nd.tangent_window * hl), n):
             hv[k] = h[ids[q]]
             k += 1
-    hb = np.median(hv)
+    if k == 0:
+        return False
+    hb = np.median(hv[:k])
     R = nd.tangent_reach * hb
     W = R + nd.tangent_window * hb
     # the side the one branch comes from (where along w its sample the window's length from
@@ -714,10 +717,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
         m = _end_count(P, ids, W)
         if m < nd.tangent_points:  # (a stub is no strand: its side is unknown)
             return False
-        t = 0.0
-        for c in range(d):
-            t += (P[ids[n - m], c] - x[c]) * w[c]
-        if t < 0.0:
+        if _along(P, ids[n - m], x, w) < 0.0:
             below += 1
             b_lo = bi
         else:
@@ -738,9 +738,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
     cid = np.empty(nr + flat.shape[0], dtype=np.int64)
     n = 0
     for q in range(nr):
-        t = 0.0
-        for c in range(d):
-            t += (P[rid[q], c] - x[c]) * w[c]
+        t = _along(P, rid[q], x, w)
         if -W <= t <= W:
             cid[n] = rid[q]
             n += 1
@@ -765,9 +763,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
                     al += dc * w[c]
                 if al * al < nd.tangent_turn * nd.tangent_turn * a2:
                     break
-            t = 0.0
-            for c in range(d):
-                t += (P[ids[q], c] - x[c]) * w[c]
+            t = _along(P, ids[q], x, w)
             if not -W <= t <= W:
                 break
             cid[n] = ids[q]
@@ -794,9 +790,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
         p = cid[q]
         for e in range(indptr[p], indptr[p + 1]):
             j = indices[e]
-            t = 0.0
-            for c in range(d):
-                t += (P[j, c] - x[c]) * w[c]
+            t = _along(P, j, x, w)
             if not -W <= t <= W:
                 continue
             seen = False
@@ -810,10 +804,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
     n = k
     tv = np.empty(n)
     for q in range(n):
-        t = 0.0
-        for c in range(d):
-            t += (P[ids[q], c] - x[c]) * w[c]
-        tv[q] = sgn * t
+        tv[q] = sgn * _along(P, ids[q], x, w)
     if n < 2 * nd.tangent_points:
         return False
     ts = np.sort(tv[:n])
@@ -839,11 +830,10 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
             split = s
     if best == -np.inf or not abs(split) > nd.tangent_keep * hb:
         return False
-    split = sgn * split
     xm = np.zeros(d)
     cnt = 0
     for q in range(n):
-        if abs(tv[q] - sgn * split) <= hb:
+        if abs(tv[q] - split) <= hb:
             for c in range(d):
                 xm[c] += P[ids[q], c]
             cnt += 1
