@@ -1325,8 +1325,9 @@ class Unexplained(NamedTuple):
     #: distance of its tip)
     #: origin: set with the stage, not tuned: the twigs of the kinds and neurons are 3-6 h
     search: float = 14.0
-    #: the fewest samples of a branch's path (its explained end included): fewer are stray
-    #: points (2% outliers land near curves too)
+    #: the fewest samples of a branch's path (its explained end included; the path through
+    #: every sample, since 5 December 2026, see ``tip_short``): fewer are stray points (2%
+    #: outliers land near curves too)
     #: origin: benchmark (issue 25, 5 December 2026; a first version of the stage, run after the
     #: method, on 832 runs of the kinds, real-dev and synthetic models under noise, outliers and
     #: density x3): 3 samples 46 networks better, 27 worse (curve F1 summed +6.1); 4 samples 19
@@ -1347,6 +1348,18 @@ class Unexplained(NamedTuple):
     #: lost their exact topology (eye, fan, tree at noise 0.3 h + x3: a branch of 2-4 samples 2.3 h
     #: from a junction placed 2 h off the true one)
     length_noise: float = 2.5
+    #: ... less this many spacings for the branch's own reach from its foot: its last sample lies
+    #: up to one spacing short of the curve's true end, so a twig ``min_spur`` spacings long
+    #: reaches ``min_spur - 1`` to ``min_spur`` (its tip's distance from other nodes keeps the full
+    #: bound). Taken with the detour test (``unexplained._other_leg``: unexplained samples near
+    #: the tip off the branch's own, the curve going out and back) and the sample count on the
+    #: path through every sample
+    #: origin: benchmark (issue 25, 5 December 2026; 928 + 352 runs of the harness): with the
+    #: three changes 26 better, 8 worse (twigs at noise 0.2 h: 6 of 8 samplings better, e.g. 0.709
+    #: -> 0.819; ladder at noise 0.2 h s1, s6 and plate / twigs at 0.3 h + x3 worse); without the
+    #: detour test real neurons gained false twigs (nrn_CTh5080328L_s4 at noise 0.1 h 0.714 ->
+    #: 0.500: 2-3 h corners of a tortuous neurite); without this allowance (0) 12 better, 10 worse
+    tip_short: float = 1.0
     #: a branch joining a curve within this many spacings (along it) of one of its nodes joins
     #: that node instead of cutting the curve
     #: origin: set with the stage, not tuned: a node placed within 2 h of a junction matches it

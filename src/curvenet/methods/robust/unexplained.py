@@ -18,16 +18,23 @@ link length ``link`` spacings) runs back to a point the network explains closely
 new branch, from the curve point its line meets when extended towards the network to a new
 free end at its tip, when:
 
-* it holds at least ``UNEXPLAINED.min_samples`` samples: a sampled curve, not one stray point;
-* its tip lies at least ``min_spur`` spacings plus ``UNEXPLAINED.length_noise`` times the noise
+* it holds at least ``UNEXPLAINED.min_samples`` samples (on the path through every sample
+  between its ends): a sampled curve, not one stray point;
+* its tip lies at least ``min_spur`` less ``UNEXPLAINED.tip_short`` spacings (its last sample
+  lies up to a spacing short of its true end) plus ``UNEXPLAINED.length_noise`` times the noise
   from where it joins the network (the spurs the repairs drop are shorter; noise scatters the
-  samples around a junction that far), and as far from every other node;
+  samples around a junction that far), and ``min_spur`` spacings plus as much from every other
+  node;
 * its tip lies at least ``UNEXPLAINED.rise`` times the path's length from the network. A branch
   leaves the network. A path that runs alongside a curve is a stretch of that curve the network
   passes a little off, and it is left alone;
 * its tip is a free end: the samples within ``min_spur`` spacings of it lie to one side
   (``UNEXPLAINED.end``, ``UNEXPLAINED.end_points``). Where they lie on both sides the samples go
-  on past it: a curve the network missed or merged with another, not a branch.
+  on past it: a curve the network missed or merged with another, not a branch;
+* no sample the network leaves unexplained (beyond the near band) lies within ``min_spur``
+  spacings of its tip off its own samples. Where some do, the samples run out to the tip and
+  come back: a corner of a zigzagging curve (a traced neurite) that the network cuts across,
+  whose two legs both lie on the network's side of the tip, so the free-end test above passes.
 
 A branch joining a curve within ``min_spur`` spacings of the curve's free end extends the
 curve: the curve stopped short, and its free end moves to the tip. A branch joining a curve
@@ -194,7 +201,7 @@ def add_unexplained_branches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
     branches = _branches(P, h, d, un, noise, link, min_spur, ptree)
     if not branches:
         return nodes, curves, 0
-    joins, kept = _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise)
+    joins, kept = _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise, ptree)
     if not kept:
         return nodes, curves, 0
     return _with_branches(P, nodes, curves, joins, kept, fit)
@@ -297,7 +304,7 @@ def walk_back(pred: np.ndarray, j: int, s: int) -> np.ndarray:
     return np.asarray(path, dtype=np.int64)
 
 
-def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise):
+def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise, ptree):
     """Where each kept branch joins the network, and the kept branches.
 
     Returns
@@ -324,17 +331,24 @@ def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise):
     joins, kept = [], []
     for path, samples in branches:
         j, tip = int(path[0]), int(path[-1])
-        if len(path) < UNEXPLAINED.min_samples or used[tip]:
+        # (counted on the path through every sample: the shortest path may step from the
+        # explained sample straight to the tip past the branch's other samples)
+        if len(samples) < UNEXPLAINED.min_samples or used[tip]:
             continue  # (a tip that is a curve's sample: that curve runs through it)
         hj = float(h[j])
-        q = _foot(P, V, tree, path, link * hj + UNEXPLAINED.near_noise * noise)
+        # (the foot's direction needs two samples off the network: a shortest path of one step
+        # from its explained sample to the tip has none, the path through every sample has)
+        q = _foot(P, V, tree, path if len(path) > 2 else samples, link * hj + UNEXPLAINED.near_noise * noise)
         x = V[q]
-        span = min_spur * hj + UNEXPLAINED.length_noise * noise  # a branch's shortest reach
+        # a branch's shortest reach (its tip's sample may lie up to a spacing short of its end)
+        span = (min_spur - UNEXPLAINED.tip_short) * hj + UNEXPLAINED.length_noise * noise
         if np.linalg.norm(P[tip] - x) < span:
             continue
         plen = float(np.linalg.norm(np.diff(P[path], axis=0), axis=1).sum() + np.linalg.norm(P[j] - x))
         if d[tip] < UNEXPLAINED.rise * plen:
             continue
+        if _other_leg(P, h, d, ptree, samples, min_spur, noise):
+            continue  # (a zigzag's corner the network cuts across: out and back)
         ci = int(owner[q])
         s = q - int(off[ci])
         c = curves[ci]
@@ -364,6 +378,17 @@ def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise):
         samples = samples[len(samples) - int(np.argmax(close[::-1])):] if close.any() else samples
         kept.append(samples[~used[samples]])
     return joins, kept
+
+
+def _other_leg(P, h, d, ptree, samples, min_spur, noise) -> bool:
+    """Whether samples the network does not explain closely (over the near band of
+    :func:`_distances`) lie within ``min_spur`` spacings of the branch's tip but off its own
+    samples ``samples`` (from its explained sample to the tip): the samples run out to the tip
+    and come back, a detour of the curve, not a branch."""
+    tip = int(samples[-1])
+    near = np.asarray(ptree.query_ball_point(P[tip], min_spur * float(h[tip])), dtype=np.int64)
+    far = near[d[near] > UNEXPLAINED.near * h[near] + UNEXPLAINED.near_noise * noise]
+    return bool(len(np.setdiff1d(far, samples)))
 
 
 def _is_end(P, ptree, tip, r) -> bool:
