@@ -1355,10 +1355,10 @@ class Unexplained(NamedTuple):
     #: the tip off the branch's own, the curve going out and back) and the sample count on the
     #: path through every sample
     #: origin: benchmark (issue 25, 5 December 2026; 928 + 352 runs of the harness): with the
-    #: three changes 26 better, 8 worse (twigs at noise 0.2 h: 6 of 8 samplings better, e.g. 0.709
-    #: -> 0.819; ladder at noise 0.2 h s1, s6 and plate / twigs at 0.3 h + x3 worse); without the
-    #: detour test real neurons gained false twigs (nrn_CTh5080328L_s4 at noise 0.1 h 0.714 ->
-    #: 0.500: 2-3 h corners of a tortuous neurite); without this allowance (0) 12 better, 10 worse
+    #: three changes 27 better, 7 worse (twigs at noise 0.2 h: 7 of 8 samplings better, e.g. 0.709
+    #: -> 0.819; ladder at noise 0.2 h s1, s6 and plate at 0.3 h + x3 worse); without the detour
+    #: test real neurons gained false twigs (nrn_CTh5080328L_s4 at noise 0.1 h 0.714 -> 0.500:
+    #: 2-3 h corners of a tortuous neurite); without this allowance (0) 12 better, 10 worse
     tip_short: float = 1.0
     #: a branch joining a curve within this many spacings (along it) of one of its nodes joins
     #: that node instead of cutting the curve

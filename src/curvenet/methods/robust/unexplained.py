@@ -382,13 +382,19 @@ def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise, ptree):
 
 def _other_leg(P, h, d, ptree, samples, min_spur, noise) -> bool:
     """Whether samples the network does not explain closely (over the near band of
-    :func:`_distances`) lie within ``min_spur`` spacings of the branch's tip but off its own
-    samples ``samples`` (from its explained sample to the tip): the samples run out to the tip
-    and come back, a detour of the curve, not a branch."""
+    :func:`_distances`) lie within ``min_spur`` spacings of the branch's tip and off the branch
+    (over that band from the polyline of its samples ``samples``, from its explained sample to
+    the tip: densely sampled noisy branches are bands of samples beside that path): the samples
+    run out to the tip and come back, a detour of the curve, not a branch."""
     tip = int(samples[-1])
     near = np.asarray(ptree.query_ball_point(P[tip], min_spur * float(h[tip])), dtype=np.int64)
-    far = near[d[near] > UNEXPLAINED.near * h[near] + UNEXPLAINED.near_noise * noise]
-    return bool(len(np.setdiff1d(far, samples)))
+    band = UNEXPLAINED.near * h[near] + UNEXPLAINED.near_noise * noise
+    far = near[d[near] > band]
+    if len(far) == 0:
+        return False
+    B = P[samples]
+    off = segment_distance(P[far][:, None], B[:-1][None], B[1:][None]).min(axis=1)
+    return bool(np.any(off > UNEXPLAINED.near * h[far] + UNEXPLAINED.near_noise * noise))
 
 
 def _is_end(P, ptree, tip, r) -> bool:
