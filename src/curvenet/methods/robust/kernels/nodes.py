@@ -484,9 +484,10 @@ def _arc_profile(x0, w, Q, t, MU, UU, CF, nm, x, e, J, H, g, z, iters):  # pragm
     return f
 
 
-def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover - compiled
+def _tangent_node(P, h, flat, off, x, hl, noise, V, ev, nd, la):  # pragma: no cover - compiled
     """Where the branches' circles meet: the node ``x`` of :func:`_junction_nodes` moved along
-    the weak direction of the lines' normal matrix ``A`` (without the anchor's pull; overwritten).
+    the weak direction of the lines' normal matrix ``A`` (without the anchor's pull), given by
+    its eigenvalues ``ev`` (d,, ascending) and unit eigenvectors, the columns of ``V`` (d, d).
 
     Two cases. (a) Near-tangent branches: the smallest eigenvalue of ``A`` under
     ``nd.tangent_weak`` times the number of branches; the lines cannot place the node along its
@@ -524,13 +525,8 @@ def _tangent_node(P, h, flat, off, x, hl, noise, A, nd, la):  # pragma: no cover
     branch (a mug's handle, a semicircle leaving its side at a right angle) misses the junction
     by a few spacings, where the lines already meet well.
     """
-    nbr = off.shape[0] - 1
+    nbr = off.shape[0] - 1  # (2 or more, in 2D or 3D: the caller's test)
     d = P.shape[1]
-    if d < 2 or nbr < 2:
-        return False
-    V = np.zeros((d, d))
-    ev = np.zeros(d)
-    _eig_sym(A, V, ev, la)
     weak = ev[0] < nd.tangent_weak * nbr
     noisy = noise > nd.tangent_noise * hl
     if noisy and not weak and not ev[0] < nd.tangent_weak_noisy * nbr:  # (b) under noise: a band
@@ -642,7 +638,7 @@ def _along(P, p, x, w):  # pragma: no cover - compiled
     return t
 
 
-def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, noise, nd, la):  # pragma: no cover - compiled
+def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, V, ev, hl, noise, nd):  # pragma: no cover - compiled
     """Under noise, a near-tangent junction's node moved to where the number of strands changes.
 
     Where branches leave each other at a few degrees (a line leaving a circle tangentially, a
@@ -653,8 +649,9 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
     samples, on the other two curves' (the branches that have not parted yet), so the samples
     per unit length along the branches' common direction step up by about two there.
 
-    ``A`` (d, d, overwritten): the lines' normal matrix; its eigenvector of the smallest
-    eigenvalue ``w`` is that direction. The test runs (under noise: the caller's test) only
+    ``A``: the lines' normal matrix, given by its eigenvalues ``ev`` (d,, ascending) and unit
+    eigenvectors, the columns of ``V`` (d, d); its eigenvector of the smallest eigenvalue ``w``
+    is that direction. The test runs (under noise: the caller's test) only
     where that eigenvalue is under ``nd.tangent_weak_step`` times the number of branches (the
     lines place the node poorly along ``w``), with region points (without them the samples
     near the node are missing), on 3 branches or more, each running along ``w``
@@ -679,11 +676,8 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
     """
     nbr = off.shape[0] - 1
     d = P.shape[1]
-    if d < 2 or nbr < nd.junction_valence or rid.shape[0] == 0:  # (without its region: a hole)
+    if nbr < nd.junction_valence or rid.shape[0] == 0:  # (without its region: a hole; d >= 2: the caller's test)
         return False
-    V = np.zeros((d, d))
-    ev = np.zeros(d)
-    _eig_sym(A, V, ev, la)
     if not ev[0] < nd.tangent_weak_step * nbr:
         return False
     w = np.zeros(d)
@@ -736,11 +730,13 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
     # would pile its samples up at one position along w) ...
     nr = rid.shape[0]
     cid = np.empty(nr + flat.shape[0], dtype=np.int64)
+    ct = np.empty(nr + flat.shape[0])  # (their positions along w)
     n = 0
     for q in range(nr):
         t = _along(P, rid[q], x, w)
         if -W <= t <= W:
             cid[n] = rid[q]
+            ct[n] = t
             n += 1
     # the window ends where the branches' samples counted end (a branch ending or turning away
     # within it would read as fewer curves there): on the one branch's side where its samples
@@ -767,6 +763,7 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
             if not -W <= t <= W:
                 break
             cid[n] = ids[q]
+            ct[n] = t
             if bi == stem and sgn * t < reach or bi != stem and sgn * t > reach:
                 reach = sgn * t
             n += 1
@@ -784,7 +781,9 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
         for q in range(n):
             m += indptr[cid[q] + 1] - indptr[cid[q]]
     ids = np.empty(n + m, dtype=np.int64)
+    tv = np.empty(n + m)
     ids[:n] = cid[:n]
+    tv[:n] = ct[:n]
     k = n
     for q in range(n if use_graph else 0):
         p = cid[q]
@@ -800,11 +799,11 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A, hl, n
                     break
             if not seen:
                 ids[k] = j
+                tv[k] = t
                 k += 1
     n = k
-    tv = np.empty(n)
     for q in range(n):
-        tv[q] = sgn * _along(P, ids[q], x, w)
+        tv[q] = sgn * tv[q]
     if n < 2 * nd.tangent_points:
         return False
     ts = np.sort(tv[:n])
@@ -891,7 +890,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     x = np.zeros(d)
     xs = np.zeros(d)
     A0 = np.zeros((d, d))
-    A1 = np.zeros((d, d))
+    Vl = np.zeros((d, d))
+    evl = np.zeros(d)
     anchor = np.zeros(d)
     for j in range(nj):
         b0 = jb[j]
@@ -997,11 +997,13 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         # the lines' node may be
         for c in range(d):
             xs[c] = x[c]
-            for a in range(d):
-                A1[c, a] = A0[c, a]  # (_tangent_node overwrites A0)
-        moved = _tangent_node(P, h, flat, off, x, hl, noise, A0, nd, la)
-        if noise > nd.tangent_noise * hl and _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, A1, hl, noise, nd, la):
-            moved = True
+        moved = False
+        if d >= 2 and nbr >= 2:  # (the lines' eigenpairs, read by both)
+            _eig_sym(A0, Vl, evl, la)
+            moved = _tangent_node(P, h, flat, off, x, hl, noise, Vl, evl, nd, la)
+            if noise > nd.tangent_noise * hl and _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x,
+                                                                Vl, evl, hl, noise, nd):
+                moved = True
         if moved:
             dist2 = 0.0
             for c in range(d):
