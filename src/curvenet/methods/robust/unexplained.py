@@ -89,6 +89,12 @@ def _vertices(curves: list[Curve]) -> _Vertices:
     return _Vertices(V, np.r_[0, np.cumsum(lens)], np.repeat(np.arange(len(curves)), lens), build_tree(V))
 
 
+def _near_band(h: np.ndarray, noise: float) -> np.ndarray:
+    """The distance within which the network explains a sample of spacing ``h`` closely:
+    ``UNEXPLAINED.near`` spacings plus ``UNEXPLAINED.near_noise`` times the noise."""
+    return UNEXPLAINED.near * h + UNEXPLAINED.near_noise * noise
+
+
 def _distances(P: np.ndarray, h: np.ndarray, curves: list[Curve], vx: _Vertices, noise: float) -> np.ndarray:
     """Each point's distance to the network as the stage reads it (N,): a curve's sample lying
     within the near band (``UNEXPLAINED.near`` spacings plus ``near_noise`` times the noise) of
@@ -100,7 +106,7 @@ def _distances(P: np.ndarray, h: np.ndarray, curves: list[Curve], vx: _Vertices,
     on = ids >= 0
     ids, X = ids[on], vx.V[on]
     own = np.linalg.norm(P[ids] - X, axis=1)
-    near = own <= UNEXPLAINED.near * h[ids] + UNEXPLAINED.near_noise * noise
+    near = own <= _near_band(h[ids], noise)
     d[ids[near]] = own[near]
     rest = np.flatnonzero(np.isinf(d))
     if len(rest):
@@ -243,7 +249,7 @@ def _branches(P, h, d, un, noise, link, min_spur, ptree) -> list[tuple[np.ndarra
     # the same ends joined through every sample between them: the path whose squared steps sum
     # least (the shortest path above skips samples that lie nearly in line)
     G2 = coo_matrix((w * w, (lp[:, 0], lp[:, 1])), shape=(m, m)).tocsr()
-    near = d[local] <= UNEXPLAINED.near * hl + UNEXPLAINED.near_noise * noise
+    near = d[local] <= _near_band(hl, noise)
     src = np.searchsorted(local, tips)
     # the paths of each connected piece of the graph searched on its own (a path cannot leave
     # its piece; one search over all tips at once would hold tips x samples distances)
@@ -374,7 +380,7 @@ def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise, ptree):
         joins.append(jn)
         # its samples: those past the last one the network explains closely, none a sample of
         # a curve already (a point stays in one curve)
-        close = d[samples] <= UNEXPLAINED.near * h[samples] + UNEXPLAINED.near_noise * noise
+        close = d[samples] <= _near_band(h[samples], noise)
         samples = samples[len(samples) - int(np.argmax(close[::-1])):] if close.any() else samples
         kept.append(samples[~used[samples]])
     return joins, kept
@@ -388,13 +394,13 @@ def _other_leg(P, h, d, ptree, samples, min_spur, noise) -> bool:
     run out to the tip and come back, a detour of the curve, not a branch."""
     tip = int(samples[-1])
     near = np.asarray(ptree.query_ball_point(P[tip], min_spur * float(h[tip])), dtype=np.int64)
-    band = UNEXPLAINED.near * h[near] + UNEXPLAINED.near_noise * noise
-    far = near[d[near] > band]
-    if len(far) == 0:
+    band = _near_band(h[near], noise)
+    out = d[near] > band
+    if not out.any():
         return False
     B = P[samples]
-    off = segment_distance(P[far][:, None], B[:-1][None], B[1:][None]).min(axis=1)
-    return bool(np.any(off > UNEXPLAINED.near * h[far] + UNEXPLAINED.near_noise * noise))
+    off = segment_distance(P[near[out]][:, None], B[:-1][None], B[1:][None]).min(axis=1)
+    return bool(np.any(off > band[out]))
 
 
 def _is_end(P, ptree, tip, r) -> bool:
