@@ -259,8 +259,11 @@ def test_a_notch_chain_is_split_at_its_two_corners(monkeypatch):
 
 
 def _sampled(name, condition, k):
+    """Sampling ``k`` of model ``name`` under a benchmark condition (``bench.CONDITIONS`` or
+    ``bench.EXTRA_CONDITIONS``), as the benchmark samples it, and the model."""
     truth = synth.model(name)
-    pts, _ = synth.sample(truth, rng=bench.run_seed(name, condition) + k, **bench.CONDITIONS[condition])
+    kw = {**bench.CONDITIONS, **bench.EXTRA_CONDITIONS}[condition]
+    pts, _ = synth.sample(truth, rng=bench.run_seed(name, condition) + k, **kw)
     return pts, truth
 
 
@@ -317,10 +320,8 @@ def test_low_noise_is_read_as_noise_free_by_the_junction_stages(monkeypatch, nam
     from curvenet.methods.robust import estimate, params
     from curvenet.methods.robust.params import Estimates
 
-    truth = synth.model(name)
+    pts, truth = _sampled(name, "noise 0.1h", offset)
     h = synth.h_of(truth)
-    pts, _ = synth.sample(truth, rng=bench.run_seed(name, "noise 0.1h") + offset,
-                          **bench.EXTRA_CONDITIONS["noise 0.1h"])
     est = estimate(pts)
     assert est.low and not est.clean
     now = compare(reconstruct(pts, method="robust"), truth, h=h)
@@ -504,9 +505,7 @@ def test_a_chain_running_past_its_node_onto_a_notch_is_trimmed(monkeypatch):
     # trim (paired._overruns, Topology.trim_end) both notches part (0.91)
     from curvenet.methods.robust import paired
 
-    truth = synth.model("outline")
-    cond = {**bench.CONDITIONS, **bench.EXTRA_CONDITIONS}["outliers 2% + noise 0.1h"]
-    pts, _ = synth.sample(truth, rng=bench.run_seed("outline", "outliers 2% + noise 0.1h"), **cond)
+    pts, truth = _sampled("outline", "outliers 2% + noise 0.1h", 0)
     h = synth.h_of(truth)
     now = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(paired, "PAIRED", paired.PAIRED._replace(behind=0.0))
@@ -528,9 +527,7 @@ def test_a_stub_or_a_crossing_gets_no_strand_step(monkeypatch):
     pts, _ = synth.sample(truth, rng=bench.run_seed("realdev", "nrn_c11471_s1066", "noise 0.2h") + 3,
                           **bench.CONDITIONS["noise 0.2h"])
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] == 1.0
-    truth = synth.model("eye")
-    cond = {**bench.CONDITIONS, **bench.EXTRA_CONDITIONS}["outliers 2% + noise 0.1h"]
-    pts, _ = synth.sample(truth, rng=bench.run_seed("eye", "outliers 2% + noise 0.1h") + 1, **cond)
+    pts, truth = _sampled("eye", "outliers 2% + noise 0.1h", 1)
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] == 1.0
 
 
