@@ -85,10 +85,13 @@ def test_tangent_junctions_are_where_the_branches_meet(condition):
 def test_finer_split_scale_stays_clear_of_the_noise(monkeypatch):
     # noise 0.3h with density x3: a 0.5 shell inside the noise's blur splits a crossing's
     # junction (the benchmark's crossing, sampling offset 6: curve F1 0.57 without the guard)
+    # (stage 5's bypass rule alone also keeps this junction whole: off here, see
+    # _without_bypass_links)
     truth = synth.model("crossing")
     cond = "noise 0.3h + density x3"
     pts, _ = synth.sample(truth, rng=bench.run_seed("crossing", cond) + 6, **bench.CONDITIONS[cond])
     h = synth.h_of(truth)
+    _without_bypass_links(monkeypatch)
     guarded = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(fine_noise=0.0))
     unguarded = compare(reconstruct(pts, method="robust"), truth, h=h)
@@ -187,8 +190,6 @@ def test_a_chain_that_runs_past_a_corner_region_is_cut_there(monkeypatch):
     # the corner instead of ending at it; the corner, with too few chain ends, is lost (copy 7
     # of the jittered outline lost all four corners of a notch). Measured over the 8 jittered
     # copies: mean curve F1 0.81 -> 0.85, copy 1 0.83 -> 0.92, copy 7 0.64 -> 0.87, none worse
-    from curvenet.methods.robust import chains
-
     _fine_tests_by_the_middle(monkeypatch)
 
     def copies(ks):
@@ -201,8 +202,11 @@ def test_a_chain_that_runs_past_a_corner_region_is_cut_there(monkeypatch):
             out.append(compare(reconstruct(q, method="robust"), truth, h=h))
         return out
 
+    # (stage 5's bypass rule, chains.bypass_links, now parts these chains before they are
+    # formed: off in both runs, so that the cut is measured alone)
+    _without_bypass_links(monkeypatch)
     cut = copies((1, 7))
-    monkeypatch.setattr(chains, "CHAINS", thresholds.CHAINS._replace(pass_jump=np.inf))
+    _without_bypass_links(monkeypatch, pass_jump=np.inf)
     whole = copies((1, 7))
     for a, b in zip(cut, whole):
         assert a["curve_f1"] >= b["curve_f1"] + 0.05 and a["n_nodes_found"] > b["n_nodes_found"]
@@ -256,6 +260,15 @@ def test_a_notch_chain_is_split_at_its_two_corners(monkeypatch):
     assert all(r["curve_f1"] == 1.0 and r["exact_topology"] for r in split)
     monkeypatch.setattr(branched, "cores_plan", lambda *a: None)
     assert all(r["curve_f1"] < 0.9 for r in copies((2, 7)))
+
+
+def _without_bypass_links(monkeypatch, **other):
+    """Stage 5 keeps the links that step over a region (:func:`.chains.bypass_links`): the
+    tests of the later repairs that it now makes unneeded on their sampling measure the repair
+    alone so (``other``: more fields of ``CHAINS`` to set)."""
+    from curvenet.methods.robust import chains
+
+    monkeypatch.setattr(chains, "CHAINS", thresholds.CHAINS._replace(bypass_off=0.0, **other))
 
 
 def _sampled(name, condition, k):
@@ -342,6 +355,7 @@ def test_chains_past_several_junctions_are_split_under_noise_too(monkeypatch):
     h = synth.h_of(truth)
     pts, _ = synth.sample(truth, rng=bench.run_seed("ladder", "noise 0.2h") + 2, **bench.CONDITIONS["noise 0.2h"])
     assert not estimate(pts).low
+    _without_bypass_links(monkeypatch)  # (which now parts this ladder's rails before: 0.56 either way)
     now = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(branched, "_split_at_cores", lambda *a, **k: None)
     before = compare(reconstruct(pts, method="robust"), truth, h=h)
@@ -507,6 +521,7 @@ def test_a_chain_running_past_its_node_onto_a_notch_is_trimmed(monkeypatch):
 
     pts, truth = _sampled("outline", "outliers 2% + noise 0.1h", 0)
     h = synth.h_of(truth)
+    _without_bypass_links(monkeypatch)  # (which now parts both notches before: 1.00 either way)
     now = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(paired, "PAIRED", paired.PAIRED._replace(behind=0.0))
     before = compare(reconstruct(pts, method="robust"), truth, h=h)

@@ -15,7 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from . import kernels as _k
-from .graph import Graph, components, edge_lengths
+from .graph import Graph, components, csr_edges, edge_lengths
 from .thresholds import CHAINS, ENDS, LAYOUT, NUMERIC
 
 __all__ = ["Chain", "trace_chains", "order_chains", "fit_line", "step_lengths", "polylen", "chain_lengths",
@@ -71,14 +71,111 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
     regions : list of (m,) ndarray of int64
         The points of each region, ascending.
     """
-    chn, n_chn = components(len(P), graph.src, graph.dst, ~flagged)
-    dd = edge_lengths(P, graph.src, graph.dst)
-    chains = order_chains(P, h, graph.src, graph.dst, dd, chn, n_chn, reg, lin, close)
+    keep = ~bypass_links(P, graph, flagged, reg)
+    src, dst = graph.src[keep], graph.dst[keep]
+    del keep
+    chn, n_chn = components(len(P), src, dst, ~flagged)
+    dd = edge_lengths(P, src, dst)
+    chains = order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close)
     # the points of each region, ascending (one stable sort, not one pass over N per region)
     o = np.argsort(reg, kind="stable")
     cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
     regions = [o[cut[r]:cut[r + 1]] for r in range(n_reg)]
     return chains, regions
+
+
+def bypass_links(P: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarray) -> np.ndarray:
+    """The links that step over a region between two pieces of curve: left out of the chains.
+
+    Under noise the links reach up to a few spacings, and a region of a few points on a curve
+    (a junction of the ladder's rail with a rung) can be stepped over by a link from the curve's
+    samples on one side to those on the other: the points outside the regions then stay one
+    piece past the junction, which gets too few chain ends to be one. A link ``(u, v)`` between
+    two points outside the regions steps over (or cuts the corner of) the region of a point
+    ``w`` linked to both when ``w`` projects inside the link and lies within
+    ``CHAINS.bypass_off`` of its length from it (a crossing's corner: its two streets' links
+    around it),
+    and the region holds ``CHAINS.pass_min_points`` points or more (the rule of
+    :func:`_passed_regions`: a lone flagged point is no junction). Such a link is left out
+    where that parts two pieces that each touch a region other than the one stepped over (the
+    rail's pieces reach the next junctions); it is kept where a piece would touch no other
+    region: the tip of a sharp corner whose legs, close together, were flagged on both, or a
+    sample inside one region spanning several junctions (a building's notch).
+
+    Parameters
+    ----------
+    P : (N, d) ndarray
+    graph : Graph
+    flagged : (N,) ndarray of bool
+        Region points.
+    reg : (N,) ndarray of int
+        Region of each flagged point (-1 elsewhere).
+
+    Returns
+    -------
+    (E,) ndarray of bool
+        Over ``graph.src`` / ``graph.dst``: the links left out.
+    """
+    src, dst, ip, ix = graph.src, graph.dst, graph.indptr, graph.indices
+    out = np.zeros(len(src), dtype=bool)
+    if not flagged.any():
+        return out
+    N = len(P)
+    sizes = np.bincount(reg[flagged])
+    big = np.zeros(N, dtype=bool)
+    big[flagged] = sizes[reg[flagged]] >= CHAINS.pass_min_points
+    # every point's links to the points of such regions, as sorted keys (point, region point)
+    ea, eb = csr_edges(ip, ix, np.flatnonzero(~flagged))
+    sel = big[eb]
+    ea, eb = ea[sel], eb[sel].astype(np.int64)
+    if not len(ea):
+        return out
+    keys = np.unique(ea.astype(np.int64) * N + eb)
+    has = np.zeros(N, dtype=bool)
+    has[ea] = True
+    cand = np.flatnonzero(has[src] & has[dst])
+    if not len(cand):
+        return out
+    # (link, w): w a region point linked to the link's first end, then to its second
+    lu = src[cand]
+    lo = np.searchsorted(keys, lu.astype(np.int64) * N)
+    hi = np.searchsorted(keys, (lu.astype(np.int64) + 1) * N)
+    n = hi - lo
+    pe = np.repeat(cand, n)
+    pw = keys[np.repeat(lo - np.cumsum(np.r_[0, n[:-1]]), n) + np.arange(n.sum())] % N
+    k2 = dst[pe].astype(np.int64) * N + pw
+    j = np.minimum(np.searchsorted(keys, k2), len(keys) - 1)
+    both = keys[j] == k2
+    pe, pw = pe[both], pw[both]
+    if not len(pe):
+        return out
+    # w inside the link, near it
+    a, d = P[src[pe]], P[dst[pe]] - P[src[pe]]
+    L2 = np.einsum("ij,ij->i", d, d)
+    t = np.einsum("ij,ij->i", P[pw] - a, d) / np.maximum(L2, NUMERIC.tiny)
+    q = P[pw] - a - t[:, None] * d
+    over = (t > 0) & (t < 1) & (np.einsum("ij,ij->i", q, q) < CHAINS.bypass_off ** 2 * L2)
+    rows = np.unique(np.c_[pe[over], reg[pw[over]]], axis=0)
+    if not len(rows):
+        return out
+    # the pieces without those links, and the regions each piece touches (one sorted key each)
+    cut = out.copy()
+    cut[rows[:, 0]] = True
+    chn, _ = components(N, src[~cut], dst[~cut], ~flagged)
+    fa, fb = csr_edges(ip, ix, np.flatnonzero(flagged))
+    n_reg = int(reg.max()) + 1
+    tk = np.unique(chn[fb[chn[fb] >= 0]].astype(np.int64) * n_reg + reg[fa[chn[fb] >= 0]])
+    n_touch = np.bincount(tk // n_reg, minlength=int(chn.max()) + 1)
+
+    def elsewhere(c, r):  # piece c touches a region other than r
+        j = np.minimum(np.searchsorted(tk, c * n_reg + r), len(tk) - 1)
+        return n_touch[c] - (tk[j] == c * n_reg + r) > 0
+
+    e, r = rows[:, 0], rows[:, 1]
+    cu, cv = chn[src[e]].astype(np.int64), chn[dst[e]].astype(np.int64)
+    parted = (cu != cv) & elsewhere(cu, r) & elsewhere(cv, r)
+    out[e[parted]] = True
+    return out
 
 
 def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):

@@ -541,6 +541,17 @@ class Chains(NamedTuple):
     #: sparse curve is no junction: the guitar again)
     #: origin: benchmark: CASSIE guitar (a one-point region 10 h from any node)
     pass_min_points: int = 2
+    #: a link between two points outside the regions steps over (or cuts the corner of) a
+    #: region point linked to both its ends when that point projects inside the link and lies
+    #: within this fraction of the link's length from it (0.75: the link's ends seen from the
+    #: point at least 67 degrees apart); such a link does not join the chains
+    #: (:func:`.chains.bypass_links`)
+    #: origin: benchmark (issue 25, 5 December 2026; 928 + 352 kind/real-dev/synthetic runs):
+    #: the ladder's rails at noise 0.2 h linked over their junctions' regions; 0.25, 0.5, 0.75
+    #: and 1.0 tried: kinds at noise 0.2 h 0.790 -> 0.815 (0.25, without the two-pieces rule),
+    #: 0.823, 0.820, 0.820 (8 samplings); 0.75 keeps the
+    #: streets' two crossings 4.7 h apart (sampling 0) that 0.5 merges (links around the corner)
+    bypass_off: float = 0.75
 
 
 CHAINS = Chains()
