@@ -1,5 +1,5 @@
 """Stage 5: links that step over a junction's region are left out of the chains
-(:func:`curvenet.methods.robust.chains.bypass_links`)."""
+(:func:`curvenet.methods.robust.chains.part_bypassed`)."""
 import numpy as np
 from scipy.sparse import coo_matrix
 
@@ -7,8 +7,8 @@ from curvenet import synth
 from curvenet.metrics import compare
 from curvenet.reconstruct import reconstruct
 from curvenet.methods.robust import chains
-from curvenet.methods.robust.chains import bypass_links
-from curvenet.methods.robust.graph import Graph
+from curvenet.methods.robust.chains import part_bypassed
+from curvenet.methods.robust.graph import Graph, components
 from curvenet.methods.robust.thresholds import CHAINS
 
 from test_quality_kinds import _sampled
@@ -54,8 +54,15 @@ def _rail(far_regions=True, region_points=2):
 
 
 def _over(P, g, flagged, reg):
-    out = bypass_links(P, g, flagged, reg)
-    return sorted({tuple(sorted((int(a), int(b)))) for a, b in zip(g.src[out], g.dst[out])})
+    chn, n = components(len(P), g.src, g.dst, ~flagged)
+    out = part_bypassed(P, g, flagged, reg, chn, n)
+    # the pieces are those of the links without the ones left out, numbered the same way
+    keep = np.ones(len(g.src), dtype=bool)
+    keep[out.dropped] = False
+    chn2, n2 = components(len(P), g.src[keep], g.dst[keep], ~flagged)
+    assert out.n_chn == n2 and np.array_equal(out.chn, chn2)
+    d = out.dropped
+    return sorted({tuple(sorted((int(a), int(b)))) for a, b in zip(g.src[d], g.dst[d])})
 
 
 def test_a_link_over_a_junction_between_two_pieces_is_left_out():

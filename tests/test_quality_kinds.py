@@ -202,7 +202,7 @@ def test_a_chain_that_runs_past_a_corner_region_is_cut_there(monkeypatch):
             out.append(compare(reconstruct(q, method="robust"), truth, h=h))
         return out
 
-    # (stage 5's bypass rule, chains.bypass_links, now parts these chains before they are
+    # (stage 5's bypass rule, chains.part_bypassed, now parts these chains before they are
     # formed: off in both runs, so that the cut is measured alone)
     _without_bypass_links(monkeypatch)
     cut = copies((1, 7))
@@ -263,7 +263,7 @@ def test_a_notch_chain_is_split_at_its_two_corners(monkeypatch):
 
 
 def _without_bypass_links(monkeypatch, **other):
-    """Stage 5 keeps the links that step over a region (:func:`.chains.bypass_links`): the
+    """Stage 5 keeps the links that step over a region (:func:`.chains.part_bypassed`): the
     tests of the later repairs that it now makes unneeded on their sampling measure the repair
     alone so (``other``: more fields of ``CHAINS`` to set)."""
     from curvenet.methods.robust import chains

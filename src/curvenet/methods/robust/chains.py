@@ -3,12 +3,15 @@
 The points outside every region fall apart (linked graph) into chains, one per curve segment.
 Each is ordered by geodesic distance from one end and given the regions its two ends touch
 (:func:`order_chains`); a chain touching no region is a closed loop cut open at its
-straightest point or an open piece, and a chain that runs past a region over a long link is cut
-there (:func:`_passed_regions`). The geometric helpers of chains (end portions, lengths,
+straightest point or an open piece; links that step over a region between two pieces are left
+out before (:func:`part_bypassed`), and a chain that still runs past a region over a long link
+is cut there (:func:`_passed_regions`). The geometric helpers of chains (end portions, lengths,
 line fits) live here too.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -71,12 +74,10 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
     regions : list of (m,) ndarray of int64
         The points of each region, ascending.
     """
-    keep = ~bypass_links(P, graph, flagged, reg)
-    src, dst = graph.src[keep], graph.dst[keep]
-    del keep
-    chn, n_chn = components(len(P), src, dst, ~flagged)
-    dd = edge_lengths(P, src, dst)
-    chains = order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close)
+    chn, n_chn = components(len(P), graph.src, graph.dst, ~flagged)
+    chn, n_chn, _ = part_bypassed(P, graph, flagged, reg, chn, n_chn)
+    dd = edge_lengths(P, graph.src, graph.dst)
+    chains = order_chains(P, h, graph.src, graph.dst, dd, chn, n_chn, reg, lin, close)
     # the points of each region, ascending (one stable sort, not one pass over N per region)
     o = np.argsort(reg, kind="stable")
     cut = np.searchsorted(reg[o], np.arange(n_reg + 1))
@@ -84,7 +85,25 @@ def trace_chains(P: np.ndarray, h: np.ndarray, graph: Graph, flagged: np.ndarray
     return chains, regions
 
 
-def bypass_links(P: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarray) -> np.ndarray:
+class Parted(NamedTuple):
+    """The pieces of :func:`part_bypassed`.
+
+    Attributes
+    ----------
+    chn : (N,) ndarray of int
+        Piece of every point (-1 for region points), numbered in the order of the lowest point.
+    n_chn : int
+    dropped : (D,) ndarray of int64
+        Indices (into ``graph.src`` / ``graph.dst``) of the links left out, ascending.
+    """
+
+    chn: np.ndarray
+    n_chn: int
+    dropped: np.ndarray
+
+
+def part_bypassed(P: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarray, chn: np.ndarray,
+                  n_chn: int) -> Parted:
     """The links that step over a region between two pieces of curve: left out of the chains.
 
     Under noise the links reach up to a few spacings, and a region of a few points on a curve
@@ -102,6 +121,10 @@ def bypass_links(P: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarr
     region: the tip of a sharp corner whose legs, close together, were flagged on both, or a
     sample inside one region spanning several junctions (a building's notch).
 
+    Only the pieces holding such links are formed again (a union-find over their links), so
+    that no copy of the links is made: the links left out stay in the graph, joining two
+    chains, which every later reading ignores (a chain's own links have both ends in it).
+
     Parameters
     ----------
     P : (N, d) ndarray
@@ -110,72 +133,112 @@ def bypass_links(P: np.ndarray, graph: Graph, flagged: np.ndarray, reg: np.ndarr
         Region points.
     reg : (N,) ndarray of int
         Region of each flagged point (-1 elsewhere).
+    chn : (N,) ndarray of int
+        The pieces over every link (:func:`.graph.components` of the points outside the regions;
+        -1 for region points).
+    n_chn : int
 
     Returns
     -------
-    (E,) ndarray of bool
-        Over ``graph.src`` / ``graph.dst``: the links left out.
+    Parted
+        The pieces without the links left out (numbered, as ``chn``, in the order of their
+        lowest point), their number and the links left out.
     """
     src, dst, ip, ix = graph.src, graph.dst, graph.indptr, graph.indices
-    out = np.zeros(len(src), dtype=bool)
-    if not flagged.any():
-        return out
+    same = Parted(chn, n_chn, np.zeros(0, dtype=np.int64))
+    if not flagged.any() or not n_chn:
+        return same
     N = len(P)
     sizes = np.bincount(reg[flagged])
     big = np.zeros(N, dtype=bool)
     big[flagged] = sizes[reg[flagged]] >= CHAINS.pass_min_points
-    # every point's links to the points of such regions, as sorted keys (point, region point)
-    ea, eb = csr_edges(ip, ix, np.flatnonzero(~flagged))
-    sel = big[eb]
-    ea, eb = ea[sel], eb[sel].astype(np.int64)
+    # the region points' links (the adjacency is symmetric: read from the region side, the
+    # fewer rows); those of points outside the regions to such regions' points, as sorted keys
+    # (point, region point): each pair once, as a CSR row holds a neighbour once
+    fa, fb = csr_edges(ip, ix, np.flatnonzero(flagged))
+    sel = big[fa] & ~flagged[fb]
+    ea, eb = fb[sel], fa[sel].astype(np.int64)
     if not len(ea):
-        return out
-    keys = np.unique(ea.astype(np.int64) * N + eb)
+        return same
+    keys = np.sort(ea.astype(np.int64) * N + eb)
     has = np.zeros(N, dtype=bool)
     has[ea] = True
+    del ea, eb, sel
     cand = np.flatnonzero(has[src] & has[dst])
+    del has
     if not len(cand):
-        return out
-    # (link, w): w a region point linked to the link's first end, then to its second
-    lu = src[cand]
-    lo = np.searchsorted(keys, lu.astype(np.int64) * N)
-    hi = np.searchsorted(keys, (lu.astype(np.int64) + 1) * N)
-    n = hi - lo
+        return same
+    # (link, w): w a region point linked to both ends of the link, inside it and near it; the
+    # links in blocks (their temporaries stay small)
+    rows = np.unique(np.concatenate([_stepped_over(P, src, dst, keys, reg, cand[b:b + LAYOUT.link_block])
+                                     for b in range(0, len(cand), LAYOUT.link_block)]), axis=0)
+    if not len(rows):
+        return same
+    # the pieces holding those links, formed again without them
+    inA = np.zeros(n_chn, dtype=bool)
+    inA[chn[src[rows[:, 0]]]] = True
+    ptsA = chn >= 0
+    ptsA[ptsA] = inA[chn[ptsA]]
+    e_sub = np.flatnonzero(ptsA[src])  # (a piece's links have both ends in it)
+
+    def pieces(drop):
+        k = e_sub[~np.isin(e_sub, drop)]
+        return components(N, src[k], dst[k], ptsA)[0]
+
+    sub = pieces(rows[:, 0])
+    # the regions each new piece touches (one sorted key each)
+    n_reg = int(reg.max()) + 1
+    m = sub[fb] >= 0
+    tk = np.unique(sub[fb[m]].astype(np.int64) * n_reg + reg[fa[m]])
+    n_touch = np.bincount(tk // n_reg, minlength=int(sub.max()) + 1)
+
+    def elsewhere(c, r):  # piece c touches a region other than r
+        key = c * n_reg + r
+        j = np.minimum(np.searchsorted(tk, key), len(tk) - 1)
+        return n_touch[c] - (tk[j] == key) > 0
+
+    e, r = rows[:, 0], rows[:, 1]
+    cu, cv = sub[src[e]].astype(np.int64), sub[dst[e]].astype(np.int64)
+    dropped = np.unique(e[(cu != cv) & elsewhere(cu, r) & elsewhere(cv, r)])
+    if not len(dropped):
+        return same
+    if len(dropped) < len(np.unique(e)):
+        sub = pieces(dropped)
+    # the pieces outside A as they were, those of A new; numbered by their lowest point
+    lab = chn.astype(np.int64)
+    lab[ptsA] = n_chn + sub[ptsA]
+    m = lab >= 0
+    first = np.full(n_chn + int(sub.max()) + 1, N, dtype=np.int64)
+    np.minimum.at(first, lab[m], np.flatnonzero(m))
+    used = np.flatnonzero(first < N)
+    rank = np.full(len(first), -1, dtype=np.int64)
+    rank[used[np.argsort(first[used], kind="stable")]] = np.arange(len(used))
+    out = np.full(N, -1, dtype=chn.dtype)
+    out[m] = rank[lab[m]]
+    return Parted(out, len(used), dropped)
+
+
+def _stepped_over(P, src, dst, keys, reg, cand):
+    """(k, 2) rows (link, region) of :func:`part_bypassed` for the links ``cand``: a point of
+    the region is linked to both ends of the link (``keys``: sorted ``point * N + region
+    point``), projects inside it and lies within ``CHAINS.bypass_off`` of its length from it."""
+    N = len(P)
+    lu = src[cand].astype(np.int64)
+    lo = np.searchsorted(keys, lu * N)
+    n = np.searchsorted(keys, (lu + 1) * N) - lo
     pe = np.repeat(cand, n)
     pw = keys[np.repeat(lo - np.cumsum(np.r_[0, n[:-1]]), n) + np.arange(n.sum())] % N
     k2 = dst[pe].astype(np.int64) * N + pw
     j = np.minimum(np.searchsorted(keys, k2), len(keys) - 1)
     both = keys[j] == k2
     pe, pw = pe[both], pw[both]
-    if not len(pe):
-        return out
-    # w inside the link, near it
     a, d = P[src[pe]], P[dst[pe]] - P[src[pe]]
     L2 = np.einsum("ij,ij->i", d, d)
-    t = np.einsum("ij,ij->i", P[pw] - a, d) / np.maximum(L2, NUMERIC.tiny)
-    q = P[pw] - a - t[:, None] * d
-    over = (t > 0) & (t < 1) & (np.einsum("ij,ij->i", q, q) < CHAINS.bypass_off ** 2 * L2)
-    rows = np.unique(np.c_[pe[over], reg[pw[over]]], axis=0)
-    if not len(rows):
-        return out
-    # the pieces without those links, and the regions each piece touches (one sorted key each)
-    cut = out.copy()
-    cut[rows[:, 0]] = True
-    chn, _ = components(N, src[~cut], dst[~cut], ~flagged)
-    fa, fb = csr_edges(ip, ix, np.flatnonzero(flagged))
-    n_reg = int(reg.max()) + 1
-    tk = np.unique(chn[fb[chn[fb] >= 0]].astype(np.int64) * n_reg + reg[fa[chn[fb] >= 0]])
-    n_touch = np.bincount(tk // n_reg, minlength=int(chn.max()) + 1)
-
-    def elsewhere(c, r):  # piece c touches a region other than r
-        j = np.minimum(np.searchsorted(tk, c * n_reg + r), len(tk) - 1)
-        return n_touch[c] - (tk[j] == c * n_reg + r) > 0
-
-    e, r = rows[:, 0], rows[:, 1]
-    cu, cv = chn[src[e]].astype(np.int64), chn[dst[e]].astype(np.int64)
-    parted = (cu != cv) & elsewhere(cu, r) & elsewhere(cv, r)
-    out[e[parted]] = True
-    return out
+    w = P[pw] - a
+    t = np.einsum("ij,ij->i", w, d) / np.maximum(L2, NUMERIC.tiny)
+    w -= t[:, None] * d
+    over = (t > 0) & (t < 1) & (np.einsum("ij,ij->i", w, w) < CHAINS.bypass_off ** 2 * L2)
+    return np.c_[pe[over], reg[pw[over]]].astype(np.int64)
 
 
 def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):

@@ -73,6 +73,11 @@ class Layout(NamedTuple):
     #: origin: memory only: a block holds whole curves, the same arithmetic; results never depend on
     #: it
     curve_block: int = 1 << 18
+    #: candidate links per block of the test of links stepping over a region (its temporaries,
+    #: about 5 region points per link, stay small)
+    #: origin: memory only: the links are independent, results never depend on it (1e6 noisy
+    #: points: 263 MB at once, 1.8 million (link, point) pairs)
+    link_block: int = 1 << 16
 
 
 LAYOUT = Layout()
@@ -545,7 +550,7 @@ class Chains(NamedTuple):
     #: region point linked to both its ends when that point projects inside the link and lies
     #: within this fraction of the link's length from it (0.75: the link's ends seen from the
     #: point at least 67 degrees apart); such a link does not join the chains
-    #: (:func:`.chains.bypass_links`)
+    #: (:func:`.chains.part_bypassed`)
     #: origin: benchmark (issue 25, 5 December 2026; 928 + 352 kind/real-dev/synthetic runs):
     #: the ladder's rails at noise 0.2 h linked over their junctions' regions; 0.25, 0.5, 0.75
     #: and 1.0 tried: kinds at noise 0.2 h 0.790 -> 0.815 (0.25, without the two-pieces rule),
