@@ -237,11 +237,14 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     Returns
     -------
     split : (R,) ndarray of int64
-        The row of :func:`_splits` chosen per region, -1 where none.
+        The row of :func:`_splits` chosen per region, -1 where none (every region when ``m`` is
+        over ``PAIRED.max_lines``: its splits are not tried).
     xa, xb : (R, d) ndarray
         Its two points (the second group's is ``xb``).
     """
     R, m, d = L.c.shape
+    if m > PAIRED.max_lines:  # (too many splits to try; never two junctions)
+        return np.full(R, -1, dtype=np.int64), np.zeros((R, d)), np.zeros((R, d))
     flat = Lines(L.c.reshape(-1, d), L.u.reshape(-1, d), L.tip.reshape(-1, d), L.lim.reshape(-1))
     one = np.ones((R, m))
     x1 = _group_points(L, one, anchor)
@@ -464,7 +467,7 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     found: dict[int, tuple] = {}
     for m in np.unique(nl).tolist():  # the regions of m lines at once
         js = np.flatnonzero((nl == m) & ~single)
-        if not len(js):
+        if not len(js) or m > PAIRED.max_lines:
             continue
         rows = off[js][:, None] + np.arange(m)
         Lm = Lines(L.c[rows], L.u[rows], L.tip[rows], L.lim[rows])

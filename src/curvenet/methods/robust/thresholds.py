@@ -655,6 +655,12 @@ class Paired(NamedTuple):
     #: segment between them, a junction of valence 3 or more)
     #: origin: definition
     min_group: int = 2
+    #: a region with more branch ends is not read as two junctions: its splits (about 2^(m - 1)
+    #: of m ends) would be too many to try (two junctions of valence 5 show 5 + 5 - 2 = 8)
+    #: origin: measured (5 December 2026): over CASSIE 64 sketches x 4 conditions and 464 harness
+    #: runs no split was ever taken above 7 ends (regions of 8 to 20 ends: 491 tried, 0 split);
+    #: the CASSIE flower at noise 0.3 h had a region of 22 ends, 2 million splits: out of memory
+    max_lines: int = 8
     #: the two meeting points lie more than this many spacings apart
     #: origin: set with the split (issue 25), not tuned: the real-dev buildings' jogs under noise
     #: 0.2h measure 3.7 to 5.5 h (24 splits, two samplings)
