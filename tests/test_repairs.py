@@ -1148,3 +1148,23 @@ def test_merge_twin_chains_leaves_two_curves_apart():
     offset = np.sqrt((REPAIRS.twin + EPS) ** 2 - 1.0)
     topo, *_ = _twins(offset)
     _assert_untouched(R.merge_twin_chains, topo)
+
+
+def test_two_pass_through_regions_joined_by_a_long_chain_stay_apart(monkeypatch):
+    # the synthetic corners at noise 0.3 h + x3, sampling 6: a sharp corner's two legs, close
+    # together, were each flagged a few spacings below the tip; merged as the two halves of a
+    # crossing, they made one node with the tip as a loop of 8 samples (curve F1 0.50)
+    from curvenet import bench, synth
+    from curvenet.methods.robust import repairs as R
+    from curvenet.metrics import compare
+    from curvenet.reconstruct import reconstruct
+
+    truth = synth.model("corners")
+    cond = "noise 0.3h + density x3"
+    pts, _ = synth.sample(truth, rng=bench.run_seed("corners", cond) + 6, **bench.CONDITIONS[cond])
+    h = synth.h_of(truth)
+    now = compare(reconstruct(pts, method="robust"), truth, h=h)
+    monkeypatch.setattr(R, "_would_loop", lambda *a: False)
+    merged = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert now["curve_f1"] == 1.0 and now["exact_topology"]
+    assert merged["curve_f1"] <= 0.5 and merged["n_nodes_found"] > now["n_nodes_found"]

@@ -38,7 +38,8 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
     ``link * REPAIRS.tip_gap`` spacings (plus ``LINKS.gap_noise`` times the noise). Under noise,
     into a junction (valence 3 or more) only when the curve passes it straight
     (:func:`_passed_straight`): else it is a junction whose short curve to that one the widened
-    shell took into the regions, and it stays (see ``REPAIRS.pass_cos``).
+    shell took into the regions, and it stays (see ``REPAIRS.pass_cos``). Never where a chain
+    joining the two would become a loop that stays (:func:`_would_loop`).
     """
     from scipy.spatial import cKDTree
 
@@ -70,8 +71,29 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
         t = best[1]
         if not sc.clean and v[t] >= NODES.junction_valence and not _passed_straight(topo, sc, r):
             continue
+        if _would_loop(topo, prm, r, t, h):
+            continue
         lab[lab == r] = t
         topo.absorb(r, t)
+
+
+def _would_loop(topo: Topology, prm: RobustParams, r: int, t: int, h: np.ndarray) -> bool:
+    """Whether merging region ``r`` into ``t`` makes a loop that stays: a chain joins the two
+    and reaches farther than ``shell_outer`` spacings from their merged centre (what
+    :func:`absorb_short_loops` would not take into the junction): the tip of a sharp corner
+    whose two legs, close together, were each flagged, not the two halves of one crossing."""
+    P = topo.P
+    cen = None
+    for i, s in topo.incident(r):
+        c = topo.chains[i]
+        if c.closed or c.ends[1 - s] != t:
+            continue
+        if cen is None:
+            cen = P[np.r_[topo.regions[r], topo.regions[t]]].mean(axis=0)
+        hl = float(np.median(h[c.ids]))
+        if np.linalg.norm(P[c.ids] - cen, axis=1).max() >= prm.shell_outer * hl:
+            return True
+    return False
 
 
 def _passed_straight(topo: Topology, sc: Scales, r: int) -> bool:
