@@ -467,13 +467,14 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     found: dict[int, tuple] = {}
     for m in np.unique(nl).tolist():  # the regions of m lines at once
         js = np.flatnonzero((nl == m) & ~single)
-        if not len(js) or m > PAIRED.max_lines:
+        if not len(js):
             continue
         rows = off[js][:, None] + np.arange(m)
         Lm = Lines(L.c[rows], L.u[rows], L.tip[rows], L.lim[rows])
         k, xa, xb = best_pairs(Lm, anchors[js], hr[js])
-        B = _splits(m)
-        for q in np.flatnonzero(k >= 0).tolist():
+        hit = np.flatnonzero(k >= 0).tolist()
+        B = _splits(m) if hit else None  # (none over PAIRED.max_lines: never enumerated)
+        for q in hit:
             found[int(js[q])] = (B[k[q]], xa[q], xb[q], float(np.max(L.lim[rows[q]])))
     for j in sorted(found):
         r, inc = cand[j], incs[j]

@@ -90,10 +90,16 @@ def _would_loop(topo: Topology, prm: RobustParams, r: int, t: int, h: np.ndarray
             continue
         if cen is None:
             cen = P[np.r_[topo.regions[r], topo.regions[t]]].mean(axis=0)
-        hl = float(np.median(h[c.ids]))
-        if np.linalg.norm(P[c.ids] - cen, axis=1).max() >= prm.shell_outer * hl:
+        if not _within_shell(P, h, c.ids, cen, prm):
             return True
     return False
+
+
+def _within_shell(P: np.ndarray, h: np.ndarray, ids: np.ndarray, cen: np.ndarray, prm: RobustParams) -> bool:
+    """Whether the points ``ids`` of a chain lie within ``shell_outer`` of their median spacing
+    from ``cen`` (d,): a chain from a junction back to it that short lies inside the junction
+    (:func:`absorb_short_loops`)."""
+    return bool(np.linalg.norm(P[ids] - cen, axis=1).max() < prm.shell_outer * float(np.median(h[ids])))
 
 
 def _passed_straight(topo: Topology, sc: Scales, r: int) -> bool:
@@ -117,9 +123,7 @@ def absorb_short_loops(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     for i, c in enumerate(topo.chains):
         r = c.ends[0]
         if topo.alive[i] and not c.closed and r == c.ends[1] and len(topo.regions[r]):
-            hl = float(np.median(h[c.ids]))
-            cen = P[topo.regions[r]].mean(axis=0)
-            if np.linalg.norm(P[c.ids] - cen, axis=1).max() < prm.shell_outer * hl:
+            if _within_shell(P, h, c.ids, P[topo.regions[r]].mean(axis=0), prm):
                 topo.absorb_chain(i, r)
 
 
