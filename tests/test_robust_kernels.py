@@ -704,6 +704,27 @@ def test_components_match_scipy(py):
         assert count == rcount and np.array_equal(lab, ref)
 
 
+@pytest.mark.parametrize("py", [False, True])
+def test_csr_union_lists_each_neighbour_once_in_first_order(py):
+    """Each row of the union's CSR holds every neighbour of the point once (a pair linked both
+    ways, or twice the same way, is one edge), in the order of its first place: the out-links
+    in link order, then the in-links in link order."""
+    rng = np.random.default_rng(5)
+    n = 400
+    a = rng.integers(0, n, size=1500).astype(np.int32)
+    b = rng.integers(0, n, size=1500).astype(np.int32)
+    keep = a != b
+    a, b = a[keep], b[keep]
+    src, dst = np.r_[a, b[:600], a[:200]], np.r_[b, a[:600], b[:200]]  # both ways, and repeats
+    f = _plain("csr_union") if py else K.csr_union
+    indptr, indices = f(n, src, dst)
+    assert indptr.dtype == np.int64 and indices.dtype == src.dtype and indptr[-1] == len(indices)
+    for i in range(n):
+        want = [int(y) for x, y in zip(src, dst) if x == i] + [int(x) for x, y in zip(src, dst) if y == i]
+        first = list(dict.fromkeys(want))
+        assert indices[indptr[i]:indptr[i + 1]].tolist() == first
+
+
 @pytest.mark.parametrize("k", [4, 5, 9, 16])
 def test_spacing_kernel_matches_the_numpy_formula(cloud, k):
     """robust.local_spacing gives the same bits compiled (one pass) as by its numpy formula,

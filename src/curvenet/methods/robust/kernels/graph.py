@@ -135,7 +135,9 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
     """CSR adjacency of the undirected graph with edges (src[i], dst[i]) (both directions).
 
     Within a row, the out-edges come first in edge order, then the in-edges in edge order
-    (a counting sort, stable). ``indptr`` is int64, ``indices`` of the dtype of ``src``.
+    (a counting sort, stable), each neighbour once: a pair linked both ways (most are: each
+    end keeps the other) is listed at its first place only. ``indptr`` is int64, ``indices``
+    of the dtype of ``src``.
     """
     m = src.shape[0]
     deg = np.zeros(n + 1, dtype=np.int64)
@@ -154,7 +156,19 @@ def _csr_union(n, src, dst):  # pragma: no cover - compiled
         b = dst[i]
         out[fill[b]] = src[i]
         fill[b] += 1
-    return deg, out
+    # a link kept in both directions is one edge: each row keeps the first of its repeats
+    seen = np.full(n, -1, dtype=np.int64)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    k = 0
+    for i in range(n):
+        for e in range(deg[i], deg[i + 1]):
+            j = out[e]
+            if seen[j] != i:
+                seen[j] = i
+                out[k] = j
+                k += 1
+        indptr[i + 1] = k
+    return indptr, out[:k].copy()
 
 
 def _components(n, a, b, mask):  # pragma: no cover - compiled
