@@ -31,7 +31,7 @@ A model of ``surfaces`` with an opening (the vase's mouth, the saddle's border) 
 second time with its opening given, as a designer would name it (``surface(...,
 open_curves=...)``, ``curvenet surface --open``): the reconstructed curves that lie along the true
 boundary curves (:attr:`curvenet.synth.surfaces.SurfaceModel.open_curves`, every point within
-:data:`OPEN_MATCH` h of them); its row is the model's name with "(opening given)".
+:data:`curvenet.surfacing.evaluation.OPEN_MATCH` h of them); its row is the model's name with "(opening given)".
 """
 
 from __future__ import annotations
@@ -46,32 +46,18 @@ from pathlib import Path
 import numpy as np
 
 from curvenet import synth
-from curvenet.bench import run_seed
+from curvenet.bench import SURFACING_CASSIE_H, run_seed
 from curvenet.reconstruct import reconstruct
 from curvenet.surfacing import SurfaceCheckWarning, surface
+from curvenet.surfacing.evaluation import distances_both_ways, open_curve_ids, reference_seconds
 from curvenet.synth import cassie, surfaces
 
 #: CASSIE sampling spacing (metres), as in :func:`curvenet.bench.run_cassie`.
-CASSIE_H = 0.002
+CASSIE_H = SURFACING_CASSIE_H
 #: Models of ``--quick``.
 QUICK = {"synth": ["cube", "mug"], "free": ["architecture-2"], "study": [], "surfaces": ["saddle"]}
-#: Samples per unit length of the true surfaces for the distance from the surface to the mesh.
-SURFACE_DENSITY = 150
 #: Half-height of the band around the mug's mid-height where the radius is measured.
 MUG_BAND = 0.05
-#: A reconstructed curve is on the true boundary when all its points lie within this many h of
-#: the true boundary curves (the reconstruction's node offsets are well under 1 h there).
-OPEN_MATCH = 1.0
-
-
-def open_ids(model, net, h: float) -> list[int]:
-    """The curves of ``net`` (reconstructed) along the boundary curves of ``model``'s truth."""
-    from scipy.spatial import cKDTree
-
-    if not model.open_curves:
-        return []
-    tree = cKDTree(np.vstack([model.network.curves[i].points for i in model.open_curves]))
-    return [i for i, c in enumerate(net.curves) if len(c.points) and tree.query(c.points)[0].max() <= OPEN_MATCH * h]
 
 
 def networks(kind: str, names, source: str, cache: Path | None):
@@ -151,35 +137,6 @@ def truth_distance(name, mesh, h):
     return float(d.mean()), float(d.max())
 
 
-def both_ways(model, mesh, h):
-    """Mean and largest distance, in units of h, mesh -> true surface and true surface -> mesh."""
-    import igl
-
-    d = model.distance(mesh.vertices) / h
-    S = model.sample(SURFACE_DENSITY)
-    sq, _, _ = igl.point_mesh_squared_distance(S, mesh.vertices, mesh.triangles.astype(np.int64))
-    back = np.sqrt(sq) / h
-    return float(d.mean()), float(d.max()), float(back.mean()), float(back.max())
-
-
-#: Repeats of the reference query (the fastest counts: it takes milliseconds).
-REF_REPEATS = 5
-
-
-def reference_seconds(net) -> float:
-    """Seconds of the k=16 cKDTree query of the network's curve points on themselves (fastest of
-    :data:`REF_REPEATS`)."""
-    from scipy.spatial import cKDTree
-
-    pts = np.vstack([c.points for c in net.curves]) if net.curves else np.zeros((1, 3))
-    best = np.inf
-    for _ in range(REF_REPEATS):
-        t0 = time.perf_counter()
-        cKDTree(pts).query(pts, k=min(16, len(pts)))
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 #: Heading of the ``--markdown`` table.
 HEADER = """# Surfacing table
 
@@ -242,7 +199,7 @@ def main(argv=None) -> int:
         for name, net in networks(kind, sel, args.network, cache):
             model = surfaces.surface_model(name) if kind == "surfaces" else None
             runs.append((name, name, net, model, ()))
-            ids = open_ids(model, net, synth.h_of(model.network)) if model is not None else []
+            ids = open_curve_ids(model, net, synth.h_of(model.network)) if model is not None else []
             if ids:
                 runs.append((f"{name} (opening given)", name, net, model, ids))
         for label, name, net, model, open_curves in runs:
@@ -272,7 +229,7 @@ def main(argv=None) -> int:
             if not ck.ok:
                 bad.append(f"{label}: {ck.warning()}")
             if model is not None:
-                d = both_ways(model, mesh, synth.h_of(model.network))
+                d = distances_both_ways(model, mesh, synth.h_of(model.network))
                 row.update(true_patches=model.patches, true_boundary_loops=model.boundary_loops, distances=d)
                 print(f"      patches {mesh.n_patches} (true {model.patches}), boundary loops {ck.boundary_loops} "
                       f"(true {model.boundary_loops}); mesh to the true surface: mean {d[0]:.3f} h, max {d[1]:.3f} h; "

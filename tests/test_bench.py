@@ -138,6 +138,9 @@ def test_cli_quick(tmp_path):
     data = json.loads((tmp_path / "benchmarks.json").read_text())
     assert {r["model"] for r in data["rows"]} == set(bench.QUICK_MODELS)
     assert "synthetic clean" in res.stdout.replace("  ", " ").replace("  ", " ")
+    if bench.surfacing_available():  # a quick run surfaces the saddle (and again with its border named)
+        assert [r["model"] for r in data["surfacing"]] == ["saddle", "saddle (opening given)"]
+        assert "## Surfacing" in md and "| surfaces | saddle | 12 | 20 | 9 (9) | 1 (1) | 0 | 0 | 0 | 0 |" in md
 
 
 def test_cli_missing_out_folder(tmp_path):
@@ -271,3 +274,25 @@ def test_outlier_table_scores_every_set():
     # nothing of the outlier runs enters the other tables' means
     assert all(s["dataset"] != "synthetic" or s["condition"] != bench.OUTLIER_CONDITION
                for s in bench.summarize(rows))
+
+
+def test_surfacing_section_measures_against_the_true_surface():
+    """The surfacing rows of the benchmark: the saddle's reconstructed network surfaced as the
+    designer's 9 patches with its one border, 0 self-intersections, within the targets; the
+    report's table marks a row over a target as missed and counts it."""
+    if not bench.surfacing_available():
+        pytest.skip("the surface extra is not installed")
+    from curvenet.surfacing.evaluation import HAUSDORFF_TARGET, MEAN_TARGET
+
+    rows = bench.run_surfacing(["saddle"], [])
+    r = rows[0]
+    assert r["model"] == "saddle" and r["patches"] == r["true_patches"] == 9
+    assert r["boundary_loops"] == r["true_boundary_loops"] == 1 and r["self_x"] == 0 and r["non_manifold"] == 0
+    assert r["distances"][0] <= MEAN_TARGET and r["hausdorff"] <= HAUSDORFF_TARGET and r["target"]
+    assert r["hausdorff"] == max(r["distances"][1], r["distances"][3]) and r["time"] > 0 and r["ref"] > 0
+    lid = dict(r, model="vase", distances=(0.49, 14.8, 0.13, 0.68), hausdorff=14.8, target=False,
+               true_patches=13, patches=14)
+    md = "\n".join(bench._surfacing_lines(rows + [lid]))
+    assert "| surfaces | vase |" in md and "| 14.80 | **missed** |" in md
+    assert f"Known surfaces at both targets: {len(rows)} of {len(rows) + 1} (missed: vase)" in md
+    assert bench._surfacing_lines([]) == []

@@ -27,6 +27,8 @@ def register(sub) -> None:
     p.add_argument("--tune-each", action="store_true",
                    help="tune paper-tuned on every condition (default: on the clean sampling only)")
     p.add_argument("--no-cassie", action="store_true", help="skip the CASSIE real-data table")
+    p.add_argument("--no-surfacing", action="store_true",
+                   help="skip the surfacing section (it needs the surface extra; skipped without it)")
     p.add_argument("--spread-seeds", type=int, default=8, metavar="K",
                    help="also score robust on K samplings of every model and condition (default 8; 0: skip)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
@@ -50,7 +52,8 @@ def run(args) -> int:
     for opt in ("methods", "models", "conditions"):
         if getattr(args, opt):
             cmd.append(f"--{opt} " + " ".join(repr(v) if " " in v else v for v in getattr(args, opt)))
-    cmd += ["--tune-each"] * args.tune_each + ["--no-cassie"] * args.no_cassie + ["--no-figures"] * args.no_figures
+    cmd += ["--tune-each"] * args.tune_each + ["--no-cassie"] * args.no_cassie + ["--no-surfacing"] * args.no_surfacing
+    cmd += ["--no-figures"] * args.no_figures
     cmd += [f"--spread-seeds {args.spread_seeds}"] * (args.spread_seeds != 8) + [f"--out {args.out}"]
     res = run_all(
         args.out,
@@ -64,6 +67,7 @@ def run(args) -> int:
         progress=progress if getattr(args, "verbose", False) else None,
         command=" ".join(cmd),
         spread_seeds=args.spread_seeds,
+        surfacing=not args.no_surfacing,
     )
     if not quiet:
         for s in summarize(res["rows"]):
