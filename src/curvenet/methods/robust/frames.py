@@ -173,7 +173,7 @@ def frames(P: np.ndarray, nb: Neighbours, est: Estimates | None = None, tg: Tang
     clean = Estimates(hmed, sig).clean
     if clean:
         t, lin = retry_tangents(P, idx, h, t, lin, gain)
-    t, lin = vote_tangents(t, lin, idx, m=min(TANGENTS.vote_m if clean else TANGENTS.vote_m_noisy, idx.shape[1]))
+    t, lin = vote_tangents(t, lin, idx, m=min(TANGENTS.vote_m if clean else TANGENTS.vote_m_noisy, idx.shape[1]), P=P)
     return Frames(t, lin, sig, hmed, bool(clean))
 
 
@@ -353,12 +353,20 @@ def retry_tangents(P, idx, h, t, lin, gain, m: int = TANGENTS.strip_m):
     return t, lin
 
 
-def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
+def vote_tangents(t, lin, idx, m=TANGENTS.vote_m, P=None):
     """Tangents by a vote of the point and its ``m`` nearest neighbours (tensor sum of t t^T).
 
     A tangent thrown across close parallel curves by noise is outvoted by its neighbours'.
     The linearity becomes the smaller of the point's own and the vote's coherence
     ``1 - l2 / l1`` (low at junctions, where neighbours vote for different branches).
+
+    With the points ``P`` ((N, d); ``idx`` sorted by distance), a tangent stays when its own
+    samples say it: its ``TANGENTS.vote_keep_nearest`` nearest neighbours lie on either side of
+    the point, each within ``TANGENTS.vote_keep_cos`` of its tangent and none within it of the
+    vote's direction (a short curve between two other curves, whose 16 nearest neighbours are
+    mostly theirs: a plate's edges 6 h long between its faces were voted onto the faces'
+    direction and lost their links). Without ``P`` (the strand test's noisy tangents) every
+    tangent at odds with a coherent vote is replaced.
     """
     m = min(m, idx.shape[1])
     # only a tangent clearly at odds with a coherent vote is replaced. With C = sum T_k T_k^T,
@@ -375,12 +383,33 @@ def vote_tangents(t, lin, idx, m=TANGENTS.vote_m):
     u, coh = _k.vote_eig(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(idx, dtype=_k.INDEX), m,
                          cand.astype(np.int64))
     swap = (np.abs(np.einsum("nd,nd->n", u, t[cand])) < TANGENTS.vote_cos) & (coh >= TANGENTS.vote_coh)
+    if P is not None and swap.any():
+        swap[np.flatnonzero(swap)[_own_line(P, idx, t, cand[swap], u[swap])]] = False
     sw = cand[swap]
     t = t.copy()
     lin = lin.copy()
     t[sw] = u[swap]
     lin[sw] = np.minimum(lin[sw], coh[swap])
     return t, lin
+
+
+def _own_line(P, idx, t, pts, u):
+    """Which of the points ``pts`` keep their tangent against the vote's direction ``u``
+    ((len(pts), d)): their ``TANGENTS.vote_keep_nearest`` nearest neighbours (``idx``, sorted by
+    distance) lie on both sides of the point along its tangent ``t``, each within
+    ``TANGENTS.vote_keep_cos`` of it and none within that of ``u`` (see :func:`vote_tangents`).
+
+    Returns
+    -------
+    (len(pts),) ndarray of bool
+    """
+    k = min(TANGENTS.vote_keep_nearest, idx.shape[1])
+    E = P[idx[pts, :k]] - P[pts][:, None, :]
+    E /= np.maximum(np.linalg.norm(E, axis=2, keepdims=True), NUMERIC.tiny)
+    along = np.einsum("nkd,nd->nk", E, t[pts])
+    across = np.abs(np.einsum("nkd,nd->nk", E, u))
+    sides = (along.max(axis=1) > 0) & (along.min(axis=1) < 0)
+    return sides & (np.abs(along) > TANGENTS.vote_keep_cos).all(axis=1) & (across < TANGENTS.vote_keep_cos).all(axis=1)
 
 
 def noisy_tangents(P, h, sig, tree, dist, idx):

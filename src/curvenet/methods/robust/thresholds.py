@@ -168,6 +168,16 @@ class Tangents(NamedTuple):
     #: the vote's coherence ``1 - l2 / l1`` needed to replace a tangent
     #: origin: set with the tangent vote (2bace58); no measurement recorded
     vote_coh: float = 0.6
+    #: a tangent stays against the vote when this many of its nearest neighbours (one on either
+    #: side) lie along it (:func:`.frames.vote_tangents`)
+    #: origin: derived: the samples just before and after the point on its own curve
+    vote_keep_nearest: int = 2
+    #: ... each within this cosine of it (53 degrees), and none within it of the vote's direction
+    #: origin: benchmark (issue 25, 6 December 2026): cosines 0.5 / 0.6 / 0.7 / 0.75 / 0.8 on the
+    #: 928-run harness 24 / 28 / 28 / 28 / 30 runs better and 14 / 18 / 20 / 21 / 29 worse
+    #: (+1.75 / +2.01 / +1.91 / +1.91 / +1.24 in curve F1; 0.8 costs the kinds' clean twigs); at 0.6
+    #: also 352 runs at noise 0.1 h and with outliers 13 better / 4 worse, CASSIE 320 runs 27 / 12
+    vote_keep_cos: float = 0.6
     #: picking the nearest strip neighbour on each side favours points pulled towards the
     #: point: the chord distance is scaled by this (measured on Gaussian noise)
     #: origin: measured on Gaussian noise, with the noise estimate (20a7b2f)

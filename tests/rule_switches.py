@@ -1,0 +1,12 @@
+"""Switches that turn one rule of the robust method off, for the tests of an older repair whose
+sampling a newer rule now handles first: they measure the older repair alone."""
+
+from curvenet.methods.robust import frames, thresholds
+
+
+def without_vote_keep(monkeypatch):
+    """Every tangent at odds with a coherent vote is replaced, as before the rule that keeps a
+    tangent its own two nearest samples confirm (:func:`.frames.vote_tangents`): no neighbour
+    lies within a cosine over 1 of it."""
+    off = thresholds.TANGENTS._replace(vote_keep_cos=1.0 + thresholds.NUMERIC.rel)
+    monkeypatch.setattr(frames, "TANGENTS", off)
