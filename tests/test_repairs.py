@@ -369,6 +369,51 @@ def test_join_facing_tips_counts_the_free_end_regions_points():
     assert topo.chains[b].ends[0] == T and topo.v[T] == 2
 
 
+def _fork_tips(d, turn):
+    """Two chains leaving a junction region at the origin, each ten long, along directions
+    ``turn`` degrees either side of x; their tips ``d`` apart when ``turn`` is small (a fork at
+    a branch's end)."""
+    net = _Net()
+    J = net.region([[0, 0]])
+    ang = np.radians(turn)
+    ends = []
+    for sgn in (1, -1):
+        u = np.array([np.cos(ang), sgn * np.sin(ang)])
+        ends.append(net.chain(_line(u, 10 * u, 10), (J, -1)))
+    topo = net.topology()
+    return topo, ends
+
+
+def test_join_facing_tips_under_noise_joins_ends_that_face_each_other():
+    # the broken curve of the test above, under noise: each end's line points at the other tip
+    topo, a, b = _facing_tips(GAP - EPS)
+    ra = topo.chains[a].ends[1]
+    _run(R.join_facing_tips, topo, noise=0.2)
+    assert topo.v[ra] == 2 and topo.incident(ra) == [(a, 1), (b, 0)]
+
+
+def test_join_facing_tips_under_noise_leaves_the_tips_of_a_fork():
+    # a fork whose two branches end side by side (the tips within the gap, each beside the
+    # other, not ahead): two free ends under noise; on noise-free input (no facing test) joined
+    turn = np.degrees(np.arcsin((GAP - EPS) / 20))  # tips GAP - EPS apart
+    topo, ends = _fork_tips(GAP - EPS, turn)
+    tips = [topo.chains[i].ends[1] for i in ends]
+    assert np.linalg.norm(topo.P[topo.chains[ends[0]].ids[-1]] - topo.P[topo.chains[ends[1]].ids[-1]]) < GAP
+    _assert_untouched(R.join_facing_tips, topo, noise=0.2)
+    _run(R.join_facing_tips, topo)
+    assert topo.v[tips[0]] == 2 and topo.v[tips[1]] == 0
+
+
+def test_join_facing_tips_under_noise_joins_a_gap_of_one_step_whatever_the_ends():
+    # tips within REPAIRS.tip_touch spacings: no direction to read, joined (here a fork whose
+    # tips almost touch)
+    d = REPAIRS.tip_touch - EPS
+    topo, ends = _fork_tips(d, np.degrees(np.arcsin(d / 20)))
+    tip = topo.chains[ends[0]].ends[1]
+    _run(R.join_facing_tips, topo, noise=0.2)
+    assert topo.v[tip] == 2
+
+
 # ------------------------------------------------------------------------------ attach_dangling
 def _t_with_short_stem(d, bar=(-6, 6)):
     """A bar along x (one point per h, free ends) and a stem along y from below whose tip stops

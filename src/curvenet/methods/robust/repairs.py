@@ -296,10 +296,15 @@ def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     """Two free ends facing each other across a small gap are one curve broken by noise: joined.
 
     Two free-end regions (with their chains' last points) within ``link * REPAIRS.tip_gap``
-    median spacings of each other merge (the later into the earlier, pairs in order).
+    median spacings of each other merge (the later into the earlier, pairs in order). Under
+    noise they must face each other (:func:`_facing`): the two tips of a fork at a branch's end
+    (a twig's tip a few spacings from its sibling's) lie that close too, beside each other
+    rather than ahead. On noise-free input the test is not made: two tip regions that close
+    there are the two sides of a short twig whose junction the shell test missed, which the
+    merge reads right (the twigs kind lost a twig in each of 8 samplings with the test).
     """
     P, regions, v = topo.P, topo.regions, topo.v
-    tips = []
+    tips, ends = [], []
     for i, c in enumerate(topo.chains):
         if topo.alive[i] and not c.closed:
             for s in (0, 1):
@@ -307,6 +312,7 @@ def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
                 if v[r] == 1:
                     end_pt = c.ids[-1] if s == 1 else c.ids[0]
                     tips.append((r, np.r_[regions[r], end_pt].astype(np.int64)))
+                    ends.append((i, s))
     if len(tips) < 2:
         return
     gap_max = prm.link * REPAIRS.tip_gap * sc.hmed
@@ -317,10 +323,34 @@ def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         rb, ib = tips[b]
         if ra == rb:
             continue
-        gap = np.min(np.linalg.norm(P[ia][:, None, :] - P[ib][None, :, :], axis=2))
-        if gap <= gap_max:
-            topo.absorb(rb, ra)
-            tips[b] = (ra, ib)
+        D = np.linalg.norm(P[ia][:, None, :] - P[ib][None, :, :], axis=2)
+        k = np.unravel_index(np.argmin(D), D.shape)
+        if D[k] > gap_max:
+            continue
+        if not sc.clean and not _facing(topo, sc, ends[a], ends[b], P[ia[k[0]]], P[ib[k[1]]]):
+            continue
+        topo.absorb(rb, ra)
+        tips[b] = (ra, ib)
+
+
+def _facing(topo: Topology, sc: Scales, end_a, end_b, xa, xb) -> bool:
+    """Whether the chain ends ``end_a`` and ``end_b`` ((chain, side)) face each other across
+    the gap from ``xa`` to ``xb`` (the closest points of their tips): each end's line, pointing
+    out of its chain (:func:`_end_line`), runs within ``REPAIRS.tip_face_cos`` of the way to
+    the other tip. A gap of at most ``REPAIRS.tip_touch`` median spacings has no way to read:
+    facing; so is an end too short for a line."""
+    g = xb - xa
+    n = float(np.linalg.norm(g))
+    if n <= REPAIRS.tip_touch * sc.hmed:
+        return True
+    for (i, s), w in ((end_a, g / n), (end_b, -g / n)):
+        e0, cc, u, _ = _end_line(topo.P, sc.h, topo.chains, i, s, sc.noise)
+        if u is None:
+            continue
+        out = u if float((e0 - cc) @ u) >= 0 else -u
+        if float(out @ w) < REPAIRS.tip_face_cos:
+            return False
+    return True
 
 
 def close_tip_pairs(P, tips, r):

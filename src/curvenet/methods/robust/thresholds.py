@@ -597,6 +597,16 @@ class Repairs(NamedTuple):
     #: two tips (or a tip and a region) within this many link lengths are joined
     #: origin: set with the join of facing free ends (8b94cf1); no measurement recorded
     tip_gap: float = 1.2
+    #: ... under noise only when they face each other: each end's line, pointing out of its
+    #: chain, within this cosine of the way to the other tip (0: the other tip lies ahead)
+    #: origin: benchmark (issue 25, 6 December 2026): cosines -0.5 / 0 / 0.5 on the 928-run harness
+    #: 5 / 8 / 8 runs better and 1 / 1 / 2 worse (twigs under noise; the worse one plate 0.3 h + x3);
+    #: at 0 also 352 runs at noise 0.1 h and with outliers 7 better / 2 worse, CASSIE 320 runs
+    #: 12 / 5 (worst -0.006)
+    tip_face_cos: float = 0.0
+    #: ... a gap of at most this many median spacings has no direction to read: joined
+    #: origin: derived: one sample step
+    tip_touch: float = 1.0
     #: under noise, a region passed through by one curve (valence 2) merges into a junction next
     #: to it (valence 3 or more) only when the curve passes it straight: the lines of its two
     #: chain ends within 30 degrees of each other (cosine; either way along them). Half of a
