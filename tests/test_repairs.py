@@ -22,7 +22,7 @@ from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
 from curvenet.methods.robust.params import RobustParams, Scales
-from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LAYOUT, LINKS, NODES, NOISE, PAIRED, REPAIRS, SPANNING
+from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LAYOUT, LINKS, NODES, NOISE, PAIRED, REPAIRS, SHELL, SPANNING
 from curvenet.methods.robust.topology import Topology
 
 PRM = RobustParams()
@@ -208,6 +208,36 @@ def test_merge_near_pass_through_merges_a_corner_on_noise_free_input():
     # a junction with no such chain is half of a crossing (cut into two corners), as before
     topo, J, C = _corner_next_to_junction(GAP - EPS)
     _run(R.merge_near_pass_through, topo)
+    assert topo.v[[J, C]].tolist() == [5, 0]
+
+
+def _t_beside_junction(off, noise):
+    """A T whose stem was taken into the regions: junction ``J`` at the origin (left, up and
+    down branches) and region ``C`` holding the stem's samples from (2, 0) on and the T's
+    corner, passed straight through by its through road (chains up and down from the corner),
+    placed so that C's centre lies ``off`` from J's centre, across the road."""
+    net, J, _ = _junction_beside(GAP - EPS)
+    net.regions.pop()  # (the helper's region at (d, 0): replaced by C)
+    n = int(round(2 * (off - 2))) + 1
+    xs = np.linspace(2.0, 2 * off - 2.0, n)  # C's centre at x = off
+    C = net.region(np.column_stack([xs, np.zeros_like(xs)]))
+    corner = xs[-1]
+    net.chain(_line((corner, 1), (corner, 6), 6), (C, -1))
+    net.chain(_line((corner, -1), (corner, -6), 6), (C, -1))
+    topo = net.topology()
+    return topo, J, C
+
+
+def test_merge_near_pass_through_keeps_a_t_whose_stem_was_taken_under_noise():
+    # the T's road passes C straight (a crossing's half would), but J lies off that road: the
+    # next crossing of a short link, not the other half of this one
+    noise = 0.1
+    lim = REPAIRS.pass_line * (1.0 + SHELL.widen * noise)
+    topo, J, C = _t_beside_junction(lim + 4 * EPS, noise)
+    assert topo.v[[J, C]].tolist() == [3, 2] and R._passed_straight(topo, _scales(topo, noise), C)
+    _assert_untouched(R.merge_near_pass_through, topo, noise=noise)
+    topo, J, C = _t_beside_junction(lim - 4 * EPS, noise)  # J on the road's line, within the band
+    _run(R.merge_near_pass_through, topo, noise=noise)
     assert topo.v[[J, C]].tolist() == [5, 0]
 
 

@@ -22,7 +22,7 @@ from .paired import split_paired_junctions
 from .spanning import split_multiple_junctions
 from .branched import split_branched_chains
 from .params import RobustParams, Scales
-from .thresholds import LINKS, NODES, NUMERIC, REPAIRS
+from .thresholds import LINKS, NODES, NUMERIC, REPAIRS, SHELL
 from .topology import Topology
 
 __all__ = ["ORDER", "run_repairs", "merge_twin_chains", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
@@ -37,9 +37,11 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
     Each valence-2 region merges into the nearest region of valence 2 or more within
     ``link * REPAIRS.tip_gap`` spacings (plus ``LINKS.gap_noise`` times the noise). Under noise,
     into a junction (valence 3 or more) only when the curve passes it straight
-    (:func:`_passed_straight`): else it is a junction whose short curve to that one the widened
-    shell took into the regions, and it stays (see ``REPAIRS.pass_cos``). Never where a chain
-    joining the two would become a loop that stays (:func:`_would_loop`).
+    (:func:`_passed_straight`) and the junction lies on that curve (:func:`_on_the_way`): else it
+    is a junction whose short curve to that one the widened shell took into the regions (a T
+    whose through road passes straight, its stem the short link to the next crossing), and it
+    stays (see ``REPAIRS.pass_cos``, ``REPAIRS.pass_line``). Never where a chain joining the two
+    would become a loop that stays (:func:`_would_loop`).
     """
     from scipy.spatial import cKDTree
 
@@ -69,7 +71,8 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
         if best is None:
             continue
         t = best[1]
-        if not sc.clean and v[t] >= NODES.junction_valence and not _passed_straight(topo, sc, r):
+        if not sc.clean and v[t] >= NODES.junction_valence and not (_passed_straight(topo, sc, r)
+                                                                     and _on_the_way(topo, sc, r, t)):
             continue
         if _would_loop(topo, prm, r, t, h):
             continue
@@ -110,6 +113,24 @@ def _passed_straight(topo: Topology, sc: Scales, r: int) -> bool:
     if any(u is None for u in us):
         return True
     return len(us) != 2 or abs(float(us[0] @ us[1])) >= REPAIRS.pass_cos
+
+
+def _on_the_way(topo: Topology, sc: Scales, r: int, t: int) -> bool:
+    """Whether region ``t``'s centre lies within ``REPAIRS.pass_line`` shell spacings (the median
+    spacing of region ``r`` plus ``SHELL.widen`` times the noise) of the line of the curve through
+    region ``r`` (valence 2: its two chain ends' lines, :func:`_end_line`, averaged, through
+    ``r``'s centre): the other half of a crossing lies on the curve that passes straight through
+    this half; the next junction of a T's stem lies off its through road. True when an end has
+    too few points for a line."""
+    P = topo.P
+    us = [_end_line(P, sc.h, topo.chains, i, s, sc.noise)[2] for i, s in topo.incident(r)]
+    if len(us) != 2 or any(u is None for u in us):
+        return True
+    u = us[0] + (us[1] if float(us[0] @ us[1]) >= 0 else -us[1])
+    u = u / np.linalg.norm(u)
+    d = P[topo.regions[t]].mean(axis=0) - P[topo.regions[r]].mean(axis=0)
+    off = float(np.sqrt(max(float(d @ d) - float(d @ u) ** 2, 0.0)))
+    return off <= REPAIRS.pass_line * (float(np.median(sc.h[topo.regions[r]])) + SHELL.widen * sc.noise)
 
 
 def absorb_short_loops(topo: Topology, sc: Scales, prm: RobustParams) -> None:

@@ -617,6 +617,16 @@ class Repairs(NamedTuple):
     #: better, 2 worse (-0.03, -0.01); on noise-free input too, 16 worse (the outline kind's
     #: jittered clean samplings, 4 CASSIE sketches: a crossing cut into two corner halves)
     pass_cos: float = float(np.cos(np.radians(30.0)))
+    #: ... and when that junction's centre lies within this many shell spacings (``h`` plus
+    #: ``SHELL.widen`` times the noise) of the curve's line through the region: half of a
+    #: crossing lies on the curve that passes straight through the other half; a T junction
+    #: whose stem (a short link to the next crossing, 4-6 h) the widened shell took into the
+    #: regions is passed straight by its through road, the next crossing lying off that road
+    #: origin: benchmark (issue 25, 6 December 2026): 1.5 / 2.5 / 3.5 on the 928-run harness 5
+    #: better and 2 / 2 / 1 worse (streets noise 0.2 h s2 0.70 -> 0.85, s5 0.67 -> 0.77; under
+    #: 3.5 a real neuron's junction 3.9 h off the line stayed apart); at 3.5 352 runs at noise
+    #: 0.1 h and with outliers all equal, CASSIE 320 runs 3 better / 2 worse (-0.006 at most)
+    pass_line: float = 3.5
     #: a free end attaches to a chain at most this many link lengths (plus gap_noise times the
     #: noise) ahead of it: a link lost to noise; a longer gap on clean samples is in the data
     #: origin: benchmark: 1.5 -> 1.0, CASSIE 0.8752 -> 0.8774, 2.5h gaps under noise still joined
