@@ -71,9 +71,10 @@ def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> No
         if best is None:
             continue
         t = best[1]
-        if not sc.clean and v[t] >= NODES.junction_valence and not (_passed_straight(topo, sc, r)
-                                                                     and _on_the_way(topo, sc, r, t)):
-            continue
+        if not sc.clean and v[t] >= NODES.junction_valence:
+            us = _pass_dirs(topo, sc, r)
+            if not (_passed_straight(topo, sc, r, us) and _on_the_way(topo, sc, r, t, us)):
+                continue
         if _would_loop(topo, prm, r, t, h):
             continue
         lab[lab == r] = t
@@ -105,25 +106,31 @@ def _within_shell(P: np.ndarray, h: np.ndarray, ids: np.ndarray, cen: np.ndarray
     return bool(np.linalg.norm(P[ids] - cen, axis=1).max() < prm.shell_outer * float(np.median(h[ids])))
 
 
-def _passed_straight(topo: Topology, sc: Scales, r: int) -> bool:
+def _pass_dirs(topo: Topology, sc: Scales, r: int) -> list:
+    """The directions of the lines of region ``r``'s chain ends (:func:`_end_line`, as node
+    placement fits them; None for an end too short for a line), in incidence order."""
+    return [_end_line(topo.P, sc.h, topo.chains, i, s, sc.noise)[2] for i, s in topo.incident(r)]
+
+
+def _passed_straight(topo: Topology, sc: Scales, r: int, us: list | None = None) -> bool:
     """Whether the curve through region ``r`` (valence 2) passes it straight: the lines of its
-    two chain ends (:func:`_end_line`, as node placement fits them) within
+    two chain ends (:func:`_pass_dirs`, or ``us`` when already read) within
     ``REPAIRS.pass_cos`` of each other; True when an end has too few points for a line."""
-    us = [_end_line(topo.P, sc.h, topo.chains, i, s, sc.noise)[2] for i, s in topo.incident(r)]
+    us = _pass_dirs(topo, sc, r) if us is None else us
     if any(u is None for u in us):
         return True
     return len(us) != 2 or abs(float(us[0] @ us[1])) >= REPAIRS.pass_cos
 
 
-def _on_the_way(topo: Topology, sc: Scales, r: int, t: int) -> bool:
+def _on_the_way(topo: Topology, sc: Scales, r: int, t: int, us: list | None = None) -> bool:
     """Whether region ``t``'s centre lies within ``REPAIRS.pass_line`` shell spacings (the median
     spacing of region ``r`` plus ``SHELL.widen`` times the noise) of the line of the curve through
-    region ``r`` (valence 2: its two chain ends' lines, :func:`_end_line`, averaged, through
-    ``r``'s centre): the other half of a crossing lies on the curve that passes straight through
-    this half; the next junction of a T's stem lies off its through road. True when an end has
-    too few points for a line."""
+    region ``r`` (valence 2: its two chain ends' lines, :func:`_pass_dirs` or ``us`` when already
+    read, averaged, through ``r``'s centre): the other half of a crossing lies on the curve that
+    passes straight through this half; the next junction of a T's stem lies off its through road.
+    True when an end has too few points for a line."""
     P = topo.P
-    us = [_end_line(P, sc.h, topo.chains, i, s, sc.noise)[2] for i, s in topo.incident(r)]
+    us = _pass_dirs(topo, sc, r) if us is None else us
     if len(us) != 2 or any(u is None for u in us):
         return True
     u = us[0] + (us[1] if float(us[0] @ us[1]) >= 0 else -us[1])
@@ -337,6 +344,7 @@ def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     if len(tips) < 2:
         return
     gap_max = prm.link * REPAIRS.tip_gap * sc.hmed
+    lines: dict = {}  # the chain ends' lines read by _facing (no chain's points move here)
     # only pairs of tips closer than the threshold can merge: found with a k-d tree, then
     # visited in the same (a, b) order as a double loop over all pairs
     for a, b in close_tip_pairs(P, [ia for _, ia in tips], gap_max):
@@ -348,24 +356,27 @@ def join_facing_tips(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         k = np.unravel_index(np.argmin(D), D.shape)
         if D[k] > gap_max:
             continue
-        if not sc.clean and not _facing(topo, sc, ends[a], ends[b], P[ia[k[0]]], P[ib[k[1]]]):
+        if not sc.clean and not _facing(topo, sc, ends[a], ends[b], P[ia[k[0]]], P[ib[k[1]]], lines):
             continue
         topo.absorb(rb, ra)
         tips[b] = (ra, ib)
 
 
-def _facing(topo: Topology, sc: Scales, end_a, end_b, xa, xb) -> bool:
+def _facing(topo: Topology, sc: Scales, end_a, end_b, xa, xb, lines: dict) -> bool:
     """Whether the chain ends ``end_a`` and ``end_b`` ((chain, side)) face each other across
     the gap from ``xa`` to ``xb`` (the closest points of their tips): each end's line, pointing
-    out of its chain (:func:`_end_line`), runs within ``REPAIRS.tip_face_cos`` of the way to
-    the other tip. A gap of at most ``REPAIRS.tip_touch`` median spacings has no way to read:
-    facing; so is an end too short for a line."""
+    out of its chain (:func:`_end_line`; ``lines``: those already read, by end, filled here),
+    runs within ``REPAIRS.tip_face_cos`` of the way to the other tip. A gap of at most
+    ``REPAIRS.tip_touch`` median spacings has no way to read: facing; so is an end too short
+    for a line."""
     g = xb - xa
     n = float(np.linalg.norm(g))
     if n <= REPAIRS.tip_touch * sc.hmed:
         return True
     for (i, s), w in ((end_a, g / n), (end_b, -g / n)):
-        e0, cc, u, _ = _end_line(topo.P, sc.h, topo.chains, i, s, sc.noise)
+        if (i, s) not in lines:
+            lines[i, s] = _end_line(topo.P, sc.h, topo.chains, i, s, sc.noise)
+        e0, cc, u, _ = lines[i, s]
         if u is None:
             continue
         out = u if float((e0 - cc) @ u) >= 0 else -u
