@@ -39,8 +39,6 @@ from __future__ import annotations
 import argparse
 import pickle
 import sys
-import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -48,8 +46,7 @@ import numpy as np
 from curvenet import synth
 from curvenet.bench import SURFACING_CASSIE_H, run_seed
 from curvenet.reconstruct import reconstruct
-from curvenet.surfacing import SurfaceCheckWarning, surface
-from curvenet.surfacing.evaluation import distances_both_ways, open_curve_ids, reference_seconds
+from curvenet.surfacing.evaluation import open_curve_ids, surface_row
 from curvenet.synth import cassie, surfaces
 
 #: CASSIE sampling spacing (metres), as in :func:`curvenet.bench.run_cassie`.
@@ -203,21 +200,14 @@ def main(argv=None) -> int:
             if ids:
                 runs.append((f"{name} (opening given)", name, net, model, ids))
         for label, name, net, model, open_curves in runs:
-            ref = reference_seconds(net)
-            t0 = time.perf_counter()
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", SurfaceCheckWarning)  # printed below
-                mesh = surface(net, open_curves=open_curves)
-            dt = time.perf_counter() - t0
+            h = synth.h_of(model.network) if model is not None else None
+            row, mesh = surface_row(kind, label, net, model, h, open_curves)
             ck = mesh.checks
-            sx = ck.self_intersecting_faces
+            sx, dt = row["self_x"], row["time"]
             print(f"{kind:8} {label:16} {net.n_nodes:4d} {net.n_curves:4d} {mesh.n_patches:5d} "
                   f"{len(mesh.triangles):7d} {sx if sx is not None else '-':>5} {ck.non_manifold_edges:4d} "
                   f"{ck.boundary_loops:3d} {ck.genus if ck.genus is not None else '-':>5} "
-                  f"{len(ck.overlaps):3d} {dt:6.1f} {dt / ref:6.0f}", flush=True)
-            row = {"set": kind, "model": label, "nodes": net.n_nodes, "curves": net.n_curves,
-                   "patches": mesh.n_patches, "boundary_loops": ck.boundary_loops, "self_x": sx,
-                   "non_manifold": ck.non_manifold_edges, "genus": ck.genus, "time": dt, "ref": ref}
+                  f"{len(ck.overlaps):3d} {dt:6.1f} {dt / row['ref']:6.0f}", flush=True)
             tot["models"] += 1
             tot["self_x"] += sx or 0
             tot["self_x_models"] += bool(sx)
@@ -226,11 +216,10 @@ def main(argv=None) -> int:
             tot["ovl_models"] += bool(ck.overlaps)
             tot["time"] += dt
             tot["faces"] += len(mesh.triangles)
-            if not ck.ok:
-                bad.append(f"{label}: {ck.warning()}")
+            if row["warning"]:
+                bad.append(f"{label}: {row['warning']}")
             if model is not None:
-                d = distances_both_ways(model, mesh, synth.h_of(model.network))
-                row.update(true_patches=model.patches, true_boundary_loops=model.boundary_loops, distances=d)
+                d = row["distances"]
                 print(f"      patches {mesh.n_patches} (true {model.patches}), boundary loops {ck.boundary_loops} "
                       f"(true {model.boundary_loops}); mesh to the true surface: mean {d[0]:.3f} h, max {d[1]:.3f} h; "
                       f"true surface to mesh: mean {d[2]:.3f} h, max {d[3]:.3f} h")

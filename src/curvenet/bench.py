@@ -401,7 +401,7 @@ def run_surfacing(names: Iterable[str] | None = None, cassie_names: Iterable[str
     Returns
     -------
     list of dict
-        Rows of :func:`curvenet.surfacing.evaluation.surface_row`; an empty list without the
+        The rows of :func:`curvenet.surfacing.evaluation.surface_row`; an empty list without the
         ``surface`` extra (:func:`surfacing_available`).
     """
     from .reconstruct import reconstruct
@@ -423,14 +423,14 @@ def run_surfacing(names: Iterable[str] | None = None, cassie_names: Iterable[str
         h = synth.h_of(model.network)
         pts, _ = synth.sample(model.network, rng=run_seed(name, "clean"))
         net = reconstruct(pts)
-        done(surface_row("surfaces", name, net, model, h))
+        done(surface_row("surfaces", name, net, model, h)[0])
         ids = open_curve_ids(model, net, h)
         if ids:
-            done(surface_row("surfaces", f"{name} (opening given)", net, model, h, open_curves=ids))
+            done(surface_row("surfaces", f"{name} (opening given)", net, model, h, open_curves=ids)[0])
     if cassie.available():
         for name in (list(cassie_names) if cassie_names is not None else list(cassie.FREE_CREATIONS)):
             pts, _ = synth.sample(cassie.load(name), h=SURFACING_CASSIE_H, rng=run_seed("cassie", name))
-            done(surface_row("cassie", name, reconstruct(pts)))
+            done(surface_row("cassie", name, reconstruct(pts))[0])
     return rows
 
 

@@ -104,7 +104,7 @@ def reference_seconds(net) -> float:
     return best
 
 
-def surface_row(group: str, label: str, net, model=None, h: float | None = None, open_curves=()) -> dict:
+def surface_row(group: str, label: str, net, model=None, h: float | None = None, open_curves=()):
     """Surface ``net`` and measure the result.
 
     Parameters
@@ -121,12 +121,14 @@ def surface_row(group: str, label: str, net, model=None, h: float | None = None,
 
     Returns
     -------
-    dict
+    row : dict
         ``set``, ``model``, ``nodes``, ``curves``, ``patches``, ``triangles``, ``boundary_loops``,
         ``self_x`` (None without pymeshlab and libigl), ``non_manifold``, ``genus``, ``overlaps``
         (pairs), ``time`` and ``ref`` (s), ``warning`` (the checks' warning, or ``""``); with
         ``model`` also ``true_patches``, ``true_boundary_loops``, ``distances`` (as
         :func:`distances_both_ways`), ``hausdorff`` and ``target`` (both targets met).
+    mesh : SurfaceMesh
+        The surface measured (its checks in ``mesh.checks``).
     """
     from .assemble import surface
     from .checks import SurfaceCheckWarning
@@ -147,4 +149,4 @@ def surface_row(group: str, label: str, net, model=None, h: float | None = None,
         haus = max(d[1], d[3])
         row.update(true_patches=model.patches, true_boundary_loops=model.boundary_loops, distances=d, hausdorff=haus,
                    target=bool(d[0] <= MEAN_TARGET and haus <= HAUSDORFF_TARGET))
-    return row
+    return row, mesh
