@@ -10,3 +10,12 @@ def without_vote_keep(monkeypatch):
     lies within a cosine over 1 of it."""
     off = thresholds.TANGENTS._replace(vote_keep_cos=1.0 + thresholds.NUMERIC.rel)
     monkeypatch.setattr(frames, "TANGENTS", off)
+
+
+def without_twin_pieces(monkeypatch):
+    """Two pieces of a split chain into one region are never two curves, as before the rule
+    that reads them as a double edge (:func:`.branched._pieces_apart`): no point of one lies
+    over an infinite distance from the other."""
+    from curvenet.methods.robust import branched
+
+    monkeypatch.setattr(branched, "BRANCHED", thresholds.BRANCHED._replace(twin_apart=float("inf")))

@@ -7,7 +7,7 @@ from curvenet import bench, synth
 from curvenet.methods.robust import junctions, repairs, thresholds
 from curvenet.metrics import compare
 from curvenet.reconstruct import reconstruct
-from rule_switches import without_vote_keep
+from rule_switches import without_twin_pieces, without_vote_keep
 
 
 def _score(name, condition="clean"):
@@ -93,6 +93,7 @@ def test_finer_split_scale_stays_clear_of_the_noise(monkeypatch):
     pts, _ = synth.sample(truth, rng=bench.run_seed("crossing", cond) + 6, **bench.CONDITIONS[cond])
     h = synth.h_of(truth)
     _without_bypass_links(monkeypatch)
+    without_twin_pieces(monkeypatch)  # (which also mends this crossing: 1.0 unguarded)
     guarded = compare(reconstruct(pts, method="robust"), truth, h=h)
     monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(fine_noise=0.0))
     unguarded = compare(reconstruct(pts, method="robust"), truth, h=h)
@@ -362,7 +363,7 @@ def test_chains_past_several_junctions_are_split_under_noise_too(monkeypatch):
     assert not estimate(pts).low
     _without_bypass_links(monkeypatch)  # (which now parts this ladder's rails before: 0.56 either way)
     now = compare(reconstruct(pts, method="robust"), truth, h=h)
-    monkeypatch.setattr(branched, "_split_at_cores", lambda *a, **k: None)
+    monkeypatch.setattr(branched, "_split_at_cores", lambda *a, **k: set())
     before = compare(reconstruct(pts, method="robust"), truth, h=h)
     assert now["curve_f1"] >= before["curve_f1"] + 0.15, (now["curve_f1"], before["curve_f1"])
     assert now["n_nodes_found"] > before["n_nodes_found"]

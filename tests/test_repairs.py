@@ -1093,6 +1093,70 @@ def test_split_branched_chains_leaves_two_branches_into_one_region():
     assert sorted(topo.chains[i].ends[1] for i, _ in topo.incident(3)) == [A, B, C]
 
 
+def test_split_branched_chains_splits_two_curves_between_one_junction_and_one_region_but_keeps_a_loop():
+    # a tooth from T's tip into a junction the shell test missed at the origin, then two curves
+    # from it into region B: straight along x, and round by y = 5 (a ladder's end rung beside
+    # the rail's rounded end): both over min_spur long and 5 h apart, so two curves, not a
+    # ragged end (that one, two samples each, stays whole: the test above)
+    net = _Net()
+    T = net.region([[-10, 0], [-11, 0]])
+    B = net.region([[10, 0], [11, 0], [11, 1], [11, 2], [11, 3], [11, 4], [10, 5]])
+    tooth = [[x, 0] for x in range(-9, 1)]
+    low = [[x, 0] for x in range(1, 10)]
+    high = [[0, y] for y in range(1, 6)] + [[x, 5] for x in range(1, 10)]
+    order = [p for pair in itertools.zip_longest(low, high) for p in pair if p is not None]
+    net.chain(np.array(tooth + order, dtype=float), (T, B))
+    topo = net.topology()
+    n_reg = len(topo.regions)
+    _run_near(split_branched, topo)
+    assert not topo.alive[0] and len(topo.regions) == n_reg + 1
+    J = n_reg
+    assert topo.P[topo.regions[J]].tolist() == [[0.0, 0.0]] and int(topo.v[J]) == 3
+    lengths = sorted((topo.chains[i].ends[1], len(topo.chains[i].ids)) for i, _ in topo.incident(J))
+    assert lengths == sorted([(T, 9), (B, 9), (B, 14)])
+    assert int(topo.v[B]) == 2
+    # the near miss: the same points as one loop's chain from B back to B, its tree branching
+    # towards a blob U the shell test flagged beside it (no chain ends at U): one curve, left
+    # as it is (a real sketch's loop under noise)
+    net = _Net()
+    U = net.region([[-10, 0], [-11, 0]])
+    B = net.region([[10, 0], [11, 0], [11, 1], [11, 2], [11, 3], [11, 4], [10, 5]])
+    net.chain(np.array(tooth + order, dtype=float), (B, B))
+    topo = net.topology()
+    assert int(topo.v[U]) == 0
+    _assert_untouched(split_branched, topo, run=_run_near)
+
+
+def test_split_branched_chains_splits_a_chain_past_two_junctions_with_a_free_spine_end():
+    # a comb's chain from tooth T's tip down through two junctions the shell test missed, at
+    # (0, 0) and (4, 0), up tooth S and on along the spine to region R; the spine also runs 5 h
+    # left past the first tooth into no region (the comb's end: no shell saw its tip). That end
+    # is a free branch (sampled, over min_spur long): the chain splits at both junctions, the
+    # end a new free end (it was left whole, as a branch that reaches no region)
+    net = _Net()
+    T = net.region([[0, 10], [0, 11]])
+    S = net.region([[4, 10], [4, 11]])
+    R = net.region([[10, 0], [11, 0]])
+    tooth = [[0, y] for y in range(9, 0, -1)] + [[0, 0]]
+    left = [[-x, 0] for x in range(1, 6)]
+    right = [[x, 0] for x in range(1, 10)] + [[4, y] for y in range(1, 10)]
+    right.sort(key=lambda p: (abs(p[0]) + abs(p[1]), p))
+    order = [p for pair in itertools.zip_longest(left, right) for p in pair if p is not None]
+    net.chain(np.array(tooth + order, dtype=float), (T, R))
+    topo = net.topology()
+    n_reg = len(topo.regions)
+    _run_near(split_branched, topo)
+    assert not topo.alive[0]
+    cores = [topo.P[topo.regions[q]].mean(axis=0).round().tolist() for q in (n_reg, n_reg + 1)]
+    assert sorted(cores) == [[0.0, 0.0], [4.0, 0.0]]
+    assert [int(topo.v[q]) for q in (n_reg, n_reg + 1)] == [3, 3]
+    free = [q for q in range(n_reg + 2, len(topo.regions)) if len(topo.regions[q]) == 0]
+    assert len(free) == 1 and int(topo.v[free[0]]) == 1
+    (i, _), = topo.incident(free[0])
+    assert sorted(topo.P[topo.chains[i].ids, 0].tolist()) == [-5.0, -4.0, -3.0, -2.0, -1.0]
+    assert [int(topo.v[q]) for q in (T, S, R)] == [1, 1, 1]
+
+
 # ------------------------------------------------------------------------------ the order
 TESTED = (R.split_multiple_junctions, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,

@@ -736,7 +736,7 @@ def _aims_at(P, h, sc, chains, inc, xpos, hub, noise, lines=None) -> bool:
 #: The repairs in the order :func:`run_repairs` applies them.
 ORDER = (
     split_multiple_junctions,  # (first: the row's region as the shell test left it)
-    split_branched_chains,
+    split_branched_chains,  # (then the rows its split chains reached, read again)
     merge_near_pass_through,
     absorb_short_loops,
     absorb_orphans,

@@ -440,7 +440,7 @@ def _straight_across(L, ends: list, plan: Plan) -> bool:
     return False
 
 
-def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only: set | None = None) -> None:
     """Every region of valence ``SPANNING.region_valence`` or more that holds a row of
     junctions (:func:`split_plan`) becomes those junctions, joined by new chains.
 
@@ -451,7 +451,10 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
     its ends goes to its core, so the junctions joined by it and by the tree form a cycle (such
     regions were left whole: ladder, outline and street kinds under noise, 11 runs better, 4
     worse by 0.01-0.02 of the 832-run harness, +2.98; CASSIE 2 better). The regions are planned
-    first, then split in region order (a split leaves the other regions as they are).
+    first, then split in region order (a split leaves the other regions as they are). ``only``:
+    the regions to read (default: all); :func:`.branched.split_branched_chains` reads again
+    those its split chains reached (a rail's region, joined to the rungs that a chain ran past
+    only then).
     """
     if sc.low:
         min_cores, min_points, valence = SPANNING.clean_min_cores, SPANNING.clean_min_points, SPANNING.clean_region_valence
@@ -459,6 +462,8 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> N
         min_cores, min_points, valence = SPANNING.min_cores, SPANNING.min_points, SPANNING.region_valence
     cand, incs = [], []
     for r in np.flatnonzero(topo.v >= valence).tolist():
+        if only is not None and r not in only:
+            continue
         inc = topo.incident(r)
         if len(topo.regions[r]) >= min_points:
             cand.append(r)

@@ -881,6 +881,16 @@ class Branched(NamedTuple):
     #: origin: benchmark: synthetic corners under noise 0.2h, sampling 5: 1.000 -> 0.667 without
     #: it (branches of 70, 4 and 1 samples); kinds with it: the same 7 better, 0 worse
     free_arm_points: int = 2
+    #: two pieces of a chain split at several junctions that join one junction to one region are
+    #: two curves (a double edge: a ladder's end rung and the rail's rounded end) when a point of
+    #: one lies over this many spacings from the other; closer, they are one chain end widened by
+    #: noise (the split is not made)
+    #: origin: set with the rule (issue 25): the shell's inner radius (2.5 h), where a junction's
+    #: branches are apart
+    twin_apart: float = 2.5
+    #: ... plus this many times the noise
+    #: origin: set with the rule (issue 25), as ``reach_noise``
+    twin_apart_noise: float = 2.0
 
 
 BRANCHED = Branched()
