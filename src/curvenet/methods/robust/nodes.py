@@ -3,7 +3,9 @@
 A region touched by one chain end is a free end: its points extend the chain and the node is
 the extreme point ahead (:func:`free_end`), or, where the region bends (a traced neurite turning
 a few spacings before its tip), the point farthest along it (:func:`bent_tips`), unless the
-region hides a whole fork (:func:`~.junctions.hidden_fork`). A region touched by 3 or more ends is a junction: every
+region hides a whole fork (:func:`~.junctions.hidden_fork`; on noise-free input also searched
+on the region and its chain's last samples, :func:`_fork_tail`: a twig and its sibling whose
+tips the region holds, their junction a few samples back on the chain). A region touched by 3 or more ends is a junction: every
 incident branch is walked into the region, its line is fitted on its last
 ``NODES.fit_span h + NODES.fit_noise noise``, and the node is the least-squares intersection of
 those lines (:func:`junction_positions`, one compiled call for all junctions), or the region's
@@ -118,6 +120,12 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
         fids[r] = live[ci].ids if s == 1 else live[ci].ids[::-1]  # ids run towards the region
     fr = [r for r in fr if fork_possible(P, sc, prm, fids[r], regions[r])]
     fpaths = dict(zip(fr, region_paths(P, sc, [(regions[r], int(fids[r][-1])) for r in fr])))
+    # where the region alone shows no fork, its chain's last samples may hold the fork's
+    # junction (a twig the shell test saw too short, its tip and its sibling's in the region):
+    # the region and that tail, searched from the sample before the tail (read on demand).
+    # Noise-free input only: under noise the paths part away from the junction (the fork's
+    # node 2-4 h off on the twigs kind at noise 0.2 h, curve F1 0.57 -> 0.54)
+    tails = {r: _fork_tail(P, sc, prm, fids[r], regions[r]) for r in fr} if sc.clean else {}
     fm = dict(zip(fids, end_counts(P, h, list(fids.values()), NODES.free_span).tolist()))  # free_end's
     bent: list = []  # the free ends whose region may bend: (node, chain end, entry, region, ext)
     for r in range(len(regions)):
@@ -128,6 +136,13 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
             ci, s = inc[0]
             ids = fids[r]
             fork = hidden_fork(P, sc, prm, ids, regions[r], fpaths[r]) if r in fpaths else None
+            if fork is None and tails.get(r, 0):
+                n = tails[r]
+                rid = np.r_[ids[-n:], regions[r]]
+                fork = hidden_fork(P, sc, prm, ids[:-n], rid, region_paths(P, sc, [(rid, int(ids[-n - 1]))])[0])
+                if fork is not None:  # the chain ends before its tail (the tail's samples: the fork's)
+                    c = live[ci]
+                    live[ci] = Chain(c.ids[:-n] if s == 1 else c.ids[n:], c.ends, c.closed)
             if fork is not None:
                 # a whole fork (junction and two short free branches) inside one free end's
                 # region (sparse sampling): a junction node and two free branches
@@ -167,6 +182,19 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
         new_id[norder] = np.arange(len(norder))
         nodes = nodes[norder]
     return Placement(nodes, new_id, node_of, end_ext, extra_ids, live, v)
+
+
+def _fork_tail(P, sc: Scales, prm: RobustParams, ids, rid) -> int:
+    """How many of the last samples of the chain ``ids`` (running towards the free end's region
+    ``rid``) lie within one outer shell radius of its last sample: where a fork's junction may
+    hide when its region shows none (:func:`.junctions.hidden_fork` on the region and those
+    samples). 0 when the chain holds no sample beyond them."""
+    hs = float(np.median(sc.h[rid])) + SHELL.widen * sc.noise
+    d = np.linalg.norm(P[ids] - P[int(ids[-1])], axis=1)
+    far = np.flatnonzero(d > prm.shell_outer * hs)
+    if not len(far):
+        return 0
+    return int(len(ids) - 1 - far[-1])
 
 
 def free_end(P, h, ids, rid, m=None):
