@@ -212,6 +212,30 @@ def test_branch_lines_are_the_end_portions_lines(monkeypatch):
         assert np.isclose(abs(L.u[b] @ u), 1.0)
 
 
+def test_a_one_point_link_between_two_regions_gets_its_direction(monkeypatch):
+    # two close crossings' regions A (around x = 0) and B (around x = 4) joined by a chain of
+    # one sample at x = 2 (a street's short link under noise): its line runs from A's point
+    # nearest to it to B's (along x); a one-point branch to a free end keeps direction 0, and
+    # the regions are then tried as a pair (they were left whole: a branch without a line)
+    from curvenet.methods.robust.paired import _one_point_links, branch_lines
+    from curvenet.methods.robust.params import Scales
+
+    P = np.array([[0, 0, 0], [0.5, 0.3, 0], [4, 0, 0], [3.5, -0.3, 0], [2, 0.1, 0], [0, 5, 0], [9, 9, 9]], float)
+    chains = [Chain(np.array([4]), [0, 1]), Chain(np.array([5]), [0, 2])]
+    topo = Topology(P, chains, [np.array([0, 1]), np.array([2, 3]), np.zeros(0, dtype=np.int64)])
+    sc = Scales(h=np.ones(len(P)), hmed=1.0, sigma=0.1, noise=0.1, clean=False, width=1.0,
+                indptr=np.zeros(len(P) + 1, dtype=np.int64), indices=np.zeros(0, dtype=np.int64), tree=None)
+    incs = [topo.incident(0), topo.incident(1)]
+    L, off = branch_lines(topo, sc, incs)
+    assert not np.any(np.linalg.norm(L.u, axis=1) > 0)  # (one sample: no line of its own)
+    out = _one_point_links(topo, L, off, incs, [0, 1])
+    link0 = incs[0].index((0, 0))
+    assert np.allclose(out.u[off[0] + link0], (P[3] - P[1]) / np.linalg.norm(P[3] - P[1]))
+    assert np.allclose(out.u[off[1]], (P[1] - P[3]) / np.linalg.norm(P[1] - P[3]))
+    assert not np.linalg.norm(out.u[off[0] + incs[0].index((1, 0))]) > 0  # (to a free end: no region points)
+    assert np.array_equal(L.u, np.zeros_like(L.u))  # (the given lines untouched)
+
+
 def test_group_medians_are_numpy_s_medians():
     from curvenet.methods.robust.chains import group_medians
 

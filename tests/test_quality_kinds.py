@@ -384,6 +384,21 @@ def test_the_twigs_clean_is_exact_with_a_fork_behind_its_free_end(monkeypatch):
     assert all(not r["exact_topology"] for r in rows), [r["curve_f1"] for r in rows]
 
 
+def test_two_crossings_joined_by_one_sample_are_two_junctions(monkeypatch):
+    # the streets' crossings 3.9 h apart, one region under noise, joined by a chain of one
+    # sample: its line from the two regions' nearest points (paired._one_point_links) lets the
+    # pair split (the region was left whole, as having a branch without a line: curve F1 0.89)
+    from curvenet.methods.robust import paired
+
+    pts, truth = _sampled("streets", "outliers 2% + noise 0.1h", 0)
+    h = synth.h_of(truth)
+    now = compare(reconstruct(pts, method="robust"), truth, h=h)
+    monkeypatch.setattr(paired, "_one_point_links", lambda topo, L, *a: L)
+    before = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert now["exact_topology"] and now["curve_f1"] == 1.0
+    assert before["curve_f1"] < 0.9 and before["n_nodes_found"] < now["n_nodes_found"]
+
+
 def test_the_outline_clean_is_exact():
     # its notch corners lie 4h apart on samples exactly h apart: at the finest re-test the
     # corner's three branches reach the shell's middle (2 spacings) exactly, where the last bit
