@@ -198,24 +198,23 @@ def _one_point_links(topo: Topology, L: Lines, off: np.ndarray, incs: list, regi
     sample gives no line of its own); other one-point branches keep direction 0."""
     P = topo.P
     u = L.u
-    for j, (r, inc) in enumerate(zip(regions, incs)):
-        for k, (i, s) in enumerate(inc):
-            b = int(off[j]) + k
-            c = topo.chains[i]
-            if len(c.ids) != 1 or np.linalg.norm(u[b]) > 0:
-                continue
-            other = c.ends[1 - s]
-            if other == r or other < 0 or not len(topo.regions[other]) or not len(topo.regions[r]):
-                continue
-            p = P[int(c.ids[0])]
-            a = P[topo.regions[r]][np.argmin(np.linalg.norm(P[topo.regions[r]] - p, axis=1))]
-            z = P[topo.regions[other]][np.argmin(np.linalg.norm(P[topo.regions[other]] - p, axis=1))]
-            e = z - a
-            ne = float(np.linalg.norm(e))
-            if ne > 0:
-                if u is L.u:
-                    u = u.copy()
-                u[b] = e / ne
+    zero = np.flatnonzero(~(np.linalg.norm(u, axis=1) > 0))  # (few: read one by one)
+    for b, j in zip(zero.tolist(), (np.searchsorted(off, zero, side="right") - 1).tolist()):
+        r = regions[j]
+        i, s = incs[j][b - int(off[j])]
+        c = topo.chains[i]
+        other = c.ends[1 - s]
+        if len(c.ids) != 1 or other == r or other < 0 or not len(topo.regions[other]) or not len(topo.regions[r]):
+            continue
+        p = P[int(c.ids[0])]
+        a = P[topo.regions[r]][np.argmin(np.linalg.norm(P[topo.regions[r]] - p, axis=1))]
+        z = P[topo.regions[other]][np.argmin(np.linalg.norm(P[topo.regions[other]] - p, axis=1))]
+        e = z - a
+        ne = float(np.linalg.norm(e))
+        if ne > 0:
+            if u is L.u:
+                u = u.copy()
+            u[b] = e / ne
     return L if u is L.u else Lines(L.c, u, L.tip, L.lim)
 
 
