@@ -3,9 +3,9 @@
 A region touched by one chain end is a free end: its points extend the chain and the node is
 the extreme point ahead (:func:`free_end`), or, where the region bends (a traced neurite turning
 a few spacings before its tip), the point farthest along it (:func:`bent_tips`), unless the
-region hides a whole fork (:func:`~.junctions.hidden_fork`; on noise-free input also searched
-on the region and its chain's last samples, :func:`_fork_tail`: a twig and its sibling whose
-tips the region holds, their junction a few samples back on the chain). A region touched by 3 or more ends is a junction: every
+region hides a whole fork (:func:`~.junctions.hidden_fork`; also searched on the region and
+its chain's last samples, :func:`_fork_tail`: a twig and its sibling whose tips the region
+holds, their junction a few samples back on the chain, placed by :func:`_tail_fork_node`). A region touched by 3 or more ends is a junction: every
 incident branch is walked into the region, its line is fitted on its last
 ``NODES.fit_span h + NODES.fit_noise noise``, and the node is the least-squares intersection of
 those lines (:func:`junction_positions`, one compiled call for all junctions), or the region's
@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels as _k
-from .chains import Chain, end_counts, end_portion, group_medians, segment_distance
+from .chains import Chain, end_counts, end_portion, fit_line, group_medians, segment_distance
 from .junctions import fork_possible, hidden_fork, region_paths, swallowed_branches
 from .params import RobustParams, Scales
 from .thresholds import CURVES, LINKS, NODES, NUMERIC, SHELL
@@ -122,10 +122,9 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
     fpaths = dict(zip(fr, region_paths(P, sc, [(regions[r], int(fids[r][-1])) for r in fr])))
     # where the region alone shows no fork, its chain's last samples may hold the fork's
     # junction (a twig the shell test saw too short, its tip and its sibling's in the region):
-    # the region and that tail, searched from the sample before the tail (read on demand).
-    # Noise-free input only: under noise the paths part away from the junction (the fork's
-    # node 2-4 h off on the twigs kind at noise 0.2 h, curve F1 0.57 -> 0.54)
-    tails = {r: _fork_tail(P, sc, prm, fids[r], regions[r]) for r in fr} if sc.clean else {}
+    # the region and that tail, searched from the sample before the tail (read on demand);
+    # the node placed by _tail_fork_node
+    tails = {r: _fork_tail(P, sc, prm, fids[r], regions[r]) for r in fr}
     fm = dict(zip(fids, end_counts(P, h, list(fids.values()), NODES.free_span).tolist()))  # free_end's
     bent: list = []  # the free ends whose region may bend: (node, chain end, entry, region, ext)
     for r in range(len(regions)):
@@ -141,6 +140,7 @@ def place_nodes(topo: Topology, sc: Scales, prm: RobustParams) -> Placement:
                 rid = np.r_[ids[-n:], regions[r]]
                 fork = hidden_fork(P, sc, prm, ids[:-n], rid, region_paths(P, sc, [(rid, int(ids[-n - 1]))])[0])
                 if fork is not None:  # the chain ends before its tail (the tail's samples: the fork's)
+                    fork = (fork[0], _tail_fork_node(P, sc, prm, ids[:-n], ids[-n:], *fork), fork[2])
                     c = live[ci]
                     live[ci] = Chain(c.ids[:-n] if s == 1 else c.ids[n:], c.ends, c.closed)
             if fork is not None:
@@ -195,6 +195,38 @@ def _fork_tail(P, sc: Scales, prm: RobustParams, ids, rid) -> int:
     if not len(far):
         return 0
     return int(len(ids) - 1 - far[-1])
+
+
+def _tail_fork_node(P, sc: Scales, prm: RobustParams, stem, tail, ext, x, leaves) -> np.ndarray:
+    """The node of a fork found on a chain's tail (:func:`_fork_tail`): the least-squares meeting
+    point of the lines of its three branches, each fitted on its end portion at the fork as
+    :func:`.junctions.hidden_fork` fits them, the stem's on the chain ``stem`` with ``ext`` and the
+    tail's samples on neither leaf (the parent curve's last samples, which the paths from the
+    entry skip), held near where the two leaves start (their first samples' mean) instead of
+    the paths' parting point, which under noise lies back at the entry. ``x``: the node
+    hidden_fork placed (kept where the lines meet off the shell)."""
+    h = sc.h
+    on_leaf = np.isin(tail, np.concatenate([np.asarray(lf) for lf in leaves] + [np.asarray(ext, dtype=np.int64)]))
+    anchor = np.mean([P[int(lf[0])] for lf in leaves], axis=0)
+    rest = tail[~on_leaf]
+    rest = rest[np.argsort(np.linalg.norm(P[rest] - anchor, axis=1)[::-1], kind="stable")]
+    hl = float(np.median(h[tail]))
+    span = NODES.fit_span + NODES.fit_noise * sc.noise / hl
+    dim = P.shape[1]
+    A = NODES.anchor_pull * np.eye(dim)
+    bb = NODES.anchor_pull * anchor
+    for br in (np.r_[np.asarray(stem), np.asarray(ext, dtype=np.int64), rest], *(np.asarray(lf)[::-1] for lf in leaves)):
+        cc, u = fit_line(end_portion(P, h, br, span=span))
+        if u is None:
+            continue
+        M = np.eye(dim) - np.outer(u, u)
+        A += M
+        bb += M @ cc
+    y = np.linalg.solve(A, bb)
+    hs = hl + SHELL.widen * sc.noise
+    if not np.all(np.isfinite(y)) or np.linalg.norm(y - anchor) > prm.shell_outer * hs:
+        return x
+    return y
 
 
 def free_end(P, h, ids, rid, m=None):
