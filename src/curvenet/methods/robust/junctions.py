@@ -27,7 +27,7 @@ from .thresholds import LINKS, NODES, NOISE, NUMERIC, SHELL, SPLIT
 
 __all__ = ["Regions", "junction_regions", "shell_group_counts", "split_large_regions", "separate_close_junctions",
            "fork_possible",
-           "hidden_fork", "swallowed_branches", "region_paths"]
+           "hidden_fork", "branches_meeting", "swallowed_branches", "region_paths"]
 
 
 class Regions(NamedTuple):
@@ -643,24 +643,33 @@ def hidden_fork(P, sc: Scales, prm: RobustParams, ids, rid, paths):
     if min(polylen(P[l1]), polylen(P[l2])) < prm.min_spur * hl:
         return None
     stem = np.r_[np.asarray(ids), S[p1[1:f + 1]]]
+    anchor = P[S[p1[f]]]
+    x = branches_meeting(P, h, (stem, l1[::-1], l2[::-1]), NODES.fit_span + NODES.fit_noise * noise / hl, anchor)
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm.shell_outer * hs:
+        x = anchor
+    return S[p1[1:f]], x, [l1[1:], l2[1:]]
+
+
+def branches_meeting(P, h, branches, span, anchor):
+    """The least-squares meeting point of the lines of ``branches`` (id lists, each running
+    towards the junction), each fitted on its end portion over ``span`` spacings
+    (:func:`.chains.end_portion`), pulled towards ``anchor`` (d,) by ``NODES.anchor_pull`` (which
+    only makes near-parallel lines well-posed); a branch of one point gives no line. Returns
+    the (d,) point (not finite where the system is singular). :func:`hidden_fork` places a
+    fork's node so, and :func:`.nodes._tail_fork_node` one found on a chain's tail."""
     dim = P.shape[1]
     A = np.zeros((dim, dim))
     bb = np.zeros(dim)
-    span = NODES.fit_span + NODES.fit_noise * noise / hl
-    for br in (stem, l1[::-1], l2[::-1]):
+    for br in branches:
         cc, u = fit_line(end_portion(P, h, br, span=span))
         if u is None:
             continue
         M = np.eye(dim) - np.outer(u, u)
         A += M
         bb += M @ cc
-    anchor = P[S[p1[f]]]
     A += NODES.anchor_pull * np.eye(dim)
     bb += NODES.anchor_pull * anchor
-    x = np.linalg.solve(A, bb)
-    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm.shell_outer * hs:
-        x = anchor
-    return S[p1[1:f]], x, [l1[1:], l2[1:]]
+    return np.linalg.solve(A, bb)
 
 
 def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):

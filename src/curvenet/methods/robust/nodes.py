@@ -19,8 +19,8 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels as _k
-from .chains import Chain, end_counts, end_portion, fit_line, group_medians, segment_distance
-from .junctions import fork_possible, hidden_fork, region_paths, swallowed_branches
+from .chains import Chain, end_counts, end_portion, group_medians, segment_distance
+from .junctions import branches_meeting, fork_possible, hidden_fork, region_paths, swallowed_branches
 from .params import RobustParams, Scales
 from .thresholds import CURVES, LINKS, NODES, NUMERIC, SHELL
 from .topology import Topology
@@ -211,18 +211,8 @@ def _tail_fork_node(P, sc: Scales, prm: RobustParams, stem, tail, ext, x, leaves
     rest = tail[~on_leaf]
     rest = rest[np.argsort(np.linalg.norm(P[rest] - anchor, axis=1)[::-1], kind="stable")]
     hl = float(np.median(h[tail]))
-    span = NODES.fit_span + NODES.fit_noise * sc.noise / hl
-    dim = P.shape[1]
-    A = NODES.anchor_pull * np.eye(dim)
-    bb = NODES.anchor_pull * anchor
-    for br in (np.r_[np.asarray(stem), np.asarray(ext, dtype=np.int64), rest], *(np.asarray(lf)[::-1] for lf in leaves)):
-        cc, u = fit_line(end_portion(P, h, br, span=span))
-        if u is None:
-            continue
-        M = np.eye(dim) - np.outer(u, u)
-        A += M
-        bb += M @ cc
-    y = np.linalg.solve(A, bb)
+    branches = (np.r_[np.asarray(stem), np.asarray(ext, dtype=np.int64), rest], *(np.asarray(lf)[::-1] for lf in leaves))
+    y = branches_meeting(P, h, branches, NODES.fit_span + NODES.fit_noise * sc.noise / hl, anchor)
     hs = hl + SHELL.widen * sc.noise
     if not np.all(np.isfinite(y)) or np.linalg.norm(y - anchor) > prm.shell_outer * hs:
         return x
