@@ -910,8 +910,8 @@ def test_terminal_fork_with_short_branches(a1, a2, l1, l2):
 def test_fit_width_follows_the_bend_not_the_noise(monkeypatch):
     # the wide fit's bias is read from the two fits' parting averaged over a long window too
     # (FIT.bias_reach_long): over one kernel reach alone that mean follows the noise, and the
-    # knot at noise 0.1 h was fitted worse (0.075 h from the true curve) than by the narrowest
-    # kernel alone; with the long window 0.048 h, under half the noise
+    # knot at noise 0.1 h was fitted worse (0.075 h from the true curve) by the cubic smoothing
+    # spline (FIT.order 2) than by the narrowest kernel alone; with the long window 0.048 h
     from curvenet import synth
     from curvenet.bench import run_seed
     from curvenet.methods.robust import curves
@@ -921,10 +921,33 @@ def test_fit_width_follows_the_bend_not_the_noise(monkeypatch):
     truth = synth.model("knot")
     h = synth.h_of(truth)
     pts, _ = synth.sample(truth, rng=run_seed("knot", "noise 0.1h"), noise=0.1)
-    now = deviation(reconstruct_robust(pts), truth, h=h)[0]
-    monkeypatch.setattr(curves, "FIT", FIT._replace(bias_reach_long=FIT.bias_reach))
+    monkeypatch.setattr(curves, "FIT", FIT._replace(order=2, band=4.0))
+    long = deviation(reconstruct_robust(pts), truth, h=h)[0]
+    monkeypatch.setattr(curves, "FIT", FIT._replace(order=2, band=4.0, bias_reach_long=FIT.bias_reach))
     short = deviation(reconstruct_robust(pts), truth, h=h)[0]
-    assert now < 0.05 < 0.06 < short
+    assert long < 0.05 < 0.06 < short
+
+
+@pytest.mark.parametrize("name", ["knot", "torus", "fig8"])
+def test_fit_of_the_third_derivative_pulls_bends_in_less(monkeypatch, name):
+    # FIT.order 3 leaves quadratics unpenalised: a bend of steady curvature keeps a wide
+    # kernel; the cubic smoothing spline (order 2) pulls bends in as (b h / R)^4 and must narrow
+    # on them. At noise 0.1 h: knot 0.048 -> 0.044 h, torus 0.065 -> 0.051 h (its small
+    # circles 3.3 h in radius), fig8 0.040 -> 0.020 h from the true curves
+    from curvenet import synth
+    from curvenet.bench import run_seed
+    from curvenet.methods.robust import curves
+    from curvenet.methods.robust.thresholds import FIT
+    from curvenet.metrics import deviation
+
+    truth = synth.model(name)
+    h = synth.h_of(truth)
+    pts, _ = synth.sample(truth, rng=run_seed(name, "noise 0.1h"), noise=0.1)
+    third = deviation(reconstruct_robust(pts), truth, h=h)[0]
+    monkeypatch.setattr(curves, "FIT", FIT._replace(order=2, band=4.0))
+    second = deviation(reconstruct_robust(pts), truth, h=h)[0]
+    assert third < 0.95 * second
+    assert third < 0.06
 
 
 def test_fit_holds_the_corners_of_a_noisy_square_loop_and_finds_none_on_a_circle():

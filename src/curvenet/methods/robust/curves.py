@@ -12,6 +12,7 @@ are moved onto a smoothing spline fitted through them (:func:`fit_curves`).
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -281,21 +282,23 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     Each curve keeps its samples (and their input ``indices``); their positions become the
     values, at the same samples, of the sequence ``y`` that minimises
 
-    ``sum_i |y_i - x_i|^2 + sum_j (b_j s_j)^4 |D2 y_j|^2``
+    ``sum_i |y_i - x_i|^2 + sum_j (b_j s_j)^(2 k) |Dk y_j|^2``
 
-    over the curve's samples ``x``, where ``D2 y_j`` is the second divided difference of ``y``
-    at sample ``j`` in the chord-length parameter and ``s_j`` the mean of the two steps at
-    ``j``: a discrete cubic smoothing spline (Reinsch 1967) whose equivalent kernel is about
-    ``b_j`` local spacings wide (Silverman 1984), so a sample's noise is averaged with that of
-    its neighbours along the curve. An open curve's two ends are held where they are (at its
-    nodes); a closed loop is periodic (no seam).
+    over the curve's samples ``x``, where ``Dk y_j`` is ``k!`` times the ``k``-th divided
+    difference of ``y`` over the window of ``k + 1`` samples at sample ``j`` in the
+    chord-length parameter (``k = FIT.order``, 3: about the third derivative) and ``s_j`` the
+    window's mean step: a discrete smoothing spline (Reinsch 1967 for ``k`` 2; ``k`` 3 leaves
+    quadratics unpenalised, so a bend of steady curvature is pulled in as ``b^6``, not ``b^4``)
+    whose equivalent kernel is about ``b_j`` local spacings wide (Silverman 1984), so a
+    sample's noise is averaged with that of its neighbours along the curve. An open curve's
+    two ends are held where they are (at its nodes); a closed loop is periodic (no seam).
 
     The width ``b_j`` is chosen per sample from the noise ``sigma`` (Lepski's idea): the curves
     are fitted with the widest kernel ``FIT.band`` and with the narrowest ``FIT.band_min``;
     where the two fits part (across the curve) by more than the noise explains (their parting
     averaged along the curve over ``FIT.bias_reach`` and over ``FIT.bias_reach_long`` wide
     kernels: the larger), the wide fit rounds a bend or a corner, and the width is cut to the one that minimises the expected
-    squared error: bias growing as ``b^4``, noise variance falling as ``1 / b``. On a straight
+    squared error: bias growing as ``b^(2 k)``, noise variance falling as ``1 / b``. On a straight
     or gently bent stretch the width stays ``FIT.band``; within a few samples of a held end it
     is at most ``FIT.end_taper`` times their number (a node placed a little off the samples
     pulls only the last few).
@@ -369,19 +372,34 @@ def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
     D -= (D * t).sum(axis=1)[:, None] * t  # across the curve only
     # the mean over a window of the wide kernel's reach along the curve (within the curve),
     # and over a longer window (a steadier mean where the curve bends smoothly): the larger
-    cum = np.r_[0.0, np.cumsum((D * D).sum(axis=1))]
-    part2 = np.maximum(_window_mean(cum, ch, int(np.ceil(FIT.bias_reach * wide))),
-                       _window_mean(cum, ch, int(np.ceil(FIT.bias_reach_long * wide))))
+    part = (D * D).sum(axis=1)
+    part2 = np.maximum(_window_mean(part, ch, int(np.ceil(FIT.bias_reach * wide))),
+                       _window_mean(part, ch, int(np.ceil(FIT.bias_reach_long * wide))))
     # what the noise alone puts between the two fits, and the wide fit's bias beyond it
-    noise2 = (d - 1) * FIT.kernel_l2 * sigma**2 * (1.0 / narrow - 1.0 / wide)
+    l2 = kernel_l2(FIT.order)
+    noise2 = (d - 1) * l2 * sigma**2 * (1.0 / narrow - 1.0 / wide)
     bias2 = np.maximum(part2 - noise2, NUMERIC.tiny)
-    # the width of least expected squared error: squared bias (b / wide)^(2 q) bias2 (the bias of
-    # a kernel of order q = FIT.bias_order grows as b^q), variance kernel_l2 sigma^2 / b
-    q2 = 2.0 * FIT.bias_order
-    best = wide * ((d - 1) * FIT.kernel_l2 * sigma**2 / (q2 * wide * bias2)) ** (1.0 / (q2 + 1.0))
+    # the width of least expected squared error: squared bias (b / wide)^(2 q) bias2 (the
+    # equivalent kernel is of order q = 2 FIT.order: the bias grows as b^q), variance
+    # l2 sigma^2 / b
+    q2 = 2.0 * (2 * FIT.order)
+    best = wide * ((d - 1) * l2 * sigma**2 / (q2 * wide * bias2)) ** (1.0 / (q2 + 1.0))
     # near a held end no wider than its distance from it in samples: a node placed off the
     # samples then pulls only the last few of them
     return np.clip(np.minimum(best, FIT.end_taper * ch.to_held), narrow, wide)
+
+
+def kernel_l2(order: int) -> float:
+    """Squared L2 norm of the fit's equivalent kernel of width 1 spacing: a fit of width ``b``
+    spacings keeps ``kernel_l2 / b`` of the noise's variance.
+
+    The penalty of the ``order``-th derivative gives the kernel whose transfer function is
+    ``1 / (1 + w^(2 order))`` (Silverman 1984 for ``order`` 2); the squared norm is
+    ``(1 / 2 pi) int 1 / (1 + w^(2 m))^2 dw = (2 m - 1) / (2 m) / (2 m sin(pi / (2 m)))``:
+    ``3 / (8 sqrt 2)`` for 2, ``5 / 18`` for 3.
+    """
+    m = float(order)
+    return (2.0 * m - 1.0) / (2.0 * m) / (2.0 * m * np.sin(np.pi / (2.0 * m)))
 
 
 def _to_held(held: np.ndarray, idx: np.ndarray, first: np.ndarray, last: np.ndarray,
@@ -497,12 +515,23 @@ def _hinge_gain(ch: "_Chains", cand: np.ndarray, L: int, sigma: float):
     return J, (rss[0] - rss[1]) / sigma**2, turn, coef[1][:, 0]
 
 
-def _window_mean(cum: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
-    """(M,) mean of a per-sample value over the ``w`` samples on either side of each sample,
-    within its curve; ``cum`` (M + 1,) is the value's running sum with a leading 0."""
-    lo = np.maximum(ch.idx - w, ch.first)
-    hi = np.minimum(ch.idx + w, ch.last)
-    return (cum[hi + 1] - cum[lo]) / (hi - lo + 1)
+def _window_mean(value: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
+    """(M,) mean of a per-sample ``value`` (M,) over the ``w`` samples on either side of each
+    sample, within its curve.
+
+    Summed offset by offset (``-w`` to ``w``), not from a running sum over the concatenation:
+    each sample's mean then has the same bits whichever curves share its block (a running
+    sum carries the rounding of every curve before it; the fit of order 3 turns a difference
+    in the last bit of a width into 1e-9 spacings, and a tiled run fits a curve in another
+    block than a whole run does)."""
+    total, count = value.astype(float, copy=True), np.ones(ch.M)
+    for k in range(1, w + 1):  # the samples k after and k before each one, on its curve
+        same = ch.first[k:] == ch.first[:-k]
+        total[:-k] += np.where(same, value[k:], 0.0)
+        total[k:] += np.where(same, value[:-k], 0.0)
+        count[:-k] += same
+        count[k:] += same
+    return total / count
 
 
 class _Chains:
@@ -525,9 +554,21 @@ class _Chains:
         real = loop | (idx != last)  # steps of the curve (an open curve has no wrap-around)
         mean = np.bincount(cid, step * real, len(m)) / np.maximum(np.bincount(cid, real, len(m)), 1)
         self.step = np.maximum(step, FIT.step_floor * mean[cid] + NUMERIC.tiny)
-        # one penalty row per sample of a loop and per inner sample of an open curve, but at a
-        # corner (the two sides are fitted apart)
-        self.rows = np.flatnonzero((loop | ((idx != first) & (idx != last))) & ~corner)
+        # one penalty row per window of FIT.order + 1 consecutive samples (from FIT.order // 2
+        # before a sample): every window of a loop, those of an open curve within it, none with
+        # a corner inside it (the two sides are fitted apart)
+        k = FIT.order
+        start = idx
+        for _ in range(k // 2):
+            start = self.prv[start]
+        win = [start]
+        for _ in range(k):
+            win.append(self.nxt[win[-1]])
+        win = np.array(win)  # (k + 1, M)
+        ok = loop | (np.diff(win, axis=0) == 1).all(axis=0)
+        ok &= ~corner[win[1:-1]].any(axis=0)
+        self.rows = np.flatnonzero(ok)
+        self.win = win[:, self.rows]
         # open curves' ends (at their nodes) and corners stay where they are
         self.held = (~loop & ((idx == first) | (idx == last))) | corner
         self.to_held = _to_held(self.held, idx, first, last, loop)
@@ -546,14 +587,19 @@ class _Chains:
         Y = X.copy()
         if not len(self.free):
             return Y
-        # band^2 s_j^2 times the second divided difference: unitless weights, any scale
-        dp, dn, b2 = self.step[self.prv[rows]], self.step[rows], band[rows] ** 2
-        a = b2 * (dp + dn) / (2.0 * dp)
-        c = b2 * (dp + dn) / (2.0 * dn)
+        # (band_j s_j)^k k! times the k-th divided difference over window j (k = FIT.order, s_j
+        # its mean step: about (band_j s_j)^k times the k-th derivative): unitless weights, any
+        # scale
+        win, k = self.win, FIT.order
+        steps = self.step[win[:-1]]  # (k, rows): the window's steps
+        t = np.vstack([np.zeros(len(rows)), np.cumsum(steps, axis=0)])
+        w = np.full((k + 1, len(rows)), float(math.factorial(k)) * (band[rows] * steps.mean(axis=0)) ** k)
+        for i in range(k + 1):
+            for j in range(k + 1):
+                if i != j:
+                    w[i] /= t[i] - t[j]
         r = np.arange(len(rows))
-        stencil, cols = [a, -(a + c), c], [self.prv[rows], rows, self.nxt[rows]]
-        R = coo_matrix((np.concatenate(stencil), (np.tile(r, len(stencil)), np.concatenate(cols))),
-                       shape=(len(rows), M)).tocsr()
+        R = coo_matrix((w.ravel(), (np.tile(r, k + 1), win.ravel())), shape=(len(rows), M)).tocsr()
         A = (identity(M, format="csr") + R.T @ R).tocsr()
         held = np.flatnonzero(self.held)
         for part in (self.free_open, self.free_loop):

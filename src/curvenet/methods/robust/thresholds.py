@@ -1154,29 +1154,32 @@ class Fit(NamedTuple):
     """Stage 8, under noise: each curve fitted by a penalised smoothing spline through its
     samples (:func:`.curves.fit_curves`)."""
 
-    #: widest kernel of the fit, in local spacings (the equivalent kernel of a cubic smoothing
+    #: the derivative whose square the fit penalises: 3 leaves quadratics unpenalised (a bend
+    #: of steady curvature is fitted with the bias of a sixth-order kernel: on a circle of
+    #: radius R sampled every h, a fit of width b spacings pulls it in by about
+    #: R (b h / R)^(2 order)); 2, the cubic smoothing spline (Reinsch 1967) used before, pulls
+    #: bends in as (b h / R)^4 and so had to narrow on every bend (benchmark)
+    #: origin: benchmark (issue 25, 6 December 2026): benchmarks/fit_eval.py, 16 synthetic
+    #: models x 4 noise levels x 2 samplings: mean distance to the true curves 0.447, 0.429,
+    #: 0.417, 0.450 -> 0.412, 0.405, 0.401, 0.433 noise deviations, models over half a deviation
+    #: 5, 4, 3, 5 -> 3, 2, 1, 3 (with ``band`` 5); see docs/method.md, stage 8
+    order: int = 3
+    #: widest kernel of the fit, in local spacings (the equivalent kernel of the smoothing
     #: spline, Silverman 1984: it averages about this many samples on either side), the width
     #: on straight and gently bent stretches (benchmark)
-    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf)
-    band: float = 4.0
+    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf: 4 for
+    #: ``order`` 2; 6 December 2026: 5, 6 and 8 for ``order`` 3, 5 taken: at 6 and 8 the width
+    #: choice below misses the knot's bend, 0.45 -> 0.51 -> 0.58 deviations at noise 0.1 h)
+    band: float = 5.0
     #: narrowest kernel, in local spacings: the width at sharp bends and corners (benchmark)
-    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf)
+    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf; 1,
+    #: 1.5 and 2 again with ``order`` 3, 6 December 2026: 1.5)
     band_min: float = 1.5
     #: within a few samples of a held end (a node) the kernel is at most this many spacings wide
     #: per sample from the end (benchmark)
-    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf)
+    #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf;
+    #: 0.5, 0.7 and 1 again with ``order`` 3, 6 December 2026: 1, see docs/method.md)
     end_taper: float = 1.0
-    #: squared L2 norm of the spline's equivalent kernel of width 1 (Silverman's kernel,
-    #: ``3 / (8 sqrt(2))``): a fit of width ``b`` spacings keeps ``kernel_l2 / b`` of the
-    #: noise variance
-    #: origin: derived: Silverman's kernel (above), not a tuning
-    kernel_l2: float = 0.265
-    #: order of the spline's equivalent kernel (Silverman's kernel is of fourth order): the bias
-    #: of a fit of width ``b`` grows as ``b^q``, so the width of least expected squared error
-    #: minimises ``(b / wide)^(2q) bias2 + kernel_l2 sigma^2 / b`` (``bias2``: the squared bias
-    #: of the widest fit, of width ``wide``; a property of the kernel, not a tuning; unitless)
-    #: origin: a property of the kernel (above)
-    bias_order: float = 4.0
     #: the wide fit's squared bias at a sample is the larger of the mean squared parting of the
     #: two fits over this many wide-kernel reaches on either side (short: a corner's bias stays
     #: local) ...
