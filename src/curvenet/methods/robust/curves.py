@@ -361,32 +361,36 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
 
 
 def _widths(ch: "_Chains", sigma: float) -> np.ndarray:
-    """(M,) kernel width per sample, in local spacings (see :func:`fit_curves`)."""
-    wide, narrow = FIT.band, FIT.band_min
-    Yw = ch.solve(np.full(ch.M, wide))
-    Yn = ch.solve(np.full(ch.M, narrow))
+    """(M,) kernel width per sample, in local spacings (see :func:`fit_curves`).
+
+    The curves are fitted with each of ``FIT.widths`` candidate widths, geometric from
+    ``FIT.band_min`` to ``FIT.band``. A candidate's squared bias at a sample is read as the
+    squared parting (across the curve) of its fit from the narrowest one, averaged along the
+    curve (over ``FIT.bias_reach`` and ``FIT.bias_reach_long`` of its reaches: the larger),
+    less what the noise alone puts between the two fits; its variance is what its kernel keeps
+    of the noise. Each sample takes the candidate of least sum. Read so, the bias of every
+    candidate is measured, not extrapolated from the widest one by a power of the width (which
+    holds on smooth bends but not on a traced neurite's zigzag, whose bias grows about as the
+    width itself)."""
+    cand = np.geomspace(FIT.band_min, FIT.band, FIT.widths)
+    fits = [ch.solve(np.full(ch.M, b)) for b in cand]
     d = ch.X.shape[1]
-    t = Yw[ch.nxt_open] - Yw[ch.prv_open]
+    t = fits[-1][ch.nxt_open] - fits[-1][ch.prv_open]
     t /= np.maximum(np.linalg.norm(t, axis=1), NUMERIC.tiny)[:, None]
-    D = Yn - Yw
-    D -= (D * t).sum(axis=1)[:, None] * t  # across the curve only
-    # the mean over a window of the wide kernel's reach along the curve (within the curve),
-    # and over a longer window (a steadier mean where the curve bends smoothly): the larger
-    part = (D * D).sum(axis=1)
-    part2 = np.maximum(_window_mean(part, ch, int(np.ceil(FIT.bias_reach * wide))),
-                       _window_mean(part, ch, int(np.ceil(FIT.bias_reach_long * wide))))
-    # what the noise alone puts between the two fits, and the wide fit's bias beyond it
-    l2 = kernel_l2(FIT.order)
-    noise2 = (d - 1) * l2 * sigma**2 * (1.0 / narrow - 1.0 / wide)
-    bias2 = np.maximum(part2 - noise2, NUMERIC.tiny)
-    # the width of least expected squared error: squared bias (b / wide)^(2 q) bias2 (the
-    # equivalent kernel is of order q = 2 FIT.order: the bias grows as b^q), variance
-    # l2 sigma^2 / b
-    q2 = 2.0 * (2 * FIT.order)
-    best = wide * ((d - 1) * l2 * sigma**2 / (q2 * wide * bias2)) ** (1.0 / (q2 + 1.0))
+    var = (d - 1) * kernel_l2(FIT.order) * sigma**2  # the noise a kernel of width 1 keeps (across)
+    mse = np.empty((len(cand), ch.M))
+    mse[0] = var / cand[0]
+    for i in range(1, len(cand)):
+        D = fits[0] - fits[i]
+        D -= (D * t).sum(axis=1)[:, None] * t  # across the curve only
+        part = (D * D).sum(axis=1)
+        part2 = np.maximum(_window_mean(part, ch, int(np.ceil(FIT.bias_reach * cand[i]))),
+                           _window_mean(part, ch, int(np.ceil(FIT.bias_reach_long * cand[i]))))
+        mse[i] = np.maximum(part2 - var * (1.0 / cand[0] - 1.0 / cand[i]), 0.0) + var / cand[i]
+    best = cand[np.argmin(mse, axis=0)]
     # near a held end no wider than its distance from it in samples: a node placed off the
     # samples then pulls only the last few of them
-    return np.clip(np.minimum(best, FIT.end_taper * ch.to_held), narrow, wide)
+    return np.clip(np.minimum(best, FIT.end_taper * ch.to_held), cand[0], cand[-1])
 
 
 def kernel_l2(order: int) -> float:
@@ -576,54 +580,102 @@ class _Chains:
         # the open curves' free samples (a banded system: no wrap-around) and the loops'
         self.free_open = np.flatnonzero(~self.held & ~loop)
         self.free_loop = np.flatnonzero(loop & ~self.held)
+        self._system = None
+
+    def _structure(self):
+        """The system's layout, built once (it does not depend on the widths): each window's
+        unit stencil (``k!`` times its divided-difference weights times its mean step to the
+        ``k``); every entry of ``I + R^T R`` a slot ``(sample, offset along its curve)`` of a
+        band ``2 k + 1`` wide (cyclic on a loop), the products of two stencil weights summed
+        into their slots by one ``bincount`` in a fixed order (the same bits whichever curves
+        share the block); per part (open curves, loops) the slots of its free block's lower
+        triangle in CSR order and those that couple it to the held samples."""
+        if self._system is not None:
+            return self._system
+        win, k, M, idx = self.win, FIT.order, self.M, self.idx
+        width = 2 * k + 1
+        steps = self.step[win[:-1]]  # (k, rows): the window's steps
+        t = np.vstack([np.zeros(win.shape[1]), np.cumsum(steps, axis=0)])
+        unit = np.full((k + 1, win.shape[1]), float(math.factorial(k)) * steps.mean(axis=0) ** k)
+        for i in range(k + 1):
+            for j in range(k + 1):
+                if i != j:
+                    unit[i] /= t[i] - t[j]
+        length = self.last - self.first + 1
+
+        def canonical(o, n):  # an offset along a loop of n samples, within half of it
+            o = np.mod(o, n)
+            return np.where(2 * o > n, o - n, o)
+
+        a, b = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+        a, b = a.ravel(), b.ravel()
+        at = win[a]  # (pairs, rows): the sample of each entry's row
+        off = np.broadcast_to((b - a)[:, None], at.shape)
+        short = self.loop & (length <= 2 * k)  # a loop whose band wraps onto itself
+        if short.any():
+            off = np.where(short[at], canonical(off, length[at]), off)
+        slots = np.concatenate([idx * width + k, (at * width + off + k).ravel()])
+        prod = np.concatenate([np.ones(M), (unit[a] * unit[b]).ravel()])
+        # the sample at each (sample, offset): -1 off an open curve's ends or (on a short loop)
+        # where another offset names the same sample
+        nb = np.full((M, width), -1, dtype=np.int64)
+        nb[:, k] = idx
+        fwd, back = idx, idx
+        for o in range(1, k + 1):
+            fwd, back = self.nxt[fwd], self.prv[back]
+            ahead = self.loop | (idx + o <= self.last)
+            behind = self.loop | (idx - o >= self.first)
+            if short.any():
+                ahead &= ~short | (canonical(o, length) == o)
+                behind &= ~short | (canonical(-o, length) == -o)
+            nb[:, k + o] = np.where(ahead, fwd, -1)
+            nb[:, k - o] = np.where(behind, back, -1)
+        parts = []
+        for part in (self.free_open, self.free_loop):
+            if not len(part):
+                continue
+            pos = np.full(M, -1, dtype=np.int64)
+            pos[part] = np.arange(len(part))
+            cols = nb[part]  # (n, width)
+            free = (cols >= 0) & (pos[np.maximum(cols, 0)] >= 0)
+            lower = free & (cols <= part[:, None])
+            order = np.argsort(np.where(lower, cols, M), axis=1, kind="stable")  # columns ascending
+            r = np.arange(len(part))[:, None]
+            keep = lower[r, order]
+            low_slots = (part[:, None] * width + order)[keep]
+            indptr = np.r_[0, np.cumsum(keep.sum(axis=1))].astype(np.int64)
+            indices = pos[cols[r, order][keep]].astype(np.int64)
+            held = (cols >= 0) & self.held[np.maximum(cols, 0)]
+            hr, ho = np.nonzero(held)
+            parts.append((part, low_slots, indptr, indices, part[hr] * width + ho, hr, cols[hr, ho]))
+        self._system = (slots, prod, M * width, parts)
+        return self._system
 
     def solve(self, band: np.ndarray) -> np.ndarray:
         """(M, d) fitted samples for the kernel width ``band`` (M,) of each sample (spacings);
-        the held ends stay where they are."""
-        from scipy.sparse import coo_matrix, identity
+        the held ends stay where they are.
 
-        rows, M = self.rows, self.M
+        Each part's free block is solved by the envelope Cholesky kernel
+        (:func:`~.kernels.linalg._envelope_solve`): banded for the open curves, banded but for
+        their wrap-around for the loops (whose fill stays in their last rows). Its fixed order
+        of operations gives the same bits on every machine (LAPACK's banded Cholesky and
+        SuperLU, used before, did not: their BLAS kernels depend on the processor)."""
         X = self.X
         Y = X.copy()
         if not len(self.free):
             return Y
-        # (band_j s_j)^k k! times the k-th divided difference over window j (k = FIT.order, s_j
-        # its mean step: about (band_j s_j)^k times the k-th derivative): unitless weights, any
-        # scale
-        win, k = self.win, FIT.order
-        steps = self.step[win[:-1]]  # (k, rows): the window's steps
-        t = np.vstack([np.zeros(len(rows)), np.cumsum(steps, axis=0)])
-        w = np.full((k + 1, len(rows)), float(math.factorial(k)) * (band[rows] * steps.mean(axis=0)) ** k)
-        for i in range(k + 1):
-            for j in range(k + 1):
-                if i != j:
-                    w[i] /= t[i] - t[j]
-        r = np.arange(len(rows))
-        R = coo_matrix((w.ravel(), (np.tile(r, k + 1), win.ravel())), shape=(len(rows), M)).tocsr()
-        A = (identity(M, format="csr") + R.T @ R).tocsr()
-        held = np.flatnonzero(self.held)
-        for part in (self.free_open, self.free_loop):
-            if not len(part):
-                continue
-            Ap = A[part]
-            rhs = X[part] - Ap[:, held] @ X[held] if len(held) else X[part]
-            Y[part] = _spd_solve(Ap[:, part], rhs)
+        # the penalty row of window j weighs (band_j s_j)^k k! times the k-th divided difference
+        # (k = FIT.order, s_j its mean step: about (band_j s_j)^k times the k-th derivative):
+        # unitless weights, any scale; its entries of R^T R scale as band_j^(2 k)
+        slots, prod, size, parts = self._structure()
+        scale = np.concatenate([np.ones(self.M), np.tile(band[self.rows] ** (2 * FIT.order), (FIT.order + 1) ** 2)])
+        vals = np.bincount(slots, weights=prod * scale, minlength=size)
+        for part, low, indptr, cols, held, hrow, hcol in parts:
+            rhs = X[part].copy()
+            for c in range(X.shape[1]):
+                rhs[:, c] -= np.bincount(hrow, weights=vals[held] * X[hcol, c], minlength=len(part))
+            Y[part] = _k.envelope_solve(indptr, cols, np.ascontiguousarray(vals[low]), np.ascontiguousarray(rhs))
         return Y
-
-
-def _spd_solve(A, rhs: np.ndarray) -> np.ndarray:
-    """Solve the symmetric positive definite sparse system ``A`` (n, n) for ``rhs`` (n, d) by
-    the envelope Cholesky kernel (:func:`~.kernels.linalg._envelope_solve`): banded for the
-    open curves, banded but for their wrap-around for the loops (whose fill stays in their last
-    rows). Its fixed order of operations gives the same bits on every machine (LAPACK's banded
-    Cholesky and SuperLU, used before, did not: their BLAS kernels depend on the processor)."""
-    from scipy.sparse import tril
-
-    low = tril(A, format="csr")
-    low.sort_indices()
-    return _k.envelope_solve(low.indptr.astype(np.int64), low.indices.astype(np.int64),
-                             np.ascontiguousarray(low.data, dtype=np.float64),
-                             np.ascontiguousarray(rhs, dtype=np.float64))
 
 
 def drop_spikes(curves, P: np.ndarray, h: np.ndarray, noise: float):

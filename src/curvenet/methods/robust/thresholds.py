@@ -1159,22 +1159,31 @@ class Fit(NamedTuple):
     #: radius R sampled every h, a fit of width b spacings pulls it in by about
     #: R (b h / R)^(2 order)); 2, the cubic smoothing spline (Reinsch 1967) used before, pulls
     #: bends in as (b h / R)^4 and so had to narrow on every bend (benchmark)
-    #: origin: benchmark (issue 25, 6 December 2026): benchmarks/fit_eval.py, 16 synthetic
-    #: models x 4 noise levels x 2 samplings: mean distance to the true curves 0.447, 0.429,
-    #: 0.417, 0.450 -> 0.412, 0.405, 0.401, 0.433 noise deviations, models over half a deviation
-    #: 5, 4, 3, 5 -> 3, 2, 1, 3 (with ``band`` 5); see docs/method.md, stage 8
+    #: origin: benchmark (issue 25, 6 December 2026): benchmarks/fit_eval.py --samplings 4, with
+    #: the candidate widths below: mean distance to the true curves 0.045, 0.085, 0.125, 0.136
+    #: -> 0.042, 0.082, 0.126, 0.135 h at noise 0.1, 0.2, 0.3 h and 0.3 h + x3, models over half
+    #: a noise deviation 4, 4, 4, 5 -> 3, 2, 3, 5; the 8 kinds and the 20 real-dev networks
+    #: closer too (order 2 with the same width choice: synthetic worse); see docs/method.md,
+    #: stage 8
     order: int = 3
     #: widest kernel of the fit, in local spacings (the equivalent kernel of the smoothing
     #: spline, Silverman 1984: it averages about this many samples on either side), the width
     #: on straight and gently bent stretches (benchmark)
     #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf: 4 for
-    #: ``order`` 2; 6 December 2026: 5, 6 and 8 for ``order`` 3, 5 taken: at 6 and 8 the width
-    #: choice below misses the knot's bend, 0.45 -> 0.51 -> 0.58 deviations at noise 0.1 h)
+    #: ``order`` 2; 6 December 2026: 5, 6 and 8 for ``order`` 3 with the width extrapolated
+    #: from the widest fit, 5 taken: the knot 0.45, 0.51, 0.58 deviations at noise 0.1 h)
     band: float = 5.0
     #: narrowest kernel, in local spacings: the width at sharp bends and corners (benchmark)
     #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf; 1,
     #: 1.5 and 2 again with ``order`` 3, 6 December 2026: 1.5)
     band_min: float = 1.5
+    #: the number of candidate widths, geometric from ``band_min`` to ``band`` (each one a
+    #: solve of the whole system: the fit's time grows with it): each sample takes the one of
+    #: least estimated squared error (``curves._widths``)
+    #: origin: benchmark (issue 25, 6 December 2026): 4, 5 and 7 candidates over the 16
+    #: synthetic models, the 8 kinds and the 20 real-dev networks at noise 0.1 h, 0.2 h and 0.3 h
+    #: + x3: the same to 0.007 noise deviations; 4 the cheapest
+    widths: int = 4
     #: within a few samples of a held end (a node) the kernel is at most this many spacings wide
     #: per sample from the end (benchmark)
     #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf;
