@@ -1011,3 +1011,40 @@ def test_fit_distance_to_the_nearest_held_sample_matches_a_plain_loop():
             hs = [j for j in range(first[i], last[i] + 1) if held[j]]
             want = min((min(abs(i - j), n - abs(i - j)) if loop[i] else abs(i - j) for j in hs), default=np.inf)
             assert got[i] == want
+
+
+@pytest.mark.parametrize("lens, closed", [([3, 4, 5], [False] * 3), ([4, 5, 6, 7, 8], [True] * 5),
+                                          ([6, 12, 30], [True, False, True])])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_fit_system_equals_the_dense_energy(lens, closed, dim):
+    # _Chains.solve assembles I + R^T R as slots of a band (cyclic on a loop; on a loop shorter
+    # than the band the offsets that name one sample share a slot): its solution equals the
+    # minimiser of the energy in fit_curves' docstring built densely, window by window
+    import math
+
+    from curvenet.methods.robust.curves import _Chains
+    from curvenet.methods.robust.thresholds import FIT
+
+    rng = np.random.default_rng(len(lens) * 10 + dim)
+    m = np.array(lens)
+    X = rng.normal(size=(m.sum(), dim))
+    ch = _Chains(X, m, np.array(closed))
+    band = rng.uniform(FIT.band_min, FIT.band, size=len(X))
+    k, M = FIT.order, len(X)
+    A = np.eye(M)
+    for r, j in enumerate(ch.rows):
+        w = ch.win[:, r]
+        st = ch.step[w[:-1]]
+        t = np.r_[0.0, np.cumsum(st)]
+        u = np.full(k + 1, math.factorial(k) * (band[j] * st.mean()) ** k)
+        for a in range(k + 1):
+            for b in range(k + 1):
+                if a != b:
+                    u[a] /= t[a] - t[b]
+        row = np.zeros(M)
+        np.add.at(row, w, u)
+        A += np.outer(row, row)
+    free, held = ~ch.held, ch.held
+    want = X.copy()
+    want[free] = np.linalg.solve(A[np.ix_(free, free)], X[free] - A[np.ix_(free, held)] @ X[held])
+    assert np.allclose(ch.solve(band), want, rtol=0, atol=1e-8)
