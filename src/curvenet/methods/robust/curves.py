@@ -294,11 +294,12 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     two ends are held where they are (at its nodes); a closed loop is periodic (no seam).
 
     The width ``b_j`` is chosen per sample from the noise ``sigma`` (Lepski's idea): the curves
-    are fitted with the widest kernel ``FIT.band`` and with the narrowest ``FIT.band_min``;
-    where the two fits part (across the curve) by more than the noise explains (their parting
-    averaged along the curve over ``FIT.bias_reach`` and over ``FIT.bias_reach_long`` wide
-    kernels: the larger), the wide fit rounds a bend or a corner, and the width is cut to the one that minimises the expected
-    squared error: bias growing as ``b^(2 k)``, noise variance falling as ``1 / b``. On a straight
+    are fitted with ``FIT.widths`` candidate widths from ``FIT.band_min`` to ``FIT.band``; a
+    candidate whose fit parts (across the curve) from the narrowest one by more than the noise
+    explains (the parting averaged along the curve over ``FIT.bias_reach`` and over
+    ``FIT.bias_reach_long`` of its reaches: the larger) rounds a bend or a corner, and each
+    sample takes the candidate of least expected squared error: that bias squared, plus the
+    noise variance its kernel keeps (falling as ``1 / b``), see :func:`_widths`. On a straight
     or gently bent stretch the width stays ``FIT.band``; within a few samples of a held end it
     is at most ``FIT.end_taper`` times their number (a node placed a little off the samples
     pulls only the last few).
@@ -324,8 +325,8 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     Notes
     -----
     Every curve is solved at once, in one sparse symmetric system of as many unknowns as
-    samples (banded but for the wrap-around of the loops): three solves in all, linear in the
-    number of samples.
+    samples (banded but for the wrap-around of the loops): ``FIT.widths`` + 1 solves in all (one per
+    candidate width, then the chosen ones), linear in the number of samples.
     """
     sel = [i for i, c in enumerate(curves) if len(c.points) >= FIT.min_points]
     if (band is not None and band <= 0) or not sel:
