@@ -1048,3 +1048,15 @@ def test_fit_system_equals_the_dense_energy(lens, closed, dim):
     want = X.copy()
     want[free] = np.linalg.solve(A[np.ix_(free, free)], X[free] - A[np.ix_(free, held)] @ X[held])
     assert np.allclose(ch.solve(band), want, rtol=0, atol=1e-8)
+
+
+def test_fit_of_curves_too_short_for_a_window_keeps_them():
+    # with FIT.order 3 a window holds 4 samples: a block of 3-sample curves has no penalty row,
+    # so the fit keeps their samples (it failed on the empty sum of the rows' entries)
+    from curvenet.methods.robust.curves import fit_curves
+    from curvenet.network import Curve
+
+    cs = [Curve(np.array([[0.0, 0.0], [1.0, 0.3], [2.0, 0.0]]), 0, 1, False, np.arange(3)),
+          Curve(np.array([[0.0, 1.0], [1.0, 1.2], [2.0, 1.0]]), 2, 3, False, np.arange(3, 6))]
+    out = fit_curves(cs, 0.1)
+    assert all(np.array_equal(a.points, b.points) for a, b in zip(out, cs))

@@ -586,10 +586,10 @@ class _Chains:
     def _structure(self):
         """The system's layout, built once (it does not depend on the widths): each window's
         unit stencil (``k!`` times its divided-difference weights times its mean step to the
-        ``k``); every entry of ``I + R^T R`` a slot ``(sample, offset along its curve)`` of a
-        band ``2 k + 1`` wide (cyclic on a loop), the products of two stencil weights summed
-        into their slots by one ``bincount`` in a fixed order (the same bits whichever curves
-        share the block); per part (open curves, loops) the slots of its free block's lower
+        ``k``); every entry of ``R^T R`` a slot ``(sample, offset along its curve)`` of a band
+        ``2 k + 1`` wide (cyclic on a loop), the products of two stencil weights summed into
+        their slots by one ``bincount`` in a fixed order (the same bits whichever curves share
+        the block), the identity added on the diagonal slots; per part (open curves, loops) the slots of its free block's lower
         triangle in CSR order and those that couple it to the held samples."""
         if self._system is not None:
             return self._system
@@ -615,8 +615,8 @@ class _Chains:
         short = self.loop & (length <= 2 * k)  # a loop whose band wraps onto itself
         if short.any():
             off = np.where(short[at], canonical(off, length[at]), off)
-        slots = np.concatenate([idx * width + k, (at * width + off + k).ravel()])
-        prod = np.concatenate([np.ones(M), (unit[a] * unit[b]).ravel()])
+        slots = (at * width + off + k).ravel()
+        prod = unit[a] * unit[b]  # (pairs, rows)
         # the sample at each (sample, offset): -1 off an open curve's ends or (on a short loop)
         # where another offset names the same sample
         nb = np.full((M, width), -1, dtype=np.int64)
@@ -649,7 +649,7 @@ class _Chains:
             held = (cols >= 0) & self.held[np.maximum(cols, 0)]
             hr, ho = np.nonzero(held)
             parts.append((part, low_slots, indptr, indices, part[hr] * width + ho, hr, cols[hr, ho]))
-        self._system = (slots, prod, M * width, parts)
+        self._system = (slots, prod, idx * width + k, M * width, parts)
         return self._system
 
     def solve(self, band: np.ndarray) -> np.ndarray:
@@ -668,9 +668,10 @@ class _Chains:
         # the penalty row of window j weighs (band_j s_j)^k k! times the k-th divided difference
         # (k = FIT.order, s_j its mean step: about (band_j s_j)^k times the k-th derivative):
         # unitless weights, any scale; its entries of R^T R scale as band_j^(2 k)
-        slots, prod, size, parts = self._structure()
-        scale = np.concatenate([np.ones(self.M), np.tile(band[self.rows] ** (2 * FIT.order), (FIT.order + 1) ** 2)])
-        vals = np.bincount(slots, weights=prod * scale, minlength=size)
+        slots, prod, diagonal, size, parts = self._structure()
+        vals = np.bincount(slots, weights=(prod * band[self.rows] ** (2 * FIT.order)).ravel(),
+                           minlength=size).astype(np.float64, copy=False)  # (no window: an empty int count)
+        vals[diagonal] += 1.0  # the identity (the data term)
         for part, low, indptr, cols, held, hrow, hcol in parts:
             rhs = X[part].copy()
             for c in range(X.shape[1]):
