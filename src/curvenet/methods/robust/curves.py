@@ -325,8 +325,8 @@ def fit_curves(curves: list[Curve], sigma: float, band: float | None = None) -> 
     Notes
     -----
     Every curve is solved at once, in one sparse symmetric system of as many unknowns as
-    samples (banded but for the wrap-around of the loops): ``FIT.widths`` + 1 solves in all (one per
-    candidate width, then the chosen ones), linear in the number of samples.
+    samples (banded but for the wrap-around of the loops): ``FIT.widths`` + 1 solves in all
+    (one per candidate width, then the chosen ones), linear in the number of samples.
     """
     sel = [i for i, c in enumerate(curves) if len(c.points) >= FIT.min_points]
     if (band is not None and band <= 0) or not sel:
@@ -589,8 +589,9 @@ class _Chains:
         ``k``); every entry of ``R^T R`` a slot ``(sample, offset along its curve)`` of a band
         ``2 k + 1`` wide (cyclic on a loop), the products of two stencil weights summed into
         their slots by one ``bincount`` in a fixed order (the same bits whichever curves share
-        the block), the identity added on the diagonal slots; per part (open curves, loops) the slots of its free block's lower
-        triangle in CSR order and those that couple it to the held samples."""
+        the block), the identity added on the diagonal slots; per part (open curves, loops) the
+        slots of its free block's lower triangle in CSR order and those that couple it to the
+        held samples."""
         if self._system is not None:
             return self._system
         win, k, M, idx = self.win, FIT.order, self.M, self.idx

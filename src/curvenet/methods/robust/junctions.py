@@ -644,19 +644,21 @@ def hidden_fork(P, sc: Scales, prm: RobustParams, ids, rid, paths):
         return None
     stem = np.r_[np.asarray(ids), S[p1[1:f + 1]]]
     anchor = P[S[p1[f]]]
-    x = branches_meeting(P, h, (stem, l1[::-1], l2[::-1]), NODES.fit_span + NODES.fit_noise * noise / hl, anchor)
-    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm.shell_outer * hs:
-        x = anchor
-    return S[p1[1:f]], x, [l1[1:], l2[1:]]
+    x = branches_meeting(P, sc, prm, (stem, l1[::-1], l2[::-1]), hl, anchor)
+    return S[p1[1:f]], anchor if x is None else x, [l1[1:], l2[1:]]
 
 
-def branches_meeting(P, h, branches, span, anchor):
+def branches_meeting(P, sc: Scales, prm: RobustParams, branches, hl: float, anchor):
     """The least-squares meeting point of the lines of ``branches`` (id lists, each running
-    towards the junction), each fitted on its end portion over ``span`` spacings
-    (:func:`.chains.end_portion`), pulled towards ``anchor`` (d,) by ``NODES.anchor_pull`` (which
-    only makes near-parallel lines well-posed); a branch of one point gives no line. Returns
-    the (d,) point (not finite where the system is singular). :func:`hidden_fork` places a
-    fork's node so, and :func:`.nodes._tail_fork_node` one found on a chain's tail."""
+    towards the junction), each fitted on its end portion over ``NODES.fit_span`` spacings
+    plus ``NODES.fit_noise`` noise (:func:`.chains.end_portion`; ``hl`` the local spacing),
+    pulled towards ``anchor`` (d,) by ``NODES.anchor_pull`` (which only makes near-parallel
+    lines well-posed); a branch of one point gives no line. Returns the (d,) point, or None
+    where the system is singular or the point lies over one outer shell radius (widened for
+    noise) from ``anchor``. :func:`hidden_fork` places a fork's node so, and
+    :func:`.nodes._tail_fork_node` one found on a chain's tail."""
+    h, noise = sc.h, sc.noise
+    span = NODES.fit_span + NODES.fit_noise * noise / hl
     dim = P.shape[1]
     A = np.zeros((dim, dim))
     bb = np.zeros(dim)
@@ -669,7 +671,10 @@ def branches_meeting(P, h, branches, span, anchor):
         bb += M @ cc
     A += NODES.anchor_pull * np.eye(dim)
     bb += NODES.anchor_pull * anchor
-    return np.linalg.solve(A, bb)
+    x = np.linalg.solve(A, bb)
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x - anchor) > prm.shell_outer * (hl + SHELL.widen * noise):
+        return None
+    return x
 
 
 def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):

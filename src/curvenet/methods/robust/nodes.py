@@ -210,13 +210,9 @@ def _tail_fork_node(P, sc: Scales, prm: RobustParams, stem, tail, ext, x, leaves
     anchor = np.mean([P[int(lf[0])] for lf in leaves], axis=0)
     rest = tail[~on_leaf]
     rest = rest[np.argsort(np.linalg.norm(P[rest] - anchor, axis=1)[::-1], kind="stable")]
-    hl = float(np.median(h[tail]))
     branches = (np.r_[np.asarray(stem), np.asarray(ext, dtype=np.int64), rest], *(np.asarray(lf)[::-1] for lf in leaves))
-    y = branches_meeting(P, h, branches, NODES.fit_span + NODES.fit_noise * sc.noise / hl, anchor)
-    hs = hl + SHELL.widen * sc.noise
-    if not np.all(np.isfinite(y)) or np.linalg.norm(y - anchor) > prm.shell_outer * hs:
-        return x
-    return y
+    y = branches_meeting(P, sc, prm, branches, float(np.median(h[tail])), anchor)
+    return x if y is None else y
 
 
 def free_end(P, h, ids, rid, m=None):

@@ -1189,9 +1189,9 @@ class Fit(NamedTuple):
     #: origin: benchmark: benchmarks/fit_eval.py, the distance to the true curves (71dc5cf;
     #: 0.5, 0.7 and 1 again with ``order`` 3, 6 December 2026: 1, see docs/method.md)
     end_taper: float = 1.0
-    #: the wide fit's squared bias at a sample is the larger of the mean squared parting of the
-    #: two fits over this many wide-kernel reaches on either side (short: a corner's bias stays
-    #: local) ...
+    #: a candidate width's squared bias at a sample is the larger of the mean squared parting
+    #: of its fit from the narrowest over this many of its reaches on either side (short: a
+    #: corner's bias stays local) ...
     #: origin: the reach of the widest kernel (71dc5cf): a window of one kernel width
     bias_reach: float = 1.0
     #: ... and over this many (long: the parting of the two fits is correlated over about one
