@@ -209,7 +209,7 @@ def _tail_fork_node(P, sc: Scales, prm: RobustParams, stem, tail, ext, x, leaves
     on_leaf = np.isin(tail, np.concatenate([np.asarray(lf) for lf in leaves] + [np.asarray(ext, dtype=np.int64)]))
     anchor = np.mean([P[int(lf[0])] for lf in leaves], axis=0)
     rest = tail[~on_leaf]
-    rest = rest[np.argsort(np.linalg.norm(P[rest] - anchor, axis=1)[::-1], kind="stable")]
+    rest = rest[np.argsort(-np.linalg.norm(P[rest] - anchor, axis=1), kind="stable")]  # farthest first
     branches = (np.r_[np.asarray(stem), np.asarray(ext, dtype=np.int64), rest], *(np.asarray(lf)[::-1] for lf in leaves))
     y = branches_meeting(P, sc, prm, branches, float(np.median(h[tail])), anchor)
     return x if y is None else y
