@@ -921,16 +921,36 @@ def test_split_multiple_junctions_leaves_a_pair_to_the_paired_split():
 def test_split_multiple_junctions_keeps_a_hub_of_higher_valence():
     # the row of three again, but the first junction with two branches more (up-left, down):
     # valence 5 with the segment, over SPANNING.max_valence: a hub spread by the noise, whole
-    topo, r = _row(4.0)
+    topo, r = _row_with_a_hub_first(3)
+    assert SPANNING.max_valence < 5
+    _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
+
+
+def _row_with_a_hub_first(teeth):
+    """:func:`_row` with two branches more (up-left, down) at its first junction: valence 5."""
+    topo, r = _row(4.0, teeth=teeth)
     net = _Net()
     net.pts, net.chains, net.regions = topo.P.tolist(), topo.chains, topo.regions
     extra = net._add(np.r_[_line((-1, 1), (-2, 2), 2), _line((0, -1), (0, -3), 3)])
     net.regions[r] = np.r_[net.regions[r], extra]
     net.chain(_line((-3, 3), (-10, 10), 8), (-1, r))
     net.chain(_line((0, -4), (0, -15), 12), (-1, r))
-    topo = net.topology()
-    assert SPANNING.max_valence < 5
-    _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
+    return net.topology(), r
+
+
+def test_split_multiple_junctions_parts_a_row_of_plain_junctions_beside_a_core_of_higher_valence():
+    # the hub's satellites of test_split_multiple_junctions_keeps_a_hub_of_higher_valence are
+    # two; here SPANNING.min_cores plain junctions (valence 3) follow the core of valence 5 along
+    # the spine: a row (a ladder's rail under noise, two of its junctions in one core), split,
+    # the core of valence 5 kept as one junction
+    topo, r = _row_with_a_hub_first(SPANNING.min_cores + 1)
+    n_reg = len(topo.regions)
+    _run(R.split_multiple_junctions, topo, PAIR_NOISE)
+    assert len(topo.regions) == n_reg + SPANNING.min_cores
+    vals = [int(topo.v[q]) for q in [r, *range(n_reg, n_reg + SPANNING.min_cores)]]
+    assert sorted(vals) == [3] * SPANNING.min_cores + [5]
+    hub = [q for q in [r, *range(n_reg, len(topo.regions))] if topo.v[q] == 5]
+    assert np.linalg.norm(topo.P[topo.regions[hub[0]]].mean(axis=0)) < 1.5
 
 
 def test_split_multiple_junctions_parts_a_row_and_a_pair_on_noise_free_input():
