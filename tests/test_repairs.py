@@ -941,8 +941,8 @@ def _row_with_a_hub_first(teeth):
 def test_split_multiple_junctions_parts_a_row_of_plain_junctions_beside_a_core_of_higher_valence():
     # the hub's satellites of test_split_multiple_junctions_keeps_a_hub_of_higher_valence are
     # two; here SPANNING.min_cores plain junctions (valence 3) follow the core of valence 5 along
-    # the spine: a row (a ladder's rail under noise, two of its junctions in one core), split,
-    # the core of valence 5 kept as one junction
+    # the spine: a row (a ladder's rail under noise, a core holding the ends of a junction the
+    # tree did not show), split, the core of valence 5 kept as one junction
     topo, r = _row_with_a_hub_first(SPANNING.min_cores + 1)
     n_reg = len(topo.regions)
     _run(R.split_multiple_junctions, topo, PAIR_NOISE)

@@ -25,8 +25,9 @@ and the whole row stayed one node); a core of higher
 valence is a hub of many strokes spread by the noise, and a region whose branches' lines all
 meet one point (:func:`.paired.meet_at_one_point`) is one junction: both are left whole. The
 exception is a core of higher valence beside ``SPANNING.min_cores`` plain junctions (valence
-3): that is a row, two of whose junctions the tree did not part (a ladder's rail under noise),
-and it is split, the core of higher valence kept as one junction; a hub's satellites are fewer
+3): that is a row, and the core holds the chain ends of a junction of the row that the pruned
+tree did not show (a ladder's rail under noise); it is split, the core of higher valence kept as
+one junction; a hub's satellites are fewer
 (two or fewer plain cores on every CASSIE sketch under noise).
 :func:`split_multiple_junctions` (a repair of :data:`.repairs.ORDER`, the first: before any
 other repair reads the region) then splits the cores off the region one leaf of the core tree at
@@ -353,7 +354,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         return None
     regular = sum(1 for k in live if val[k] == NODES.junction_valence)
     # a core over SPANNING.max_valence is a hub of many strokes spread by the noise, unless a row
-    # of SPANNING.min_cores plain junctions lies beside it (then two of the row's junctions in one core)
+    # of SPANNING.min_cores plain junctions lies beside it (then it holds a missed junction's ends)
     if max(val.values()) > SPANNING.max_valence and regular < SPANNING.min_cores:
         return None
     if sum(len(s) for s in nbr.values()) != 2 * (len(live) - 1):  # the cores' graph is a tree

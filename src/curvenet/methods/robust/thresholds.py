@@ -776,13 +776,14 @@ class Spanning(NamedTuple):
     #: each junction of the row has at most this valence (rows of real networks: a comb's, a
     #: street's, a facade's junctions of valence 3 and 4); a core of more is a hub of many
     #: strokes spread by the noise (a real sketch's pole), left whole with its region, unless
-    #: ``min_cores`` plain junctions (valence 3) lie beside it: then the region is a row, two of
-    #: whose junctions fell into one core of the tree, split with that core kept as one junction
+    #: ``min_cores`` plain junctions (valence 3) lie beside it: then the region is a row, and the
+    #: core holds the chain ends of a junction of the row the pruned tree did not show (a ladder's
+    #: rail under noise); it is split, that core kept as one junction
     #: origin: measured: CASSIE hat under noise 0.1h and 2% outliers, a hub of 14 strokes read
     #: as 3 cores of valence 6, 3 and 3 (curve F1 0.966 -> 0.929). The row exception (issue 25,
     #: 6 December 2026): the CASSIE regions with a core over 4 held at most 2 plain cores
     #: ([5, 5, 3, 4], [3, 5, 4], [3, 3, 5], the flower's [4, 4, 9, 3, 3]); the kinds' rails
-    #: 5-7 ([3, 3, 3, 3, 3, 3, 5, 3]): ladder noise 0.2h s4 0.353 -> 0.915, 0.3h + x3 s0 0.423
+    #: held 5 to 7 ([3, 3, 3, 3, 3, 3, 5, 3]): ladder noise 0.2h s4 0.353 -> 0.915, 0.3h + x3 s0 0.423
     #: -> 0.746, comb 0.3h + x3 s5 0.000 -> 0.486, CASSIE 5 of 128 runs at noise 0.2h and 0.3h
     #: better by 0.016-0.086, none worse of 928 + 352 harness runs and 320 CASSIE runs
     max_valence: int = 4
