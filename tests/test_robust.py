@@ -1060,3 +1060,30 @@ def test_fit_of_curves_too_short_for_a_window_keeps_them():
           Curve(np.array([[0.0, 1.0], [1.0, 1.2], [2.0, 1.0]]), 2, 3, False, np.arange(3, 6))]
     out = fit_curves(cs, 0.1)
     assert all(np.array_equal(a.points, b.points) for a, b in zip(out, cs))
+
+
+def test_junction_of_a_kinked_branch_is_placed_through_the_branch_ends():
+    # a Y of straight branches but one, which kinks 30-60 degrees 2-3 h from the junction (a
+    # traced neurite's polyline), noise-free: the kinked branch's line, fitted over its last
+    # 4 h, passes through its last sample (on the curve), not the portion's mean (off it);
+    # measured 0.10-0.44 h off (mean 0.25), 0.17-0.64 h (mean 0.37) through the mean
+    def poly(vs):
+        out = []
+        for a, b in zip(vs[:-1], vs[1:]):
+            n = max(1, int(round(np.linalg.norm(b - a))))
+            out.append(a + (np.arange(1, n + 1) / n)[:, None] * (b - a))
+        return np.vstack(out)
+
+    offsets = []
+    for kink in (2.0, 3.0):
+        for turn in (30.0, 45.0, 60.0):
+            pts = [np.zeros((1, 2))]
+            for k in range(3):
+                a0 = np.radians(120 * k + 10)
+                a1 = a0 + (np.radians(turn) if k == 0 else 0.0)
+                u0, u1 = np.array([np.cos(a0), np.sin(a0)]), np.array([np.cos(a1), np.sin(a1)])
+                pts.append(poly([np.zeros(2), kink * u0, kink * u0 + (20.0 - kink) * u1]))
+            net = reconstruct_robust(np.vstack(pts) * 0.01)
+            assert net.n_nodes == 4 and net.n_curves == 3
+            offsets.append(float(np.linalg.norm(np.asarray(net.nodes), axis=1).min()) / 0.01)
+    assert np.mean(offsets) < 0.3, offsets

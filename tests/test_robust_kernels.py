@@ -351,8 +351,9 @@ def test_trim_ends_match_the_numpy_formula(py):
     assert dropped > 50  # the test does trim
 
 
-def _junction_reference(P, branches, jspan):
-    """Least-squares intersection of the lines fitted (SVD) on each branch's end, numpy."""
+def _junction_reference(P, branches, jspan, through_end=False):
+    """Least-squares intersection of the lines fitted (SVD) on each branch's end, numpy; each
+    line through its end portion's mean, or with ``through_end`` through the branch's last point."""
     d = P.shape[1]
     A = 1e-2 * np.eye(d)
     anchor = np.mean([P[b[-1]] for b in branches], axis=0)
@@ -364,6 +365,8 @@ def _junction_reference(P, branches, jspan):
         E = X[:m]
         c = E.mean(axis=0)
         u = np.linalg.svd(E - c)[2][0]
+        if through_end:
+            c = X[0]
         M = np.eye(d) - np.outer(u, u)
         A += M
         rhs += M @ c
@@ -372,7 +375,10 @@ def _junction_reference(P, branches, jspan):
 
 @pytest.mark.parametrize("py", [False, True])
 @pytest.mark.parametrize("d", [2, 3])
-def test_junction_nodes_match_the_numpy_least_squares(py, d):
+@pytest.mark.parametrize("noise", [0.0, 0.1])
+def test_junction_nodes_match_the_numpy_least_squares(py, d, noise):
+    # noise 0 (at most NODES.tangent_noise spacings): read as noise-free, each line through its
+    # branch's last point; 0.1: through its end portion's mean, the portion 6 noise longer
     rng = np.random.default_rng(d)
     pts, branches, truth = [], [], []
     for j in range(30):  # junctions of 3 to 6 noisy straight branches, no region points
@@ -396,11 +402,12 @@ def test_junction_nodes_match_the_numpy_least_squares(py, d):
     consts = K.JunctionParams(4.0, 6.0, 1.25, 4.5, 1e9, 0.8 * 5.5, 0.9, 1.5, False)
     f = _plain("junction_nodes") if py else K.junction_nodes
     X, maybe = f(P, h, np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), bflat, boff, jb,
-                 np.zeros(0, dtype=np.int64), roff, np.ones(30), 1.0, 0.0, consts)
+                 np.zeros(0, dtype=np.int64), roff, np.ones(30), 1.0, noise, consts)
     assert not maybe.any()
     err, err_anchor = [], []
+    free = noise <= NODES.tangent_noise
     for j in range(30):
-        ref = _junction_reference(P, [b for jj, b in branches if jj == j], 4.0)
+        ref = _junction_reference(P, [b for jj, b in branches if jj == j], 4.0 + 6.0 * noise, through_end=free)
         assert np.allclose(X[j], ref, atol=1e-9), j
         anchor = np.mean([P[b[-1]] for jj, b in branches if jj == j], axis=0)
         err.append(np.linalg.norm(X[j] - truth[j]))

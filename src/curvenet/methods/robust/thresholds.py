@@ -1033,7 +1033,14 @@ class Nodes(NamedTuple):
     #: 0.37 h
     #: origin: benchmark: kinds tangent, curve F1 without / with the placement: span 8 h, noise
     #: 0.1h 0.55 / 0.27, 0.2h 0.09 / 0.09 (nodes farther off); span 8 h + 60 noise levels: 0.1h
-    #: 0.55 / 0.55, 0.2h 0.09 / 0.45, but 0.3h + x3 0.09 / 0.00 (not told apart from 0.2h)
+    #: 0.55 / 0.55, 0.2h 0.09 / 0.45, but 0.3h + x3 0.09 / 0.00 (not told apart from 0.2h).
+    #: The same noise-free reading puts each junction line through its branch's last sample
+    #: (kernels/nodes.py ``_junction_nodes``; issue 25, 6 December 2026): real-dev clean
+    #: nrn_Image001 0.857 -> 1.000 on 4 of 4 samplings (its lines, fitted over 4 h of a
+    #: traced polyline kinking every few spacings, met 0.4-2.1 h off the junctions), the
+    #: 928-run harness 5 better, 1 worse (plate density x3 s3, two junctions read as one either
+    #: way, the node moved from 1.25 h off one to 3.25 h off both); CASSIE clean mean node
+    #: offset 0.134 -> 0.127 h (53 sketches closer, 11 farther), hmd_sutherland 0.905 -> 0.896
     tangent_noise: float = 0.05
     #: ... the node walks along the weak direction by steps of this many spacings (h)
     #: origin: a sampling of the profile, not a tuning

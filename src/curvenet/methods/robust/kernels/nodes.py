@@ -857,7 +857,10 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     leaves a strip of ``jp.walk_dev`` link widths around the line fitted on the branch's end; the
     node is the least-squares intersection of the lines fitted on the walked ends, pulled a
     little (weight ``nd.anchor_pull``) towards the mean of the branch ends (the anchor), and the anchor when
-    it lands over the largest distance away.
+    it lands over the largest distance away. A line has the direction of its end portion and
+    passes through the portion's mean, or, on noise-free input (noise at most
+    ``nd.tangent_noise`` spacings) at a junction of ``nd.junction_valence`` branches or more,
+    through the walked branch's last sample.
 
     Returns
     -------
@@ -959,6 +962,13 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             ncs += 1
             if m < 2:
                 continue
+            if nbr >= nd.junction_valence and noise <= nd.tangent_noise * hj[j]:
+                # noise-free: the line through the branch's last sample, which lies on the curve
+                # (the end portion's mean lies off a bent or kinked curve: a traced neurite's
+                # lines met 1-2 h off its junctions); two branches keep the mean (their lines
+                # are near-parallel, and moving one moves their meeting along the curve)
+                for c in range(d):
+                    mu[c] = P[ids[n - 1], c]
             # M = I - u u^T; A += M; b += M mu
             um = 0.0
             for c in range(d):
