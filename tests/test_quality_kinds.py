@@ -242,6 +242,27 @@ def test_a_chain_over_two_missed_junctions_is_split_at_both():
     assert cores_plan(single, 1.0, 0.0, np.zeros(11, dtype=bool)) is None  # no junction at all
 
 
+def test_a_junction_over_two_adjacent_tree_vertices_is_one_junction():
+    # the points of one chain through a missed junction of four branches whose tree shows two
+    # branch vertices 2 spacings apart (over SPANNING.cluster) joined by one tree edge, no sample
+    # between them (a roof's apex under noise: bld_zurich_1c91dd3a noise 0.2h s2, 0.762 -> 1.000):
+    # one junction of four branches, not two cores without a piece between them (left whole)
+    from curvenet.methods.robust.branched import branch_plan, cores_plan
+    from curvenet.methods.robust.thresholds import SPANNING
+
+    gap = 2.0
+    assert gap > SPANNING.cluster
+    s = np.arange(1.0, 9.0) / np.sqrt(2)  # 8 samples a spacing apart along each diagonal arm
+    arms = [np.c_[x0 + sx * s, sy * s, 0 * s] for x0, sx in ((0.0, -1), (gap, 1)) for sy in (1, -1)]
+    X = np.vstack([[[0.0, 0.0, 0.0], [gap, 0.0, 0.0]], *arms])
+    keep = np.zeros(len(X), dtype=bool)
+    plan = branch_plan(X, 1.0, 0.0, keep)
+    assert plan is not None
+    core, found = plan
+    assert sorted(core) == [0, 1] and sorted(len(a) for a in found) == [8, 8, 8, 8]
+    assert cores_plan(X, 1.0, 0.0, keep) is None  # (one junction: for branch_plan)
+
+
 def test_a_notch_chain_is_split_at_its_two_corners(monkeypatch):
     # the jittered building outline: one chain ran past a notch's ground corner and up the
     # vertical past the eave corner (two junctions on one chain, which the one-junction reading

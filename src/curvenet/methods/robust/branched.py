@@ -12,7 +12,9 @@ pruned as :func:`.spanning.pruned_tree` prunes it (leaf branches under ``SPANNIN
 spacings plus twice the noise cut: what noise hangs off a curve; a point linked to a region is
 never cut: a branch of one sample may be all that joins the next junction). The tree of the
 points near the jumps (``BRANCHED.window``) is read first, the whole chain's only where it
-shows a junction. When the whole tree shows exactly one junction
+shows a junction. Two junctions of the tree joined by a tree edge, no sample between them, are
+one (:func:`_joined_cores`: a junction of many branches spread over two tree vertices, as a
+roof's apex under noise; read as two, the chain was left whole). When the whole tree shows exactly one junction
 (:func:`.spanning.tree_cores`: its vertices of three or more branches, clustered, whose branches
 leave apart) and its branches are paths, the chain becomes that junction (a new region of its
 vertices) and one chain per branch, ordered from the junction outwards
@@ -114,7 +116,7 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: l
         None unless the pruned tree shows exactly one junction and its branches are paths.
     """
     adj = pruned_tree(X, prune_cut(hl, noise), keep) if adj is None else adj
-    cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 1)
+    cores = _joined_cores(X, adj, hl, noise, 1)
     if len(cores) != 1:
         return None
     core = set(cores[0])
@@ -126,6 +128,43 @@ def branch_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: l
         if any(len(adj[u] & inarm) > 2 for u in arm):
             return None
     return sorted(core), arms
+
+
+def _joined_cores(X: np.ndarray, adj: list[set], hl: float, noise: float, min_cores: int) -> list[list[int]]:
+    """The junctions of the pruned tree ``adj`` of the points ``X`` (:func:`.spanning.tree_cores`
+    over every point, at least ``min_cores`` of them), two joined by a tree edge taken as one: no
+    piece of curve lies between them (a junction of many branches spread over two tree vertices
+    a cluster radius or more apart, as a roof's apex under noise). Each as its vertices, the one
+    nearest their mean first."""
+    cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, min_cores)
+    if len(cores) < 2:
+        return cores
+    core_of = {v: k for k, mem in enumerate(cores) for v in mem}
+    root = list(range(len(cores)))
+
+    def find(k: int) -> int:
+        while root[k] != k:
+            k = root[k]
+        return k
+
+    for k, mem in enumerate(cores):
+        for v in mem:
+            for w in adj[v]:
+                if w in core_of:
+                    a, b = find(k), find(core_of[w])
+                    if a != b:
+                        root[max(a, b)] = min(a, b)
+    groups: dict[int, list[int]] = {}
+    for k, mem in enumerate(cores):
+        groups.setdefault(find(k), []).extend(mem)
+    if len(groups) == len(cores):
+        return cores
+    out = []
+    for k in sorted(groups):
+        mem = np.asarray(sorted(groups[k]), dtype=np.int64)
+        order = np.argsort(np.linalg.norm(X[mem] - X[mem].mean(axis=0), axis=1), kind="stable")
+        out.append(mem[order].tolist())
+    return out
 
 
 def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: list[set] | None = None):
@@ -142,7 +181,7 @@ def cores_plan(X: np.ndarray, hl: float, noise: float, keep: np.ndarray, adj: li
         every junction has three or more pieces.
     """
     adj = pruned_tree(X, prune_cut(hl, noise), keep) if adj is None else adj
-    cores = tree_cores(X, adj, np.ones(len(X), dtype=bool), hl, noise, 2)
+    cores = _joined_cores(X, adj, hl, noise, 2)
     if len(cores) < 2:
         return None
     core_of = {v: k for k, mem in enumerate(cores) for v in mem}
