@@ -27,8 +27,8 @@ meet one point (:func:`.paired.meet_at_one_point`) is one junction: both are lef
 exception is a core of higher valence beside ``SPANNING.min_cores`` plain junctions (valence
 3): that is a row, and the core holds the chain ends of a junction of the row that the pruned
 tree did not show (a ladder's rail under noise); it is split, the core of higher valence kept as
-one junction; a hub's satellites are fewer
-(two or fewer plain cores on every CASSIE sketch under noise).
+one junction. A hub's satellites are fewer (two or fewer plain cores on every CASSIE sketch
+under noise).
 :func:`split_multiple_junctions` (a repair of :data:`.repairs.ORDER`, the first: before any
 other repair reads the region) then splits the cores off the region one leaf of the core tree at
 a time (:meth:`.topology.Topology.split_region`), each joined to its neighbour by a new chain of
