@@ -50,6 +50,7 @@ import itertools
 import numpy as np
 
 from .chains import flat_steps, group_medians, polylen
+from .graph import components
 from .params import RobustParams, Scales
 from .spanning import prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
 from .thresholds import BRANCHED, NODES
@@ -140,28 +141,15 @@ def _joined_cores(X: np.ndarray, adj: list[set], hl: float, noise: float, min_co
     if len(cores) < 2:
         return cores
     core_of = {v: k for k, mem in enumerate(cores) for v in mem}
-    root = list(range(len(cores)))
-
-    def find(k: int) -> int:
-        while root[k] != k:
-            k = root[k]
-        return k
-
-    for k, mem in enumerate(cores):
-        for v in mem:
-            for w in adj[v]:
-                if w in core_of:
-                    a, b = find(k), find(core_of[w])
-                    if a != b:
-                        root[max(a, b)] = min(a, b)
-    groups: dict[int, list[int]] = {}
-    for k, mem in enumerate(cores):
-        groups.setdefault(find(k), []).extend(mem)
-    if len(groups) == len(cores):
+    pairs = [(k, core_of[w]) for k, mem in enumerate(cores) for v in mem for w in adj[v]
+             if w in core_of and core_of[w] != k]
+    if not pairs:
         return cores
+    pa, pb = np.array(pairs, dtype=np.int64).T
+    lab, n = components(len(cores), pa, pb, np.ones(len(cores), dtype=bool))
     out = []
-    for k in sorted(groups):
-        mem = np.asarray(sorted(groups[k]), dtype=np.int64)
+    for g in range(n):
+        mem = np.asarray(sorted(v for k in np.flatnonzero(lab == g).tolist() for v in cores[k]), dtype=np.int64)
         order = np.argsort(np.linalg.norm(X[mem] - X[mem].mean(axis=0), axis=1), kind="stable")
         out.append(mem[order].tolist())
     return out

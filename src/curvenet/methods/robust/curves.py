@@ -587,11 +587,11 @@ class _Chains:
         """The system's layout, built once (it does not depend on the widths): each window's
         unit stencil (``k!`` times its divided-difference weights times its mean step to the
         ``k``); every entry of ``R^T R`` a slot ``(sample, offset along its curve)`` of a band
-        ``2 k + 1`` wide (cyclic on a loop), the products of two stencil weights summed into
-        their slots by one ``bincount`` in a fixed order (the same bits whichever curves share
-        the block), the identity added on the diagonal slots; per part (open curves, loops) the
-        slots of its free block's lower triangle in CSR order and those that couple it to the
-        held samples."""
+        ``2 k + 1`` wide (cyclic on a loop), with the products of two stencil weights that
+        :meth:`solve` sums into their slots by one ``bincount`` in a fixed order (the same bits
+        whichever curves share the block) before adding the identity on the diagonal slots; per
+        part (open curves, loops) the slots of its free block's lower triangle in CSR order and
+        those that couple it to the held samples."""
         if self._system is not None:
             return self._system
         win, k, M, idx = self.win, FIT.order, self.M, self.idx

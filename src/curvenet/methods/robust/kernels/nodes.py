@@ -948,6 +948,11 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             for c in range(d):
                 A[a, c] = 0.0
         ncs = 0
+        # noise-free: each line through its branch's last sample, which lies on the curve (the
+        # end portion's mean lies off a bent or kinked curve: a traced neurite's lines met 1-2 h
+        # off its junctions); two branches keep the mean (their lines are near-parallel, and
+        # moving one moves their meeting along the curve)
+        through_end = nbr >= nd.junction_valence and noise <= nd.tangent_noise * hj[j]
         for bi in range(nbr):
             n0 = off[bi + 1] - off[bi]
             ids = np.empty(L[bi], dtype=np.int64)
@@ -962,11 +967,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             ncs += 1
             if m < 2:
                 continue
-            if nbr >= nd.junction_valence and noise <= nd.tangent_noise * hj[j]:
-                # noise-free: the line through the branch's last sample, which lies on the curve
-                # (the end portion's mean lies off a bent or kinked curve: a traced neurite's
-                # lines met 1-2 h off its junctions); two branches keep the mean (their lines
-                # are near-parallel, and moving one moves their meeting along the curve)
+            if through_end:
                 for c in range(d):
                     mu[c] = P[ids[n - 1], c]
             # M = I - u u^T; A += M; b += M mu
