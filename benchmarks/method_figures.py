@@ -306,7 +306,8 @@ def run_stages(ex: Example, prm: RobustParams | None = None) -> StageRun:
         graph = linked_graph(P, nb, fr, prm)
         noise = thresholds.NOISE.scale * fr.sigma
         src0, dst0, _ = linked_edges(P, nb.h, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
-                                     thresholds.LINKS.strip_noise * noise, thresholds.LINKS.gap_noise * noise)
+                                     thresholds.LINKS.strip_noise * noise, thresholds.LINKS.gap_noise * noise,
+                                     lens=not fr.low)
         links, before = _pairs(graph.src, graph.dst), _pairs(src0, dst0)
         kept = {tuple(x) for x in links.tolist()}
         cut = np.array([x for x in before.tolist() if tuple(x) not in kept], dtype=np.int64).reshape(-1, 2)

@@ -203,7 +203,7 @@ dist, idx = knn(P, 16)
 h = RF.local_spacing(dist, idx)
 t, lin, chord, gain = K.tangents(P, idx, h, 12)
 sub = K.tangents(P, idx, h, 12, order=np.arange(0, len(P), 2), margin=1.0)
-e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3, True)
 s = K.short_links(P, h, idx, 2.5)
 np.savez(sys.argv[1], t, lin, chord, gain, *sub, *e, *s)
 """
@@ -220,7 +220,7 @@ def test_compiled_and_python_runs_agree(cloud, tmp_path):
     P, dist, idx, h = cloud
     t, lin, chord, gain = K.tangents(P, idx, h, 12)
     sub = K.tangents(P, idx, h, 12, order=np.arange(0, len(P), 2), margin=1.0)
-    e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+    e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3, True)
     s = K.short_links(P, h, idx, 2.5)
     out = tmp_path / "py.npz"
     env = dict(os.environ, CURVENET_NO_NUMBA="1")
@@ -243,7 +243,7 @@ def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
 
     def run():
         t, lin, chord, _ = K.tangents(P, idx, h, 12)
-        e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+        e = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3, True)
         s = K.short_links(P, h, idx, 2.5)
         agree = K.vote_agreement(t, idx, 8)
         u = K.vote_eig(t, idx, 8, cand)
@@ -258,18 +258,19 @@ def test_parallel_kernels_agree_on_all_threads_and_on_one(cloud, monkeypatch):
     for a, b in zip(one, par):
         assert np.array_equal(a, b, equal_nan=True)
     t, lin = par[0], par[1]
-    for got, ref in ((par[3:6], _plain("linked_edges")(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)),
+    for got, ref in ((par[3:6], _plain("linked_edges")(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3, True)),
                      (par[6:8], _plain("short_links")(P, h, idx, 2.5)),
                      ((par[8],), (_plain("vote_agreement")(t, idx, 8),))):
         for a, b in zip(got, ref):
             assert np.array_equal(a, b)
 
 
-def test_linked_edges_match_the_array_formulas(cloud):
+@pytest.mark.parametrize("lens", [False, True])
+def test_linked_edges_match_the_array_formulas(cloud, lens):
     P, dist, idx, h = cloud
     t, lin, _, _ = K.tangents(P, idx, h, 12)
     link, width, wmin, gap, extra_len, lmin = 2.5, 1.0, 0.004, 0.002, 2.0, 0.3
-    got = K.linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lmin)
+    got = K.linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lmin, lens)
     # the same tests on flat arrays
     n, k = idx.shape
     src = np.repeat(np.arange(n), k)
@@ -288,10 +289,24 @@ def test_linked_edges_match_the_array_formulas(cloud):
     both = (ps <= w) & (pd <= w) & (lin[src] >= lmin) & (lin[dst] >= lmin)
     sel = (ok & short) | (both & (dd <= reach))
     strip = both & (dd > 0)
+    col = np.tile(np.arange(k), n)[keep]  # each edge's place in its row
     for sgn in (1.0, -1.0):
         ci = np.flatnonzero(strip & (sgn * al > 0))
         if len(ci):
-            sel[ci[np.r_[True, src[ci][1:] != src[ci][:-1]]]] = True
+            first = ci[np.r_[True, src[ci][1:] != src[ci][:-1]]]
+            if lens:  # a strip edge only: out when a nearer neighbour lies in its lens, off its line
+                alone = first[~sel[first]]
+                first = first[sel[first]]
+                for e in alone.tolist():
+                    W = P[idx[src[e], :col[e]]]
+                    W = W[(idx[src[e], :col[e]] != src[e]) & (idx[src[e], :col[e]] != dst[e])]
+                    u = (P[dst[e]] - P[src[e]]) / dd[e]
+                    rel = W - P[src[e]]
+                    off = np.sqrt(np.maximum((rel**2).sum(1) - (rel @ u) ** 2, 0.0))
+                    inside = (np.linalg.norm(W - P[dst[e]], axis=1) < dd[e]) & (off > w[e] * (1 + 1e-9))
+                    if not inside.any():
+                        first = np.r_[first, e]
+            sel[first] = True
     assert np.array_equal(got[0], src[sel])
     assert np.array_equal(got[1], dst[sel])
     assert np.array_equal(got[2], dd[sel])
@@ -495,7 +510,7 @@ def test_vote_eig_matches_lapack(d):
 def test_shell_groups_of_a_subset_equal_those_of_all(cloud):
     P, dist, idx, h = cloud
     t, lin, _, _ = K.tangents(P, idx, h, 12)
-    src, dst, _ = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3)
+    src, dst, _ = K.linked_edges(P, h, idx, t, lin, 2.5, 1.0, 0.01, 0.005, 2.0, 0.3, True)
     indptr, indices = K.csr_union(len(P), src, dst)
     full = K.shell_groups(P, h, indptr, indices, 1.5, 3.3)
     sub = np.random.default_rng(1).choice(len(P), size=len(P) // 7, replace=False)
@@ -1035,3 +1050,32 @@ def test_strand_step_places_a_near_tangent_junction_under_noise(ang):
         now.append(a)
         off.append(b)
     assert max(now) < 3.0 and np.mean(now) + 0.5 < np.mean(off), (now, off)
+
+
+def _corner_cut(bump: bool):
+    """Points on a line with a gap from x = 0 to x = 4 (spacing 1, tangents along the line),
+    with (``bump``) or without three samples of a detour 1.5-1.8 spacings off the line over the
+    gap: the edge from 0 to 4 then cuts the corner of a curve that runs through those samples."""
+    line = np.c_[np.r_[-3.0, -2.0, -1.0, 0.0, 4.0, 5.0, 6.0, 7.0], np.zeros(8)]
+    over = np.array([[1.0, 1.5], [2.0, 1.8], [3.0, 1.5]]) if bump else np.zeros((0, 2))
+    P = np.vstack([line, over])
+    t = np.tile([1.0, 0.0], (len(P), 1))
+    t[len(line):] = [0.0, 1.0]  # the detour's samples: tangents across the line (no strip edge)
+    dist, idx = knn(P, min(8, len(P)))
+    h, lin = np.ones(len(P)), np.ones(len(P))
+    return P, idx, h, t, lin
+
+
+@pytest.mark.parametrize("plain", [False, True])
+def test_strip_edge_over_a_gap_is_kept_and_one_cutting_a_corner_is_not(plain):
+    """The lens test of the strip edges (noisy input): an edge kept only as the nearest neighbour
+    along the tangent bridges a gap, so no nearer sample lies in its lens off its line; where
+    the samples of a detour do, the edge cuts a corner and is left out (with ``lens`` only)."""
+    f = _plain("linked_edges") if plain else K.linked_edges
+    for bump in (False, True):
+        P, idx, h, t, lin = _corner_cut(bump)
+        for lens in (False, True):
+            src, dst, _ = f(P, h, idx, t, lin, 2.5, 1.0, 0.0, 0.0, 2.0, 0.3, lens)
+            edges = set(zip(src.tolist(), dst.tolist()))
+            assert ((3, 4) in edges) == (not (bump and lens)), (bump, lens)
+            assert ((4, 3) in edges) == (not (bump and lens)), (bump, lens)

@@ -58,7 +58,7 @@ def linked_graph(P: np.ndarray, nb: Neighbours, fr: Frames, prm: RobustParams) -
     N = len(P)
     noise = NOISE.scale * fr.sigma
     src, dst, dd = linked_edges(P, nb.h, nb.idx, fr.t, fr.lin, prm.link, prm.link_width,
-                                LINKS.strip_noise * noise, LINKS.gap_noise * noise)
+                                LINKS.strip_noise * noise, LINKS.gap_noise * noise, lens=not fr.low)
     if not fr.low:  # links between two close parallel strands are cut
         with _k.compiled_for(N, _k.NUMBA_MIN_POINTS_NOISY, _k.STRAND_KERNELS):  # (slow in plain Python)
             tn, ln = noisy_tangents(P, nb.h, fr.sigma, nb.tree, None, nb.idx)
@@ -89,13 +89,16 @@ def edge_lengths(P: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     return out
 
 
-def linked_edges(P, h, idx, t, lin, link, width, wmin=0.0, gap=0.0):
+def linked_edges(P, h, idx, t, lin, link, width, wmin=0.0, gap=0.0, lens=False):
     """Directed kNN edges kept by the distance and tangent tests: (src, dst, length).
 
     A link is at most ``link * h + gap`` long (``gap`` widens it for noise, which opens random
     gaps along a curve). Besides, a point with a reliable tangent is linked to its nearest
     neighbour on each side along the tangent, within the strip, up to twice that length:
-    this bridges the widest gaps of sparse, noisy sampling.
+    this bridges the widest gaps of sparse, noisy sampling. With ``lens`` (noisy input), such
+    a link kept by that rule alone is left out where a nearer neighbour of its first end lies
+    in its lens (nearer to its far end too) and off its line by more than the strip's
+    half-width: it cuts across a corner whose samples are there, not over a gap.
     """
     # compiled, one kNN row at a time (the tests are spelled out in kernels.graph._linked_edges):
     # links at most LINKS.directional * (link * h + gap) long; the far end's distance from the tangent
@@ -103,7 +106,7 @@ def linked_edges(P, h, idx, t, lin, link, width, wmin=0.0, gap=0.0):
     # links need one tangent test, longer ones (up to link * h + gap) both; plus the nearest
     # strip neighbour on each side along the tangent (rows are sorted by distance)
     return _k.linked_edges(P, np.ascontiguousarray(h, dtype=np.float64), idx, t, lin, float(link),
-                           float(width), float(wmin), float(gap), float(LINKS.directional), float(LINKS.lin_min))
+                           float(width), float(wmin), float(gap), float(LINKS.directional), float(LINKS.lin_min), bool(lens))
 
 
 def cut_strand_links(P, h, idx, tn, src, dst, dd, sig):

@@ -24,7 +24,28 @@ def _dist(P, p, q):  # pragma: no cover - compiled
     return np.sqrt(s)
 
 
-def _linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lin_min):  # pragma: no cover - compiled
+def _in_lens(P, idx, p, j, q, dd, width):  # pragma: no cover - compiled
+    """Whether a nearer neighbour of ``p`` (``idx[p, :j]``, rows sorted by distance) lies nearer
+    to ``q`` than ``p`` does (``dd``: inside the lens of the edge ``(p, q)``, the relative
+    neighbourhood graph's test) and farther than ``width`` from the edge's line: a sample of
+    the corner the edge cuts (samples near its line, a junction's on a straight curve, do not
+    count)."""
+    for i in range(j):
+        s = idx[p, i]
+        if s == p or s == q or not (_dist(P, q, s) < dd):
+            continue
+        a = 0.0
+        for c in range(P.shape[1]):
+            a += (P[s, c] - P[p, c]) * (P[q, c] - P[p, c])
+        a /= dd
+        pw = _dist(P, p, s)
+        x = pw * pw - a * a
+        if x > width * width:
+            return True
+    return False
+
+
+def _linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lin_min, lens):  # pragma: no cover - compiled
     """Directed kNN edges kept by the distance and tangent tests (see graph.linked_edges).
 
     For the edge from ``p`` to its neighbour ``q`` at distance ``d`` (rows sorted by distance;
@@ -36,7 +57,9 @@ def _linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lin_min)
     short (``d <= link * (h_p + h_q) / 2``) and passes one tangent test (or an end has
     linearity below ``lin_min``, or ``d == 0``), or if it passes both tangent tests at two
     linear ends and ``d <= reach``, or if it is the first such two-sided strip edge of its row
-    on either side of ``p`` along its tangent.
+    on either side of ``p`` along its tangent (with ``lens``, an edge kept by this last rule
+    alone only where no nearer neighbour of ``p`` lies in its lens off its line:
+    :func:`_in_lens`, with the strip half-width ``w``).
 
     Returns
     -------
@@ -77,12 +100,15 @@ def _linked_edges(P, h, idx, t, lin, link, width, wmin, gap, extra_len, lin_min)
             both = (ps <= w) and (pd <= w) and (lin[p] >= lin_min) and (lin[q] >= lin_min)
             keep = (ok and short) or (both and (dd <= reach))
             if both and dd > 0:
+                strip = False
                 if al > 0 and not got_pos:
                     got_pos = True
-                    keep = True
+                    strip = True
                 elif -al > 0 and not got_neg:
                     got_neg = True
-                    keep = True
+                    strip = True
+                if strip and not keep:  # a strip edge only: it bridges a gap, where no sample lies beside
+                    keep = not (lens and _in_lens(P, idx, p, j, q, dd, w))
             if keep:
                 sel[p, j] = True
                 row += 1
