@@ -52,7 +52,7 @@ import numpy as np
 from .chains import flat_steps, group_medians, polylen
 from .graph import components
 from .params import RobustParams, Scales
-from .spanning import prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
+from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
 from .thresholds import BRANCHED, NODES
 from .topology import Topology
 
@@ -150,8 +150,7 @@ def _joined_cores(X: np.ndarray, adj: list[set], hl: float, noise: float, min_co
     out = []
     for g in range(n):
         mem = np.asarray(sorted(v for k in np.flatnonzero(lab == g).tolist() for v in cores[k]), dtype=np.int64)
-        order = np.argsort(np.linalg.norm(X[mem] - X[mem].mean(axis=0), axis=1), kind="stable")
-        out.append(mem[order].tolist())
+        out.append(core_order(X, mem))
     return out
 
 

@@ -69,7 +69,7 @@ from .params import RobustParams, Scales
 from .thresholds import NODES, PAIRED, SPANNING
 from .topology import Topology
 
-__all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut", "tree_cores"]
+__all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut", "tree_cores", "core_order"]
 
 
 class Plan(NamedTuple):
@@ -243,10 +243,15 @@ def tree_cores(X: np.ndarray, adj: list[set], inside: np.ndarray, hl: float, noi
         mem = bv[lab == c]
         if len(mem) == 1 and not _arms_apart(X, adj, int(mem[0]), SPANNING.arm * hl):
             continue
-        m = X[mem].mean(axis=0)
-        order = np.argsort(np.linalg.norm(X[mem] - m, axis=1), kind="stable")
-        out.append(mem[order].tolist())
+        out.append(core_order(X, mem))
     return out
+
+
+def core_order(X: np.ndarray, mem: np.ndarray) -> list[int]:
+    """The vertices ``mem`` (m,) of a junction of a tree over the points ``X``, the one nearest
+    their mean first (ties: in the order of ``mem``)."""
+    order = np.argsort(np.linalg.norm(X[mem] - X[mem].mean(axis=0), axis=1), kind="stable")
+    return mem[order].tolist()
 
 
 def region_points(P: np.ndarray, tree, h: np.ndarray, ids: np.ndarray, end_points: np.ndarray) -> np.ndarray:
