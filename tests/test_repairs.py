@@ -22,7 +22,8 @@ from curvenet.methods.robust import kernels as K
 from curvenet.methods.robust import repairs as R
 from curvenet.methods.robust.chains import Chain, polylen
 from curvenet.methods.robust.params import RobustParams, Scales
-from curvenet.methods.robust.thresholds import BRANCHED, DEFAULTS, LAYOUT, LINKS, NODES, NOISE, PAIRED, REPAIRS, SHELL, SPANNING
+from curvenet.methods.robust.thresholds import (BRANCHED, DEFAULTS, LAYOUT, LINKS, NODES, NOISE, PAIRED, REPAIRS, SHELL,
+                                               SPANNING, UNEXPLAINED)
 from curvenet.methods.robust.topology import Topology
 
 PRM = RobustParams()
@@ -531,6 +532,64 @@ def test_prune_spurs_counts_the_free_end_regions_extent():
     assert not topo.alive[spur]
 
 
+#: a noise level for the twig tests below (in h)
+TWIG_NOISE = 0.2
+
+
+def test_prune_spurs_keeps_a_twig_that_reaches_min_spur_from_the_junctions_node_under_noise():
+    # under noise the junction's region takes in a twig's first samples: its chain alone is
+    # under min_spur, measured from the node (the origin, where the branches' lines meet) it is
+    # not, and its tip lies far off the other branches: a twig, kept
+    length = PRM.min_spur - 1 + 2 * EPS  # the chain starts 1 h from the node
+    topo, *_ = _junction_with_spur(length)
+    _assert_untouched(R.prune_spurs, topo, noise=TWIG_NOISE)
+    topo, J, spur = _junction_with_spur(length)  # noise-free: the chain's own length decides
+    _run(R.prune_spurs, topo)
+    assert not topo.alive[spur]
+
+
+def test_prune_spurs_drops_a_twig_under_min_spur_from_the_node_under_noise():
+    topo, J, spur = _junction_with_spur(PRM.min_spur - 1 - 2 * EPS)
+    _run(R.prune_spurs, topo, noise=TWIG_NOISE)
+    assert not topo.alive[spur] and topo.v[J] == 3
+
+
+def _junction_with_leaning_spur(tip_y):
+    """The junction of :func:`_junction_with_spur` with a spur from (1, 1) to
+    (``min_spur``, ``tip_y``): leaning over the branch along y = 0."""
+    net = _Net()
+    J = net.region([[0, 0]])
+    for end in ((-6, 0), (6, 0), (0, -6)):
+        net.chain(_line(np.sign(end), end, 6), (J, -1))
+    spur = net.chain(_line((1, 1), (PRM.min_spur, tip_y), 4), (J, -1))
+    return net.topology(), spur
+
+
+def test_prune_spurs_drops_a_spur_whose_tip_lies_in_a_branchs_noise_band():
+    # reaching min_spur from the node, but its tip lies within the noise band of the branch
+    # along y = 0: samples hung off that branch, not a twig; the same spur rising beyond the
+    # band is a twig
+    band = UNEXPLAINED.explain + UNEXPLAINED.explain_noise * TWIG_NOISE
+    topo, spur = _junction_with_leaning_spur(band - EPS)
+    assert polylen(topo.P[topo.chains[spur].ids]) < PRM.min_spur
+    _run(R.prune_spurs, topo, noise=TWIG_NOISE)
+    assert not topo.alive[spur]
+    topo, spur = _junction_with_leaning_spur(band + 2 * EPS)
+    _assert_untouched(R.prune_spurs, topo, noise=TWIG_NOISE)
+
+
+def test_prune_spurs_drops_a_lone_sample_far_from_the_junction_under_noise():
+    # one sample, no tip points: not a sampled curve, however far from the node
+    net = _Net()
+    J = net.region([[0, 0]])
+    for end in ((-6, 0), (6, 0), (0, -6)):
+        net.chain(_line(np.sign(end), end, 6), (J, -1))
+    spur = net.chain([[0, PRM.min_spur + 1]], (J, -1))
+    topo = net.topology()
+    _run(R.prune_spurs, topo, noise=TWIG_NOISE)
+    assert not topo.alive[spur]
+
+
 def _pass_through_with_spur():
     """A region of valence 2: one branch and a spur under ``min_spur`` to a free end without
     tip points."""
@@ -1012,6 +1071,50 @@ def _run_near(repair, topo, noise=0.0):
     repair(topo, _near_scales(topo, noise), PRM)
     topo.check()
     return topo
+
+
+def _fork_past_region(half_angle):
+    """A terminal fork whose junction at the origin the shell test missed under noise: a chain
+    up the parent from a free end A at (-11, 0), through the origin and on up one twig (4
+    samples at ``+half_angle`` degrees from x), its end read at the other twig's samples (5
+    at ``-half_angle``), the free-end region B, which links to the chain's points at the fork
+    only."""
+    net = _Net()
+    A = net.region([[-11, 0]])
+    t = np.radians(half_angle)
+    B = net.region([[d * np.cos(t), -d * np.sin(t)] for d in range(1, 6)])
+    parent = [[x, 0] for x in range(-10, 1)]
+    twig = [[d * np.cos(t), d * np.sin(t)] for d in range(1, 5)]
+    chain = net.chain(np.array(parent + twig, dtype=float), (A, B))
+    return net.topology(), A, B, chain
+
+
+def test_split_branched_chains_splits_a_chain_running_on_past_its_region_into_a_twig():
+    topo, A, B, chain = _fork_past_region(25)
+    tip = topo.chains[chain].ids[-1]
+    _run_near(split_branched, topo, noise=TWIG_NOISE)
+    assert not topo.alive[chain]
+    fork = [r for r in range(len(topo.regions)) if topo.v[r] == 3]
+    assert len(fork) == 1
+    arms = {topo.chains[i].ends[1]: topo.chains[i].ids for i, _ in topo.incident(fork[0])}
+    assert set(arms) - {A, B} and arms[B].size == 5 and len(topo.regions[B]) == 0  # B's samples: its twig
+    (free,) = set(arms) - {A, B}
+    assert arms[free][-1] == tip and topo.v[free] == 1 and topo.v[A] == 1 and topo.v[B] == 1
+
+
+def test_split_branched_chains_leaves_a_chain_end_within_the_noise_band_of_its_region():
+    # the same fork under a noise whose band reaches from the tip to the region's samples:
+    # the chain's end may be that region's curve, widened by noise
+    topo, A, B, chain = _fork_past_region(25)
+    P = topo.P
+    off = np.linalg.norm(P[topo.regions[B]] - P[topo.chains[chain].ids[-1]], axis=1).min()
+    before = _state(topo)
+    _run_near(split_branched, topo, noise=(off - UNEXPLAINED.explain) / UNEXPLAINED.explain_noise + EPS)
+    assert _state(topo) == before
+    topo, *_ = _fork_past_region(25)  # noise-free: a twig's tip is flagged, no chain runs past
+    before = _state(topo)
+    _run_near(split_branched, topo)
+    assert _state(topo) == before
 
 
 def test_split_branched_chains_finds_the_junction_the_shell_test_missed():

@@ -53,7 +53,7 @@ from .chains import flat_steps, group_medians, polylen
 from .graph import components
 from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
-from .thresholds import BRANCHED, NODES
+from .thresholds import BRANCHED, NODES, UNEXPLAINED
 from .topology import Topology
 
 __all__ = ["split_branched_chains", "branch_plan"]
@@ -231,13 +231,92 @@ def _near_jump_branches(Y: np.ndarray, adj: list[set], hl: float, noise: float) 
     return len(tree_cores(Y, adj, np.ones(len(Y), dtype=bool), hl, noise, 1)) > 0
 
 
+def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndarray) -> int:
+    """Where the chain ``i`` forks at its end ``side`` (0: its first point, 1: its last): the
+    position in its ids of the last point (counted from that end) linked to the free end's
+    region there, when the points past it (the *tail*) and the region's points are two twigs:
+    each, with that point, at least ``UNEXPLAINED.min_samples`` samples, and the tip of each
+    (the tail's last point; the region's point farthest from the fork) more than
+    ``UNEXPLAINED.explain`` spacings plus ``UNEXPLAINED.explain_noise`` times the noise from
+    the chain's points before the fork and from the other twig, and at least ``UNEXPLAINED.rise``
+    times its distance from the fork. -1 otherwise."""
+    P, c = topo.P, topo.chains[i]
+    rid = topo.regions[c.ends[side]]
+    if len(rid) + 1 < UNEXPLAINED.min_samples:
+        return -1
+    ids = c.ids if side == 1 else c.ids[::-1]  # the end at the region last
+    start, stop = sc.indptr[ids], sc.indptr[ids + 1]
+    r = c.ends[side]
+    linked = np.array([bool((region_of[sc.indices[a:b]] == r).any()) for a, b in zip(start.tolist(), stop.tolist())])
+    if not linked.any():
+        return -1
+    k = int(np.flatnonzero(linked)[-1])
+    head, tail = ids[:k], ids[k:]  # (the tail with the fork's point)
+    if len(tail) < UNEXPLAINED.min_samples or not len(head):
+        return -1
+    fork = P[ids[k]]
+    hl = float(np.median(sc.h[tail]))
+    band = UNEXPLAINED.explain * hl + UNEXPLAINED.explain_noise * sc.noise
+    for twig, other in ((tail, rid), (rid, tail)):
+        tip = P[twig[np.argmax(np.linalg.norm(P[twig] - fork, axis=1))]]
+        off = float(np.min(np.linalg.norm(P[np.r_[head, other]] - tip, axis=1)))
+        if off <= max(band, UNEXPLAINED.rise * float(np.linalg.norm(tip - fork))):
+            return -1
+    return k if side == 1 else len(ids) - 1 - k
+
+
+def split_tails(topo: Topology, sc: Scales) -> None:
+    """Under noise, every open chain that runs on past the region at one of its ends into a
+    twig (:func:`_tail_twig`) branches there: the last point linked to that region (a free
+    end) becomes a junction, joined to the chain's other end by the chain's points before it, to
+    a new free end by the tail, and to that free end by the region's points (the other twig's
+    samples, ordered from the junction; the region keeps its chain end, without points).
+
+    The failure: a terminal fork of two twigs (3-7 h, 40-60 degrees apart) under noise. The
+    shell test misses the fork; one twig's samples form the region of a free end, and the chain
+    traced up the parent runs on up the other twig to its tip. Its end region is read from its
+    links within a few spacings of its end (:func:`.chains.order_chains`), so the chain ends at
+    the first twig's region while its last points run up the second twig: the curve built from
+    it zigzags up one twig and back to the other, and a node is lost.
+    """
+    if sc.clean:
+        return
+    region_of = np.full(len(topo.P), -1, dtype=np.int64)
+    for r, ids in enumerate(topo.regions):
+        region_of[ids] = r
+    for i in range(len(topo.chains)):
+        c = topo.chains[i]
+        if not topo.alive[i] or c.closed or len(c.ids) < BRANCHED.min_points:
+            continue
+        for side in (1, 0):
+            b = c.ends[side]
+            if b < 0 or topo.v[b] != 1 or c.ends[1 - side] == b:
+                continue
+            k = _tail_twig(topo, sc, i, side, region_of)
+            if k < 0:
+                continue
+            if side == 1:
+                head, tail = c.ids[:k][::-1], c.ids[k + 1:]
+            else:
+                head, tail = c.ids[k + 1:], c.ids[:k][::-1]
+            a, core = c.ends[1 - side], c.ids[k:k + 1]
+            other = topo.release(b)  # the other twig's samples, ordered from the fork
+            region_of[other] = -1
+            other = other[np.lexsort((other, np.linalg.norm(topo.P[other] - topo.P[core], axis=1)))]
+            region_of[core] = topo.branch_chain(i, core, [head, tail, other], [a, -1, b])
+            break
+
+
 def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None:
-    """Every open chain whose points, in order, jump by over ``BRANCHED.jump`` spacings (plus
+    """Under noise, an open chain that runs on past the free end at one of its ends into a twig
+    first branches where that free end's samples link to it (:func:`split_tails`). Every open
+    chain whose points, in order, jump by over ``BRANCHED.jump`` spacings (plus
     the noise) and whose spanning tree shows one junction (:func:`branch_plan`) becomes that
     junction and one chain per branch (:meth:`.topology.Topology.branch_chain`); a tree of
     two or more junctions is split at each (:func:`_split_at_cores`). The regions the split
     chains' branches reached are then read again by :func:`.spanning.split_multiple_junctions`
     (a rail's region, joined to the rungs only now)."""
+    split_tails(topo, sc)
     P, h = topo.P, sc.h
     # the chains' largest steps and spacings, all at once
     idx = [i for i, c in enumerate(topo.chains)

@@ -15,14 +15,14 @@ import numpy as np
 
 from ... import _sigint
 from ...neighbors import query_threads
-from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, polylen, step_lengths
+from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, polylen, segment_distance, step_lengths
 from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
 from .spanning import split_multiple_junctions
 from .branched import split_branched_chains
 from .params import RobustParams, Scales
-from .thresholds import LINKS, NODES, NUMERIC, REPAIRS, SHELL
+from .thresholds import LINKS, NODES, NUMERIC, REPAIRS, SHELL, UNEXPLAINED
 from .topology import Topology
 
 __all__ = ["ORDER", "run_repairs", "merge_twin_chains", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
@@ -554,7 +554,10 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     under twice that. On noise-free input also such a chain from a region of valence 2 to a free
     end without tip points (a stub: a noise-free curve's end is always flagged) joins that
     region, which is a free end again (a whole fork with two short branches in one region: the
-    hidden fork of :func:`~.junctions.hidden_fork`). Up to ``REPAIRS.prune_passes`` passes (a dropped
+    hidden fork of :func:`~.junctions.hidden_fork`). Under noise a short chain from a junction to
+    a free end stays when it is a twig all the same (:func:`_twig`): measured from the junction's
+    node it reaches ``min_spur``, it holds ``UNEXPLAINED.min_samples`` samples or more, and its
+    tip lies off the junction's other branches. Up to ``REPAIRS.prune_passes`` passes (a dropped
     spur can leave another).
     """
     P, h, chains, regions = topo.P, sc.h, topo.chains, topo.regions
@@ -582,7 +585,7 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
             hl = float(np.median(h[c.ids])) if len(c.ids) else sc.hmed
             length = polylen(P[c.ids])
             ext = sum(extent(P, regions[r]) for r in (a, b) if v[r] == 1)
-            if length + ext < prm.min_spur * hl:
+            if length + ext < prm.min_spur * hl and not _twig(topo, sc, prm, i, hl, length + ext):
                 if free_a and free_b or v[a] >= NODES.junction_valence or v[b] >= NODES.junction_valence:
                     topo.drop(i)
                     changed = True
@@ -593,6 +596,42 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
                     changed = True
         if not changed:
             break
+
+
+def _twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, hl: float, length: float) -> bool:
+    """Whether the chain ``i`` from a junction to a free end, ``length`` long from its first
+    point to its tip (polyline and free-end region), is a twig all the same: measured from the
+    junction's node (:func:`.nodes.junction_positions`) it reaches ``min_spur`` spacings ``hl``,
+    and its tip lies off the junction's other branches (more than ``UNEXPLAINED.explain``
+    spacings plus ``UNEXPLAINED.explain_noise`` times the noise from each, and at least
+    ``UNEXPLAINED.rise`` times that length: a branch leaves the curves it joins). Under noise the
+    junction's region takes in a twig's first samples, so its chain alone is shorter than the twig
+    (the kinds' twigs of 3-6 h); samples that noise hangs off a curve near a junction lie within
+    the noise band of a branch."""
+    P, c, v = topo.P, topo.chains[i], topo.v
+    if sc.clean or not len(c.ids):
+        return False
+    s = 0 if v[c.ends[0]] >= NODES.junction_valence else 1
+    if v[c.ends[s]] < NODES.junction_valence or v[c.ends[1 - s]] != 1:
+        return False
+    j, first = c.ends[s], c.ids[0] if s == 0 else c.ids[-1]
+    tip_ids = np.r_[topo.regions[c.ends[1 - s]], c.ids[-1] if s == 0 else c.ids[0]].astype(np.int64)
+    if len(c.ids) + len(topo.regions[c.ends[1 - s]]) < UNEXPLAINED.min_samples:
+        return False  # a stray sample or two, not a sampled curve
+    X, _ = junction_positions(P, sc, prm, [(topo.chains, topo.incident(j), topo.regions[j])])
+    reach = length + float(np.linalg.norm(X[0] - P[first]))
+    if reach < prm.min_spur * hl:
+        return False
+    tip = P[tip_ids[np.argmax(np.linalg.norm(P[tip_ids] - X[0], axis=1))]]
+    off = np.inf
+    for k, side in topo.incident(j):
+        ids = topo.chains[k].ids if side == 0 else topo.chains[k].ids[::-1]
+        if k == i or not len(ids):
+            continue
+        Y = np.vstack([X[0][None], P[ids]])  # the branch from the node outwards
+        off = min(off, float(segment_distance(tip, Y[:-1], Y[1:]).min()))
+    band = UNEXPLAINED.explain * hl + UNEXPLAINED.explain_noise * sc.noise
+    return off > max(band, UNEXPLAINED.rise * reach)
 
 
 def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:

@@ -1390,7 +1390,11 @@ WALKIN = WalkIn()
 
 
 class Unexplained(NamedTuple):
-    """Stage 9: branches the finished network leaves unexplained (:mod:`.unexplained`)."""
+    """Stage 9: branches the finished network leaves unexplained (:mod:`.unexplained`). The
+    band of unexplained points (``explain``, ``explain_noise``), the fewest samples of a branch
+    (``min_samples``) and its rise (``rise``) are read in stage 6 too, where a short twig is told
+    from samples that noise hangs off a curve (:func:`.repairs._twig`,
+    :func:`.branched.split_tails`)."""
 
     #: a point farther than this many spacings from every curve ...
     #: origin: benchmark (issue 25, 5 December 2026, with the fields below): the tip of a 3 h

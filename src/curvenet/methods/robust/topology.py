@@ -129,6 +129,13 @@ class Topology:
         self.regions[r] = np.r_[self.regions[r], self.chains[i].ids].astype(np.int64)
         self._changed()
 
+    def release(self, r: int) -> np.ndarray:
+        """Region ``r`` gives up its points (returned; the caller gives them to a chain) and
+        stays, without points, with its chain ends and valence."""
+        ids, self.regions[r] = self.regions[r], np.zeros(0, dtype=np.int64)
+        self._changed()
+        return ids
+
     def trim_end(self, i: int, s: int, k: int) -> None:
         """The ``k`` points of chain ``i`` at its side ``s`` (0: its start) join the region that
         end is at (a chain that ran on past its node); the chain keeps at least one point."""
