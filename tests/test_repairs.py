@@ -1012,6 +1012,33 @@ def test_split_multiple_junctions_parts_a_row_of_plain_junctions_beside_a_core_o
     assert np.linalg.norm(topo.P[topo.regions[hub[0]]].mean(axis=0)) < 1.5
 
 
+def _row_with_a_hub_inside():
+    """:func:`_row` of three teeth 4 h apart with two branches more (down, down-left) at its
+    middle junction: valence 5 there, between the two others."""
+    topo, r = _row(4.0, teeth=3)
+    net = _Net()
+    net.pts, net.chains, net.regions = topo.P.tolist(), topo.chains, topo.regions
+    extra = net._add(np.r_[_line((4, -1), (4, -3), 3), _line((3, -1), (2, -2), 2)])
+    net.regions[r] = np.r_[net.regions[r], extra]
+    net.chain(_line((4, -4), (4, -15), 12), (-1, r))
+    net.chain(_line((1, -3), (-6, -10), 8), (-1, r))
+    return net.topology(), r
+
+
+def test_split_multiple_junctions_parts_a_row_whose_middle_core_has_higher_valence():
+    # a core over SPANNING.max_valence between two plain junctions of a path: two junctions of
+    # the row the tree did not part (a ladder's rail under noise: rungs 3 h apart), not a hub;
+    # the row is split, that core kept as one junction (split_paired_junctions reads it later)
+    topo, r = _row_with_a_hub_inside()
+    n_reg = len(topo.regions)
+    _run(R.split_multiple_junctions, topo, PAIR_NOISE)
+    assert len(topo.regions) == n_reg + 2
+    vals = [int(topo.v[q]) for q in [r, n_reg, n_reg + 1]]
+    assert sorted(vals) == [3, 3, 5]
+    hub = [q for q in [r, n_reg, n_reg + 1] if topo.v[q] == 5]
+    assert np.linalg.norm(topo.P[topo.regions[hub[0]]].mean(axis=0) - [4, 0]) < 1.5
+
+
 def test_split_multiple_junctions_parts_a_row_and_a_pair_on_noise_free_input():
     for teeth in (3, 2):  # on noise-free input a pair is split too
         topo, r = _row(4.0, teeth=teeth)

@@ -359,8 +359,13 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         return None
     regular = sum(1 for k in live if val[k] == NODES.junction_valence)
     # a core over SPANNING.max_valence is a hub of many strokes spread by the noise, unless a row
-    # of SPANNING.min_cores plain junctions lies beside it (then it holds a missed junction's ends)
-    if max(val.values()) > SPANNING.max_valence and regular < SPANNING.min_cores:
+    # of SPANNING.min_cores plain junctions lies beside it (then it holds a missed junction's
+    # ends), or it lies inside a row: the cores a path, it between two of them, and one plain
+    # junction fewer (two junctions of the row the tree did not part)
+    over = [k for k in live if val[k] > SPANNING.max_valence]
+    inside_row = (all(len(nbr[k]) <= 2 for k in live) and all(len(nbr[k]) == 2 for k in over)
+                  and regular >= SPANNING.min_cores - 1)
+    if over and regular < SPANNING.min_cores and not inside_row:
         return None
     if sum(len(s) for s in nbr.values()) != 2 * (len(live) - 1):  # the cores' graph is a tree
         return None

@@ -778,14 +778,21 @@ class Spanning(NamedTuple):
     #: strokes spread by the noise (a real sketch's pole), left whole with its region, unless
     #: ``min_cores`` plain junctions (valence 3) lie beside it: then the region is a row, and the
     #: core holds the chain ends of a junction of the row the pruned tree did not show (a ladder's
-    #: rail under noise); it is split, that core kept as one junction
+    #: rail under noise); it is split, that core kept as one junction. So too when the core lies
+    #: inside a row (the cores a path, it between two of them) beside ``min_cores`` - 1 plain
+    #: junctions: two junctions of the row the tree did not part (a ladder's rungs 3 h apart);
+    #: a hub is the centre of a star of cores or a leaf of the path
     #: origin: measured: CASSIE hat under noise 0.1h and 2% outliers, a hub of 14 strokes read
     #: as 3 cores of valence 6, 3 and 3 (curve F1 0.966 -> 0.929). The row exception (issue 25,
     #: 6 December 2026): the CASSIE regions with a core over 4 held at most 2 plain cores
     #: ([5, 5, 3, 4], [3, 5, 4], [3, 3, 5], the flower's [4, 4, 9, 3, 3]); the kinds' rails
     #: held 5 to 7 ([3, 3, 3, 3, 3, 3, 5, 3]): ladder noise 0.2h s4 0.353 -> 0.915, 0.3h + x3 s0 0.423
     #: -> 0.746, comb 0.3h + x3 s5 0.000 -> 0.486, CASSIE 5 of 128 runs at noise 0.2h and 0.3h
-    #: better by 0.016-0.086, none worse of 928 + 352 harness runs and 320 CASSIE runs
+    #: better by 0.016-0.086, none worse of 928 + 352 harness runs and 320 CASSIE runs. Inside a
+    #: row (6 December 2026): 928 + 352 runs 5 better, 0 worse (ladder noise 0.2h s3 0.561 ->
+    #: 0.800, streets 0.3h + x3 s1 0.700 -> 0.806), CASSIE 256 noisy runs 3 better, 1 worse
+    #: (10-2-1 at 0.2h by 0.004); any core beside 2 plain ones instead: the flower's hub (a star
+    #: of cores, valence 10) split, 0.788 -> 0.713
     max_valence: int = 4
     #: the fewest chain ends of such a region: three junctions of valence 3 in a row show
     #: 3 + 3 + 3 - 2 x 2
