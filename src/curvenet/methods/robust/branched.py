@@ -245,12 +245,15 @@ def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndar
     if len(rid) + 1 < UNEXPLAINED.min_samples:
         return -1
     ids = c.ids if side == 1 else c.ids[::-1]  # the end at the region last
-    start, stop = sc.indptr[ids], sc.indptr[ids + 1]
     r = c.ends[side]
-    linked = np.array([bool((region_of[sc.indices[a:b]] == r).any()) for a, b in zip(start.tolist(), stop.tolist())])
-    if not linked.any():
+    start = sc.indptr[ids]
+    cnt = sc.indptr[ids + 1] - start
+    first = np.cumsum(cnt) - cnt
+    nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
+    at = np.repeat(np.arange(len(ids)), cnt)[region_of[nb] == r]  # positions linked to the region
+    if not len(at):
         return -1
-    k = int(np.flatnonzero(linked)[-1])
+    k = int(at.max())
     head, tail = ids[:k], ids[k:]  # (the tail with the fork's point)
     if len(tail) < UNEXPLAINED.min_samples or not len(head):
         return -1
