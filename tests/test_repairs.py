@@ -1129,18 +1129,27 @@ def test_split_branched_chains_splits_a_chain_running_on_past_its_region_into_a_
     assert arms[free][-1] == tip and topo.v[free] == 1 and topo.v[A] == 1 and topo.v[B] == 1
 
 
-def test_split_branched_chains_leaves_a_chain_end_within_the_noise_band_of_its_region():
+def test_split_tails_splits_a_chain_running_on_past_a_free_end_left_by_the_pruning():
+    # the same fork, read after prune_spurs (ORDER): its free end B was a region of valence 2
+    # until a spur at it was dropped
+    topo, A, B, chain = _fork_past_region(25)
+    _run_near(R.split_tails, topo, noise=TWIG_NOISE)
+    assert not topo.alive[chain]
+    assert sorted(int(topo.v[q]) for q in range(len(topo.regions)) if topo.v[q]) == [1, 1, 1, 3]
+
+
+def test_split_tails_leaves_a_chain_end_within_the_noise_band_of_its_free_end():
     # the same fork under a noise whose band reaches from the tip to the region's samples:
     # the chain's end may be that region's curve, widened by noise
     topo, A, B, chain = _fork_past_region(25)
     P = topo.P
     off = np.linalg.norm(P[topo.regions[B]] - P[topo.chains[chain].ids[-1]], axis=1).min()
     before = _state(topo)
-    _run_near(split_branched, topo, noise=(off - UNEXPLAINED.explain) / UNEXPLAINED.explain_noise + EPS)
+    _run_near(R.split_tails, topo, noise=(off - UNEXPLAINED.explain) / UNEXPLAINED.explain_noise + EPS)
     assert _state(topo) == before
     topo, *_ = _fork_past_region(25)  # noise-free: a twig's tip is flagged, no chain runs past
     before = _state(topo)
-    _run_near(split_branched, topo)
+    _run_near(R.split_tails, topo)
     assert _state(topo) == before
 
 
@@ -1310,7 +1319,7 @@ def test_split_branched_chains_splits_a_chain_past_two_junctions_with_a_free_spi
 # ------------------------------------------------------------------------------ the order
 TESTED = (R.split_multiple_junctions, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
-          R.merge_close_junctions, R.split_paired_junctions, R.merge_twin_chains)
+          R.merge_close_junctions, R.split_paired_junctions, R.merge_twin_chains, R.split_tails)
 
 
 def test_every_repair_in_the_order_has_its_tests_here():

@@ -268,12 +268,14 @@ def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndar
     return k if side == 1 else len(ids) - 1 - k
 
 
-def split_tails(topo: Topology, sc: Scales) -> None:
+def split_tails(topo: Topology, sc: Scales, prm: RobustParams | None = None) -> None:
     """Under noise, every open chain that runs on past the region at one of its ends into a
     twig (:func:`_tail_twig`) branches there: the last point linked to that region (a free
     end) becomes a junction, joined to the chain's other end by the chain's points before it, to
     a new free end by the tail, and to that free end by the region's points (the other twig's
-    samples, ordered from the junction; the region keeps its chain end, without points).
+    samples, ordered from the junction; the region keeps its chain end, without points). Read
+    first by :func:`split_branched_chains`, again after :func:`.repairs.prune_spurs` (a region
+    that a dropped spur leaves a free end).
 
     The failure: a terminal fork of two twigs (3-7 h, 40-60 degrees apart) under noise. The
     shell test misses the fork; one twig's samples form the region of a free end, and the chain
@@ -319,7 +321,7 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
     two or more junctions is split at each (:func:`_split_at_cores`). The regions the split
     chains' branches reached are then read again by :func:`.spanning.split_multiple_junctions`
     (a rail's region, joined to the rungs only now)."""
-    split_tails(topo, sc)
+    split_tails(topo, sc, prm)
     P, h = topo.P, sc.h
     # the chains' largest steps and spacings, all at once
     idx = [i for i, c in enumerate(topo.chains)

@@ -20,7 +20,7 @@ from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
 from .spanning import split_multiple_junctions
-from .branched import split_branched_chains
+from .branched import split_branched_chains, split_tails
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS, SHELL, UNEXPLAINED
 from .topology import Topology
@@ -783,6 +783,7 @@ ORDER = (
     join_facing_tips,
     attach_dangling,
     prune_spurs,
+    split_tails,  # (a free end the pruning left: a chain may run on past it)
     merge_twin_chains,  # (after the tips joined junctions: a tip's chain can become a twin)
     join_through_pass_regions,
     split_paired_junctions,
