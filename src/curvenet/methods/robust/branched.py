@@ -55,6 +55,7 @@ from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
 from .thresholds import BRANCHED, NODES, UNEXPLAINED
 from .topology import Topology
+from .unexplained import leaves
 
 __all__ = ["split_branched_chains", "branch_plan"]
 
@@ -231,6 +232,24 @@ def _near_jump_branches(Y: np.ndarray, adj: list[set], hl: float, noise: float) 
     return len(tree_cores(Y, adj, np.ones(len(Y), dtype=bool), hl, noise, 1)) > 0
 
 
+def _region_of(topo: Topology) -> np.ndarray:
+    """The region of every point (N,) of the topology, -1 where none."""
+    region_of = np.full(len(topo.P), -1, dtype=np.int64)
+    for r, ids in enumerate(topo.regions):
+        region_of[ids] = r
+    return region_of
+
+
+def _links(sc: Scales, region_of: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every link of the points ``ids``: the position in ``ids`` of its point and the region
+    (``region_of``, :func:`_region_of`) of its other point (-1: none)."""
+    start = sc.indptr[ids]
+    cnt = sc.indptr[ids + 1] - start
+    first = np.cumsum(cnt) - cnt
+    nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
+    return np.repeat(np.arange(len(ids)), cnt), region_of[nb]
+
+
 def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndarray) -> int:
     """Where the chain ``i`` forks at its end ``side`` (0: its first point, 1: its last): the
     position in its ids of the last point (counted from that end) linked to the free end's
@@ -240,17 +259,13 @@ def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndar
     ``UNEXPLAINED.explain`` spacings plus ``UNEXPLAINED.explain_noise`` times the noise from
     the chain's points before the fork and from the other twig, and at least ``UNEXPLAINED.rise``
     times its distance from the fork. -1 otherwise."""
-    P, c = topo.P, topo.chains[i]
-    rid = topo.regions[c.ends[side]]
+    P, r = topo.P, topo.chains[i].ends[side]
+    rid = topo.regions[r]
     if len(rid) + 1 < UNEXPLAINED.min_samples:
         return -1
-    ids = c.ids if side == 1 else c.ids[::-1]  # the end at the region last
-    r = c.ends[side]
-    start = sc.indptr[ids]
-    cnt = sc.indptr[ids + 1] - start
-    first = np.cumsum(cnt) - cnt
-    nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
-    at = np.repeat(np.arange(len(ids)), cnt)[region_of[nb] == r]  # positions linked to the region
+    ids = topo.end_ids(i, side)  # the end at the region last
+    own, rr = _links(sc, region_of, ids)
+    at = own[rr == r]  # positions linked to the region
     if not len(at):
         return -1
     k = int(at.max())
@@ -259,11 +274,10 @@ def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndar
         return -1
     fork = P[ids[k]]
     hl = float(np.median(sc.h[tail]))
-    band = UNEXPLAINED.explain * hl + UNEXPLAINED.explain_noise * sc.noise
     for twig, other in ((tail, rid), (rid, tail)):
         tip = P[twig[np.argmax(np.linalg.norm(P[twig] - fork, axis=1))]]
         off = float(np.min(np.linalg.norm(P[np.r_[head, other]] - tip, axis=1)))
-        if off <= max(band, UNEXPLAINED.rise * float(np.linalg.norm(tip - fork))):
+        if not leaves(off, float(np.linalg.norm(tip - fork)), hl, sc.noise):
             return -1
     return k if side == 1 else len(ids) - 1 - k
 
@@ -286,9 +300,7 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams | None = None) -> 
     """
     if sc.clean:
         return
-    region_of = np.full(len(topo.P), -1, dtype=np.int64)
-    for r, ids in enumerate(topo.regions):
-        region_of[ids] = r
+    region_of = _region_of(topo)
     for i in range(len(topo.chains)):
         c = topo.chains[i]
         if not topo.alive[i] or c.closed or len(c.ids) < BRANCHED.min_points:
@@ -334,28 +346,17 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
     cand = [(idx[j], float(hl[j])) for j in np.flatnonzero(jumps).tolist()]
     if not cand:
         return
-    region_of = np.full(len(P), -1, dtype=np.int64)
-    for r, ids in enumerate(topo.regions):
-        region_of[ids] = r
-
-    def links(ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Every link of the points ``ids``: the position in ``ids`` of its point and the
-        region of its other point (-1: none)."""
-        start = sc.indptr[ids]
-        cnt = sc.indptr[ids + 1] - start
-        first = np.cumsum(cnt) - cnt
-        nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
-        return np.repeat(np.arange(len(ids)), cnt), region_of[nb]
+    region_of = _region_of(topo)
 
     def linked_region(ids: np.ndarray) -> int:
         """The region most linked to the points ``ids`` (ties: the lowest; -1: none)."""
-        rr = links(ids)[1]
+        rr = _links(sc, region_of, ids)[1]
         rr = rr[rr >= 0]
         return int(np.bincount(rr).argmax()) if len(rr) else -1
 
     def linked_to_a_region(ids: np.ndarray) -> np.ndarray:
         """Per point of ``ids``: whether it is linked to a region point."""
-        own, rr = links(ids)
+        own, rr = _links(sc, region_of, ids)
         out = np.zeros(len(ids), dtype=bool)
         out[own[rr >= 0]] = True
         return out

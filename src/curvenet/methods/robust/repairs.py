@@ -24,6 +24,7 @@ from .branched import split_branched_chains, split_tails
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS, SHELL, UNEXPLAINED
 from .topology import Topology
+from .unexplained import leaves
 
 __all__ = ["ORDER", "run_repairs", "merge_twin_chains", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
            "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "join_through_pass_regions",
@@ -625,13 +626,12 @@ def _twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, hl: float, leng
     tip = P[tip_ids[np.argmax(np.linalg.norm(P[tip_ids] - X[0], axis=1))]]
     off = np.inf
     for k, side in topo.incident(j):
-        ids = topo.chains[k].ids if side == 0 else topo.chains[k].ids[::-1]
+        ids = topo.end_ids(k, side)[::-1]  # the branch from the node outwards
         if k == i or not len(ids):
             continue
-        Y = np.vstack([X[0][None], P[ids]])  # the branch from the node outwards
+        Y = np.vstack([X[0][None], P[ids]])
         off = min(off, float(segment_distance(tip, Y[:-1], Y[1:]).min()))
-    band = UNEXPLAINED.explain * hl + UNEXPLAINED.explain_noise * sc.noise
-    return off > max(band, UNEXPLAINED.rise * reach)
+    return leaves(off, reach, hl, sc.noise)
 
 
 def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:

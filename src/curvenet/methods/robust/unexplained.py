@@ -59,7 +59,22 @@ from .chains import segment_distance
 from .curves import renumbered
 from .thresholds import NUMERIC, UNEXPLAINED
 
-__all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back"]
+__all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back", "explain_band", "leaves"]
+
+
+def explain_band(h, noise: float):
+    """How far from every curve a sample is unexplained: ``UNEXPLAINED.explain`` spacings ``h``
+    (a float or an array) plus ``UNEXPLAINED.explain_noise`` times the noise (the band in which
+    noise scatters a curve's samples)."""
+    return UNEXPLAINED.explain * h + UNEXPLAINED.explain_noise * noise
+
+
+def leaves(off: float, length: float, h: float, noise: float) -> bool:
+    """Whether a branch whose tip lies ``off`` from the curves it joins, ``length`` from where it
+    joins them, leaves them: beyond the noise band (:func:`explain_band`) and at least
+    ``UNEXPLAINED.rise`` times that length off (the twig tests of stage 6,
+    :func:`.repairs._twig` and :func:`.branched.split_tails`)."""
+    return off > max(explain_band(h, noise), UNEXPLAINED.rise * length)
 
 
 class _Join(NamedTuple):
@@ -200,7 +215,7 @@ def add_unexplained_branches(P: np.ndarray, h: np.ndarray, nodes: np.ndarray, cu
         return nodes, curves, 0
     vx = _vertices(curves)
     d = _distances(P, h, curves, vx, noise)
-    un = np.flatnonzero(d > UNEXPLAINED.explain * h + UNEXPLAINED.explain_noise * noise)
+    un = np.flatnonzero(d > explain_band(h, noise))
     if len(un) == 0:
         return nodes, curves, 0
     ptree = build_tree(P)
