@@ -268,9 +268,12 @@ def test_a_notch_chain_is_split_at_its_two_corners(monkeypatch):
     # vertical past the eave corner (two junctions on one chain, which the one-junction reading
     # of split_branched_chains leaves). Measured over the 8 jittered copies: mean curve F1
     # 0.85 -> 0.92 (copies 2 and 7 0.85 / 0.87 -> 1.00, 3 and 6 0.75 / 0.73 -> 0.85), none worse
-    from curvenet.methods.robust import branched
+    from curvenet.methods.robust import branched, repairs
 
     _fine_tests_by_the_middle(monkeypatch)
+    # (measured alone: without it, repairs.cross_pass_regions mends part of copy 7 since 6
+    # December 2026, 0.87 -> 0.91, and copy 2 stays 0.85)
+    monkeypatch.setattr(repairs, "ORDER", tuple(r for r in repairs.ORDER if r is not repairs.cross_pass_regions))
 
     def copies(ks):
         truth = synth.model("outline")

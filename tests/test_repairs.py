@@ -640,6 +640,60 @@ def test_prune_spurs_small_closed_loops(length, dropped):
     assert topo.alive[c] is not dropped
 
 
+# ------------------------------------------------------------------------------ cross_pass_regions
+def _crossing(traced):
+    """A crossing at the origin whose region ``X`` holds two chain ends only (valence 2), and a
+    chain ``k`` through it (linked graph: pairs within 1.5 h). ``traced`` "straight": the
+    region's chains run up and down, ``k`` along x through the origin; "corners": the region's
+    chains run down and right, ``k`` comes down and turns left at the crossing."""
+    net = _Net()
+    if traced == "straight":
+        X = net.region([[0.3, 1.0], [-0.3, -1.0]])
+        ways = [_line((0, 2), (0, 8), 7), _line((0, -2), (0, -8), 7)]
+        k = net.chain(_line((-8, 0), (8, 0), 17))
+    else:
+        X = net.region([[0.0, 0.0], [0.7, -0.7]])
+        ways = [_line((0, -2), (0, -8), 7), _line((2, 0), (8, 0), 7)]
+        k = net.chain(np.r_[_line((0, 8), (0, 1), 8), _line((-1, 0), (-8, 0), 8)])
+    for w in ways:
+        net.chain(w, (X, -1))
+    return net.topology(), X, k
+
+
+@pytest.mark.parametrize("traced", ["straight", "corners"])
+def test_cross_pass_regions_joins_a_chain_through_a_crossing(traced):
+    topo, X, k = _crossing(traced)
+    m = len(topo.chains[k].ids)
+    _run_near(R.cross_pass_regions, topo, noise=0.2)
+    assert topo.v[X] == 4
+    parts = [i for i, c in enumerate(topo.chains) if topo.alive[i] and X in c.ends and i not in (1, 2)]
+    assert len(parts) == 2 and k in parts
+    assert sum(len(topo.chains[i].ids) for i in parts) == m - 3  # its point at the crossing and two neighbours
+    assert len(topo.regions[X]) == 5
+
+
+def test_cross_pass_regions_leaves_a_curve_passing_beside_a_bend():
+    # the region is a corner of one curve (down and right), another curve passes it straight
+    # 1.2 h to the left: its way down lies along the corner's way down
+    net = _Net()
+    X = net.region([[0.0, 0.0]])
+    net.chain(_line((0, -1), (0, -8), 8), (X, -1))
+    net.chain(_line((1, 0), (8, 0), 8), (X, -1))
+    net.chain(_line((-1.2, 8), (-1.2, -8), 17))
+    _assert_untouched(R.cross_pass_regions, net.topology(), noise=0.2, run=_run_near)
+
+
+def test_cross_pass_regions_leaves_a_chain_linked_at_its_end():
+    # the other chain ends in the crossing (its last two points, linked to the region, lie
+    # within REPAIRS.attach_end_points of its end): it does not pass through
+    net = _Net()
+    X = net.region([[0.3, 1.0], [-0.3, -1.0]])
+    net.chain(_line((0, 2), (0, 8), 7), (X, -1))
+    net.chain(_line((0, -2), (0, -8), 7), (X, -1))
+    net.chain(_line((-8, 0), (0, 0), 9))
+    _assert_untouched(R.cross_pass_regions, net.topology(), noise=0.2, run=_run_near)
+
+
 # ------------------------------------------------------------------------------ join_through_pass_regions
 def test_join_through_pass_regions_joins_two_chains():
     net = _Net()
@@ -1319,7 +1373,8 @@ def test_split_branched_chains_splits_a_chain_past_two_junctions_with_a_free_spi
 # ------------------------------------------------------------------------------ the order
 TESTED = (R.split_multiple_junctions, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
-          R.merge_close_junctions, R.split_paired_junctions, R.merge_twin_chains, R.split_tails)
+          R.merge_close_junctions, R.split_paired_junctions, R.merge_twin_chains, R.split_tails,
+          R.cross_pass_regions)
 
 
 def test_every_repair_in_the_order_has_its_tests_here():

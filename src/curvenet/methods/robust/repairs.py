@@ -27,7 +27,7 @@ from .topology import Topology
 from .unexplained import leaves
 
 __all__ = ["ORDER", "run_repairs", "merge_twin_chains", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
-           "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "join_through_pass_regions",
+           "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "cross_pass_regions", "join_through_pass_regions",
            "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions", "split_branched_chains"]
 
 
@@ -634,6 +634,79 @@ def _twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, hl: float, leng
     return leaves(off, reach, hl, sc.noise)
 
 
+def cross_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """A region of valence 2 that another chain passes through is a crossing: that chain joins it.
+
+    The failure: where two curves cross, the chains ran through the crossing along one curve,
+    or turned there from one curve onto the other (a street grid's crossings 4 h apart under
+    noise), so the crossing's region holds only two chain ends (valence 2) and would be joined
+    through as a bend of one curve. A point of another chain linked to a point of the region,
+    at least ``REPAIRS.attach_end_points`` points from that chain's ends, is a crossing when
+    the four ways out are four branches: the region's two chains (to the mean of each chain's
+    last ``REPAIRS.attach_span`` spacings) and the other chain's two sides (to the mean of its
+    points within ``REPAIRS.attach_span`` spacings on that side, at least one), each from the
+    point halfway between the region's centroid and the chain point, lie more than 45 degrees
+    apart, every pair (cosine under ``REPAIRS.attach_cos``). Closed chains are left as they are.
+    The nearest such point to the centroid and its two chain neighbours then join the region,
+    the chain split there (:meth:`.topology.Topology.cross`). A curve passing beside a bend
+    runs along one of its chains: two ways out lie together.
+    """
+    P, h, chains = topo.P, sc.h, topo.chains
+    rs = np.flatnonzero(topo.v == 2).tolist()
+    if not rs:
+        return
+    owner = np.full(len(P), -1, dtype=np.int64)  # the live chain of every point and its place
+    place = np.zeros(len(P), dtype=np.int64)
+    for i, c in enumerate(chains):
+        if topo.alive[i]:
+            owner[c.ids] = i
+            place[c.ids] = np.arange(len(c.ids))
+    near_end = REPAIRS.attach_end_points
+    span = REPAIRS.attach_span
+
+    def unit(v):
+        n = float(np.linalg.norm(v))
+        return v / n if n > 0 else None
+
+    for r in rs:
+        R = topo.regions[r]
+        inc = sorted(set(topo.incident(r)))
+        if topo.v[r] != 2 or not len(R) or len(inc) != 2 or inc[0][0] == inc[1][0]:
+            continue
+        nb = np.unique(np.concatenate([sc.indices[sc.indptr[p]:sc.indptr[p + 1]] for p in R.tolist()]))
+        k_of = owner[nb]
+        cand = nb[(k_of >= 0) & (k_of != inc[0][0]) & (k_of != inc[1][0])]
+        if not len(cand):
+            continue
+        cen = P[R].mean(axis=0)
+        ends = [end_portion(P, h, topo.end_ids(i, s), span=span).mean(axis=0) for i, s in inc]
+        dist = np.sqrt(((P[cand] - cen) ** 2).sum(axis=1))
+        for q in cand[np.lexsort((cand, dist))].tolist():
+            k = int(owner[q])
+            c = chains[k]
+            m, a = len(c.ids), int(place[q])
+            if c.closed or not near_end <= a <= m - 1 - near_end:
+                continue
+            arc = np.r_[0.0, np.cumsum(step_lengths(P, c.ids)[:-1])]
+            reach = span * h[q]
+            b0 = min(int(np.searchsorted(arc, arc[a] - reach, side="left")), a - 1)  # (a sample at least)
+            b1 = max(int(np.searchsorted(arc, arc[a] + reach, side="right")), a + 2)
+            at = (cen + P[q]) / 2  # (the crossing: between the region and the chain)
+            U = [unit(x - at) for x in ends + [P[c.ids[b0:a]].mean(axis=0), P[c.ids[a + 1:b1]].mean(axis=0)]]
+            if any(u is None for u in U):
+                continue
+            U = np.array(U)
+            cos = U @ U.T
+            if (cos[np.triu_indices(len(U), 1)] < REPAIRS.attach_cos).all():
+                lo, hi = a - 1, a + 2
+                owner[c.ids[lo:hi]] = -1
+                topo.cross(r, k, lo, hi)
+                kn = len(chains) - 1  # the part after the split is a new chain
+                owner[chains[kn].ids] = kn
+                place[chains[kn].ids] = np.arange(len(chains[kn].ids))
+                break
+
+
 def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     """Chains are joined through every region of valence 2 (no node there), in region order.
 
@@ -785,6 +858,7 @@ ORDER = (
     prune_spurs,
     split_tails,  # (a free end the pruning left: a chain may run on past it)
     merge_twin_chains,  # (after the tips joined junctions: a tip's chain can become a twin)
+    cross_pass_regions,  # (before the valence-2 regions are joined through)
     join_through_pass_regions,
     split_paired_junctions,
     merge_close_junctions,  # (after the split: it merges back what it takes for one junction)
