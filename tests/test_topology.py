@@ -215,6 +215,22 @@ def test_split_chain_opens_a_closed_chain():
     topo.check()
 
 
+def test_cross_splits_a_chain_through_a_region():
+    # the bar's points 3..5 join the T's junction region J of valence 2 (chains up and down)
+    P = np.array([[x, 0] for x in range(-4, 5)] + [[0, 1], [0, -1]] + [[0, y] for y in (2, 3)]
+                 + [[0, -y] for y in (2, 3)], dtype=float)
+    chains = [Chain(_ids(0, 9), [-1, -1]), Chain(_ids(11, 13), [0, -1]), Chain(_ids(13, 15), [0, -1])]
+    topo = Topology(P, chains, [np.array([9, 10], dtype=np.int64)])
+    assert topo.v.tolist() == [2, 1, 1, 1, 1]
+    topo.cross(0, 0, 3, 6)
+    assert topo.regions[0].tolist() == [9, 10, 3, 4, 5]
+    assert [c.ids.tolist() for c in topo.chains] == [[0, 1, 2], [11, 12], [13, 14], [6, 7, 8]]
+    assert _regions_of_ends(topo) == [[1, 0], [0, 3], [0, 4], [0, 2]]  # (the bar's free ends: 1 and 2)
+    assert topo.v.tolist() == [4, 1, 1, 1, 1]
+    assert topo.incident(0) == [(1, 0), (2, 0), (0, 1), (3, 0)] and topo.incident(2) == [(3, 1)]
+    topo.check()
+
+
 # ------------------------------------------------------------------------------ broken states
 def test_check_rejects_an_end_not_listed_at_its_region(t_shape):
     t_shape._ends_at[J].remove((UP, 0))

@@ -261,23 +261,19 @@ class Topology:
         return core
 
     def cross(self, r: int, j: int, lo: int, hi: int) -> None:
-        """Chain ``j`` crosses region ``r`` in its middle: its points ``lo:hi`` join the region,
-        and it is split into the part before and the part after, both ending at ``r`` (a
-        closed chain is opened there instead). The region's valence grows by 2."""
+        """The open chain ``j`` crosses region ``r`` in its middle (``0 < lo < hi < len``): its
+        points ``lo:hi`` join the region, and it is split into the part before (chain ``j``) and
+        the part after (a new chain), both ending at ``r``. The region's valence grows by 2."""
         cj = self.chains[j]
         self.regions[r] = np.r_[self.regions[r], cj.ids[lo:hi]].astype(np.int64)
         ea = self._ends_at
-        if cj.closed:
-            self.chains[j] = Chain(np.r_[cj.ids[hi:], cj.ids[:lo]], [r, r])
-            ea[r] += [(j, 0), (j, 1)]
-        else:
-            a, b = cj.ends
-            self.chains[j] = Chain(cj.ids[:lo], [a, r])
-            self.chains.append(Chain(cj.ids[hi:], [r, b]))
-            self.alive.append(True)
-            jn = len(self.chains) - 1
-            ea[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ea[b]]
-            ea[r] += [(j, 1), (jn, 0)]
+        a, b = cj.ends
+        self.chains[j] = Chain(cj.ids[:lo], [a, r])
+        self.chains.append(Chain(cj.ids[hi:], [r, b]))
+        self.alive.append(True)
+        jn = len(self.chains) - 1
+        ea[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ea[b]]
+        ea[r] += [(j, 1), (jn, 0)]
         self.v[r] += 2
         self._changed()
 
