@@ -1411,10 +1411,10 @@ def test_run_repairs_mends_a_broken_curve():
     assert topo.v.tolist() == [1, 0, 0, 1]
 
 
-def _close_junctions_with_stub(linked: bool = False):
+def _close_junctions_with_stub(linked: bool = False, off: float = 0.0):
     """Junctions A at (0, 0) and B at (4, 0), two branches each, and a one-point chain from A to
-    a free end without tip points at (1, 0), on the segment A-B (a short link traced out of A);
-    ``linked``: A and B joined by a chain already."""
+    a free end without tip points at (1, 0), on the segment A-B (a short link traced out of A),
+    or at (1.5, ``off``); ``linked``: A and B joined by a chain already."""
     net = _Net()
     A = net.region([[0, 0]])
     B = net.region([[4, 0]])
@@ -1424,22 +1424,32 @@ def _close_junctions_with_stub(linked: bool = False):
     net.chain(_line((4, 1), (4, 6), 6), (B, -1))
     if linked:
         net.chain(_line((1, 0.5), (3, 0.5), 3), (A, B))
-    stub = net.chain(_line((1, 0), (1, 0), 1), (A, -1))
+    at = (1.5, off) if off else (1, 0)
+    stub = net.chain(_line(at, at, 1), (A, -1))
     return net.topology(), A, B, stub
 
 
-def test_tips_to_junctions_gives_a_stub_between_close_junctions_to_the_other():
+@pytest.mark.parametrize("noise", [0.0, 0.2])
+def test_tips_to_junctions_gives_a_stub_between_close_junctions_to_the_other(noise):
+    # under noise too (6 December 2026): the two regions took the link's samples but one
     topo, A, B, stub = _close_junctions_with_stub()
-    _run(R.tips_to_junctions, topo)
+    _run(R.tips_to_junctions, topo, noise=noise)
     assert sorted(topo.chains[stub].ends) == [A, B]  # the link between the two
     assert topo.v[A] == 3 and topo.v[B] == 3
 
 
-@pytest.mark.parametrize("noise, linked", [(0.2, False), (0.0, True)])
-def test_tips_to_junctions_leaves_the_stub_under_noise_or_when_linked(noise, linked):
-    # under noise a real tip can lose its flags; a second trace of an existing link is the
-    # region's own (both left to prune_spurs)
-    topo, *_ = _close_junctions_with_stub(linked)
+def test_tips_to_junctions_leaves_the_stub_when_linked():
+    # a second trace of an existing link is the region's own (left to prune_spurs)
+    topo, *_ = _close_junctions_with_stub(linked=True)
+    _assert_untouched(R.tips_to_junctions, topo)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.2])
+def test_tips_to_junctions_leaves_a_stub_off_the_segment(noise):
+    # 1.2 h off the segment A-B (within the gap of B: 2.8 h): beyond the strip (the link
+    # width, 1 h; under noise 0.2 the noise's strip 0.9 h): no link between the two, a short
+    # twig of A (left to prune_spurs)
+    topo, *_ = _close_junctions_with_stub(off=PRM.link_width + 2 * EPS)
     _assert_untouched(R.tips_to_junctions, topo, noise=noise)
 
 

@@ -231,10 +231,11 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     Where the free end's node would be (:func:`~.nodes.free_end`), the nearest point of a region
     of valence 2 or more within ``link * REPAIRS.tip_gap`` spacings (plus the noise gap) takes
     the free end's region, unless the chain's other end is that very junction (a short spur:
-    left to :func:`prune_spurs`). On noise-free input a free end without tip points there
-    (no curve's end) goes to the nearest other junction within that gap when the chain runs
-    straight between the two (:func:`_linked_junction`): a short link between two close
-    junctions (a street grid's, a ladder's), traced out of one of them.
+    left to :func:`prune_spurs`). A free end without tip points there goes to the nearest
+    other junction within that gap when the chain runs straight between the two
+    (:func:`_linked_junction`): a short link between two close junctions (a street grid's, a
+    ladder's, a building's edge of 7 h between two corners under noise), traced out of one of
+    them, the other's region holding its last samples.
     """
     from scipy.spatial import cKDTree
 
@@ -273,9 +274,9 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
             continue
         t = int(lab[k])
         if topo.chains[i].ends[1 - s] == t:
-            # a short spur of that very junction, left to the pruning; or, on noise-free input
-            # and without tip points (no curve's end: see prune_spurs), a short link between two
-            # close junctions traced from one of them: taken by the other one
+            # a short spur of that very junction, left to the pruning; or, without tip points,
+            # a short link between two close junctions traced from one of them: taken by the
+            # other one
             t = _linked_junction(topo, sc, i, r, t, tip[j], float(gap[j]), tree, ids, lab)
             if t < 0:
                 continue
@@ -293,12 +294,19 @@ def _no_curve_end(topo: Topology, sc: Scales, r: int) -> bool:
 def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: np.ndarray, gap: float,
                      tree, ids: np.ndarray, lab: np.ndarray) -> int:
     """The junction a stub (chain ``i`` from junction ``own`` to the free end ``r`` without tip
-    points, on noise-free input) is a link to: the nearest region point of another junction
-    within ``gap`` of its tip (``tree`` over the junction points ``ids``, labelled ``lab``),
-    when every point of the stub lies within ``sc.width`` spacings of the segment between the
-    two junctions' centres (a link runs straight between them) and no other chain links the two
-    already (the stub would be a second trace of that link); -1 where there is none."""
-    if not _no_curve_end(topo, sc, r):
+    points) is a link to: the nearest region point of another junction within ``gap`` of its
+    tip (``tree`` over the junction points ``ids``, labelled ``lab``), when every point of the
+    stub lies within ``sc.width`` spacings (under noise, at least ``LINKS.strip_noise`` times
+    the noise: the strip a link keeps to its line) of the segment between the two junctions'
+    centres (a link runs straight between them) and no other chain links the two already (the
+    stub would be a second trace of that link); -1 where there is none.
+
+    Under noise a free end without tip points may be a true tip whose flags the noise took
+    (:func:`_no_curve_end`); one whose chain runs straight from its junction to within the gap
+    of another junction's region is read as the link between them all the same (since 6
+    December 2026: a building's 7 h edge between two corners under noise 0.2 h, whose samples
+    but one the two regions took, was pruned and both corners lost)."""
+    if not (topo.v[r] == 1 and not len(topo.regions[r])):
         return -1
     near = np.asarray(tree.query_ball_point(tip, gap), dtype=np.int64)
     near = near[lab[near] != own]
@@ -317,7 +325,7 @@ def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: 
     X = P[topo.chains[i].ids] - a
     along = np.clip(X @ (u / L), 0.0, L)
     off = np.linalg.norm(X - along[:, None] * (u / L), axis=1)
-    lim = sc.width * np.median(sc.h[topo.chains[i].ids])
+    lim = max(sc.width * float(np.median(sc.h[topo.chains[i].ids])), LINKS.strip_noise * sc.noise)
     return t if bool(np.all(off <= lim)) else -1
 
 
