@@ -632,13 +632,17 @@ class Repairs(NamedTuple):
     #: origin: benchmark: 1.5 -> 1.0, CASSIE 0.8752 -> 0.8774, 2.5h gaps under noise still joined
     #: (5171ee8)
     attach: float = 1.0
-    #: ... within 45 degrees of its end's direction (cosine)
-    #: origin: benchmark: held-out seeds 5-9 density x3 0.964 -> 0.969 (8c10e3f)
+    #: ... within 45 degrees of its end's direction (cosine); also the least angle between the
+    #: four ways out of a crossing (:func:`.repairs.cross_pass_regions`)
+    #: origin: benchmark: held-out seeds 5-9 density x3 0.964 -> 0.969 (8c10e3f); reused for the
+    #: crossings, not tuned (issue 25, 6 December 2026)
     attach_cos: float = float(np.cos(np.radians(45.0)))
-    #: the end portion (in h) that gives a free end's direction for the attach test
+    #: the end portion (in h) that gives a free end's direction for the attach test (and each
+    #: way out of a crossing, :func:`.repairs.cross_pass_regions`)
     #: origin: set with the dangling-end attach (b34cd7a); no measurement recorded
     attach_span: float = 3.0
     #: a chain point within this many points of the other chain's end joins that end's region
+    #: (and is no crossing's point, :func:`.repairs.cross_pass_regions`)
     #: origin: set with the dangling-end attach (b34cd7a); no measurement recorded
     attach_end_points: int = 2
     #: the end portion (in h) that gives a tip's node for the tip-to-junction test
