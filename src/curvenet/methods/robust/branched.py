@@ -50,7 +50,7 @@ import itertools
 import numpy as np
 
 from .chains import flat_steps, group_medians, polylen
-from .graph import components
+from .graph import components, csr_edges
 from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
 from .thresholds import BRANCHED, NODES, UNEXPLAINED
@@ -243,11 +243,8 @@ def _region_of(topo: Topology) -> np.ndarray:
 def _links(sc: Scales, region_of: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every link of the points ``ids``: the position in ``ids`` of its point and the region
     (``region_of``, :func:`_region_of`) of its other point (-1: none)."""
-    start = sc.indptr[ids]
-    cnt = sc.indptr[ids + 1] - start
-    first = np.cumsum(cnt) - cnt
-    nb = sc.indices[np.repeat(start - first, cnt) + np.arange(int(cnt.sum()))]
-    return np.repeat(np.arange(len(ids)), cnt), region_of[nb]
+    _, nb = csr_edges(sc.indptr, sc.indices, ids)
+    return np.repeat(np.arange(len(ids)), sc.indptr[ids + 1] - sc.indptr[ids]), region_of[nb]
 
 
 def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndarray) -> int:

@@ -16,6 +16,7 @@ import numpy as np
 from ... import _sigint
 from ...neighbors import query_threads
 from .chains import chain_lengths, end_counts, end_portion, extent, fit_line, polylen, segment_distance, step_lengths
+from .graph import csr_edges
 from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
@@ -419,10 +420,7 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     are handled in chain order; each moves at most once.
     """
     chains = topo.chains
-    owner = np.full(len(topo.P), -1, dtype=np.int64)  # the live chain of every point (-1: none)
-    for i, c in enumerate(chains):
-        if topo.alive[i]:
-            owner[c.ids] = i
+    owner, _ = _owners(topo)
     if not (owner >= 0).any():
         return
     tips = [(i, s) for i, c in enumerate(chains) if topo.alive[i] and not c.closed
@@ -456,6 +454,17 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         if not cj.closed:  # the part after the split is a new chain
             jn = len(chains) - 1
             owner[chains[jn].ids] = jn
+
+
+def _owners(topo: Topology) -> tuple[np.ndarray, np.ndarray]:
+    """The live chain of every point (N,) (-1: none) and the point's place in that chain (N,)."""
+    owner = np.full(len(topo.P), -1, dtype=np.int64)
+    place = np.zeros(len(topo.P), dtype=np.int64)
+    for i, c in enumerate(topo.chains):
+        if topo.alive[i]:
+            owner[c.ids] = i
+            place[c.ids] = np.arange(len(c.ids))
+    return owner, place
 
 
 class _Prefilter(NamedTuple):
@@ -663,12 +672,7 @@ def cross_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     rs = np.flatnonzero(topo.v == 2).tolist()
     if not rs:
         return
-    owner = np.full(len(P), -1, dtype=np.int64)  # the live chain of every point and its place
-    place = np.zeros(len(P), dtype=np.int64)
-    for i, c in enumerate(chains):
-        if topo.alive[i]:
-            owner[c.ids] = i
-            place[c.ids] = np.arange(len(c.ids))
+    owner, place = _owners(topo)
     near_end = REPAIRS.attach_end_points
     span = REPAIRS.attach_span
 
@@ -681,7 +685,7 @@ def cross_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         inc = sorted(set(topo.incident(r)))
         if topo.v[r] != 2 or not len(R) or len(inc) != 2 or inc[0][0] == inc[1][0]:
             continue
-        nb = np.unique(np.concatenate([sc.indices[sc.indptr[p]:sc.indptr[p + 1]] for p in R.tolist()]))
+        nb = np.unique(csr_edges(sc.indptr, sc.indices, R)[1])
         k_of = owner[nb]
         cand = nb[(k_of >= 0) & (k_of != inc[0][0]) & (k_of != inc[1][0])]
         if not len(cand):

@@ -249,13 +249,7 @@ class Topology:
             self.chains[j] = Chain(np.r_[cj.ids[hi:], cj.ids[:lo]], [nr, nr])
             ea[nr] += [(j, 0), (j, 1)]
         else:
-            a, b = cj.ends
-            self.chains[j] = Chain(cj.ids[:lo], [a, nr])
-            self.chains.append(Chain(cj.ids[hi:], [nr, b]))
-            self.alive.append(True)
-            jn = len(self.chains) - 1
-            ea[nr] += [(j, 1), (jn, 0)]
-            ea[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ea[b]]
+            self._split_open(j, lo, hi, nr)
         self.v[nr] += 2
         self._changed()
         return core
@@ -264,18 +258,24 @@ class Topology:
         """The open chain ``j`` crosses region ``r`` in its middle (``0 < lo < hi < len``): its
         points ``lo:hi`` join the region, and it is split into the part before (chain ``j``) and
         the part after (a new chain), both ending at ``r``. The region's valence grows by 2."""
+        self.regions[r] = np.r_[self.regions[r], self.chains[j].ids[lo:hi]].astype(np.int64)
+        self._split_open(j, lo, hi, r)
+        self.v[r] += 2
+        self._changed()
+
+    def _split_open(self, j: int, lo: int, hi: int, r: int) -> None:
+        """The open chain ``j`` without its points ``lo:hi``: the part before (chain ``j``) and
+        the part after (a new chain), both ending at region ``r`` (its valence left to the
+        caller)."""
         cj = self.chains[j]
-        self.regions[r] = np.r_[self.regions[r], cj.ids[lo:hi]].astype(np.int64)
-        ea = self._ends_at
         a, b = cj.ends
         self.chains[j] = Chain(cj.ids[:lo], [a, r])
         self.chains.append(Chain(cj.ids[hi:], [r, b]))
         self.alive.append(True)
         jn = len(self.chains) - 1
-        ea[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ea[b]]
+        ea = self._ends_at
+        ea[b] = [(jn, 1) if e_ == (j, 1) else e_ for e_ in ea[b]]  # (before r's: b may be r)
         ea[r] += [(j, 1), (jn, 0)]
-        self.v[r] += 2
-        self._changed()
 
     def split_region(self, r: int, ends_b: list[tuple[int, int]], ids_a: np.ndarray, ids_b: np.ndarray,
                      seg: np.ndarray) -> int:
