@@ -6,6 +6,7 @@ import pytest
 
 from curvenet import bench, synth
 from curvenet.metrics import compare
+from curvenet.methods.robust import branched
 from curvenet.methods.robust import frames as RF
 from curvenet.methods.robust import thresholds as TH
 from curvenet.neighbors import knn
@@ -60,5 +61,7 @@ def test_the_plate_s_short_edges_keep_their_links(monkeypatch):
     assert with_rule["exact_topology"] and with_rule["curve_f1"] == pytest.approx(1.0)
     off = TH.TANGENTS._replace(vote_keep_cos=1.0 + TH.NUMERIC.rel)  # no neighbour lies within it
     monkeypatch.setattr(RF, "TANGENTS", off)
+    # (measured alone: branched.orphan_twigs mends one of the lost junctions, 0.72 -> 0.87)
+    monkeypatch.setattr(branched, "orphan_twigs", lambda *a: set())
     without = compare(reconstruct(pts), truth, h=h)
     assert without["curve_f1"] < with_rule["curve_f1"] - 0.2

@@ -45,6 +45,7 @@ ends' chains, each through a missed junction, were left whole; with the second p
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
@@ -53,11 +54,11 @@ from .chains import flat_steps, group_medians, polylen
 from .graph import components, csr_edges
 from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
-from .thresholds import BRANCHED, NODES, UNEXPLAINED
+from .thresholds import BRANCHED, LINKS, NODES, UNEXPLAINED
 from .topology import Topology
 from .unexplained import leaves
 
-__all__ = ["split_branched_chains", "branch_plan"]
+__all__ = ["split_branched_chains", "branch_plan", "orphan_twigs"]
 
 
 def _jump(hl: float, noise: float) -> float:
@@ -327,42 +328,58 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
     chain whose points, in order, jump by over ``BRANCHED.jump`` spacings (plus
     the noise) and whose spanning tree shows one junction (:func:`branch_plan`) becomes that
     junction and one chain per branch (:meth:`.topology.Topology.branch_chain`); a tree of
-    two or more junctions is split at each (:func:`_split_at_cores`). The regions the split
-    chains' branches reached are then read again by :func:`.spanning.split_multiple_junctions`
-    (a rail's region, joined to the rungs only now)."""
+    two or more junctions is split at each (:func:`_split_at_cores`). A chain that neither
+    split touched and that runs past a region no chain ends at branches into it when the two
+    make one junction (:func:`orphan_twigs`). The regions the split chains' branches reached
+    are then read again by :func:`.spanning.split_multiple_junctions` (a rail's region, joined
+    to the rungs only now)."""
+    first = len(topo.chains)  # (the chains before any split here)
     split_tails(topo, sc, prm)
+    reached = _split_jumping(topo, sc, prm)
+    reached |= orphan_twigs(topo, sc, prm, first)
+    if reached:  # a row's region now joined to the branches a chain ran past: read it again
+        split_multiple_junctions(topo, sc, prm, only=reached)
+
+
+def _linked_region(sc: Scales, region_of: np.ndarray, ids: np.ndarray) -> int:
+    """The region most linked to the points ``ids`` (``region_of``: :func:`_region_of`; ties:
+    the lowest; -1: none)."""
+    rr = _links(sc, region_of, ids)[1]
+    rr = rr[rr >= 0]
+    return int(np.bincount(rr).argmax()) if len(rr) else -1
+
+
+def _linked_to_a_region(sc: Scales, region_of: np.ndarray, ids: np.ndarray) -> np.ndarray:
+    """Per point of ``ids``: whether it is linked to a region point."""
+    own, rr = _links(sc, region_of, ids)
+    out = np.zeros(len(ids), dtype=bool)
+    out[own[rr >= 0]] = True
+    return out
+
+
+def _split_jumping(topo: Topology, sc: Scales, prm: RobustParams) -> set:
+    """The chains that jump split where their trees show junctions (see
+    :func:`split_branched_chains`); returns the regions their branches reached."""
     P, h = topo.P, sc.h
     # the chains' largest steps and spacings, all at once
     idx = [i for i, c in enumerate(topo.chains)
            if topo.alive[i] and not c.closed and len(c.ids) >= BRANCHED.min_points]
     if not idx:
-        return
+        return set()
     flat, off, step = flat_steps(P, [topo.chains[i].ids for i in idx])
     hl = group_medians(h[flat], np.diff(off))
     jumps = np.maximum.reduceat(step, off[:-1]) > _jump(hl, sc.noise)
     cand = [(idx[j], float(hl[j])) for j in np.flatnonzero(jumps).tolist()]
     if not cand:
-        return
+        return set()
     region_of = _region_of(topo)
-
-    def linked_region(ids: np.ndarray) -> int:
-        """The region most linked to the points ``ids`` (ties: the lowest; -1: none)."""
-        rr = _links(sc, region_of, ids)[1]
-        rr = rr[rr >= 0]
-        return int(np.bincount(rr).argmax()) if len(rr) else -1
-
-    def linked_to_a_region(ids: np.ndarray) -> np.ndarray:
-        """Per point of ``ids``: whether it is linked to a region point."""
-        own, rr = _links(sc, region_of, ids)
-        out = np.zeros(len(ids), dtype=bool)
-        out[own[rr >= 0]] = True
-        return out
+    linked_region = functools.partial(_linked_region, sc, region_of)
 
     # the trees of every candidate at once (one sparse-graph call for all the windows, one for
     # the whole chains whose window shows a junction): the candidates are distinct chains, and
     # splitting one leaves the others' points as they are
     Xs = [P[topo.chains[i].ids] for i, _ in cand]
-    keeps = [linked_to_a_region(topo.chains[i].ids) for i, _ in cand]
+    keeps = [_linked_to_a_region(sc, region_of, topo.chains[i].ids) for i, _ in cand]
     wins = [_jump_window(X, hl, sc.noise, keep) for X, keep, (_, hl) in zip(Xs, keeps, cand)]
     looked = [j for j, w in enumerate(wins) if w is not None]
     wtrees = pruned_trees([Xs[j][wins[j][0]] for j in looked], [prune_cut(cand[j][1], sc.noise) for j in looked],
@@ -392,8 +409,117 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
             if not _ragged_end(topo, branches, hl, sc.noise, prm.min_spur):
                 reached |= {f for f in far if f >= 0}
                 topo.branch_chain(i, c.ids[core], [c.ids[np.asarray(arm)] for arm in arms], far)
-    if reached:  # a row's region now joined to the branches a chain ran past: read it again
-        split_multiple_junctions(topo, sc, prm, only=reached)
+    return reached
+
+
+def _orphans_beside(topo: Topology, sc: Scales, prm: RobustParams, first: int) -> dict:
+    """Per open chain among the first ``first`` chains, still live, with
+    ``BRANCHED.min_points`` points or more: the regions no chain end was ever listed at (an
+    *orphan*: flagged points the tracer left without a chain) with a point within the link
+    length (in the orphan's spacing, plus ``LINKS.gap_noise`` times the noise) of one of its
+    points. Only chains beside exactly one orphan are returned: ``{chain: orphan}``."""
+    orphans = [r for r in range(len(topo.regions))
+               if topo.v[r] == 0 and len(topo.regions[r]) and not topo.listed(r)]
+    if not orphans:
+        return {}
+    owner, _ = topo.owners()
+    for i in range(first, len(topo.chains)):  # (chains made by the splits: not read here)
+        owner[topo.chains[i].ids] = -1
+    ids = np.concatenate([topo.regions[r] for r in orphans])
+    of = np.repeat(np.asarray(orphans), [len(topo.regions[r]) for r in orphans])
+    reach = prm.link * group_medians(sc.h[ids], [len(topo.regions[r]) for r in orphans]) + LINKS.gap_noise * sc.noise
+    near = sc.tree.query_ball_point(topo.P[ids], np.repeat(reach, [len(topo.regions[r]) for r in orphans]))
+    beside: dict = {}
+    for r, hits in zip(of.tolist(), near):
+        for i in set(owner[np.asarray(hits, dtype=np.int64)].tolist()) - {-1}:
+            c = topo.chains[i]
+            if not c.closed and len(c.ids) >= BRANCHED.min_points:
+                beside.setdefault(i, set()).add(r)
+    return {i: next(iter(rs)) for i, rs in sorted(beside.items()) if len(rs) == 1}
+
+
+def orphan_twigs(topo: Topology, sc: Scales, prm: RobustParams, first: int) -> set:
+    """A chain that runs past a twig whose tip is an orphan region branches into it.
+
+    The failure: a twig of 3-5 h leaving a branch under noise (noise 0.1-0.2 h). Noise cut
+    the links of its last samples, so the shell test flagged them as a region of their own (a
+    free end's points) but no chain ends there (an *orphan*, :func:`_orphans_beside`); the
+    chain traced along the branch runs past the twig's junction and takes its first samples
+    (its points in order zigzag onto the twig and back, or the twig's first sample hangs off
+    it). Its own tree shows no junction: the twig's branch in it, one or two samples, is
+    shorter than the cut of noise spurs (:func:`.spanning.prune_cut`). With the orphan's
+    points in the tree (a leaf there never cut, as a point linked to a region), it does.
+
+    Each open chain of the first ``first`` (those before the splits of
+    :func:`split_branched_chains`; the ones the splits left whole) beside exactly one orphan is
+    read as :func:`branch_plan` reads a chain, over its points and the orphan's: where the tree
+    shows one junction of the chain's points whose branches are paths, one of them running
+    into the orphan (the chain's samples first, then the orphan's only), the others ending as
+    :func:`split_branched_chains` ends them, and the orphan's branch is a twig as stage 9 tells
+    one (:mod:`.unexplained`): at least ``UNEXPLAINED.min_samples`` samples with the orphan's
+    points, its farthest point from the junction ``min_spur - UNEXPLAINED.tip_short`` spacings
+    plus ``UNEXPLAINED.length_noise`` times the noise away or more, the chain branches there
+    (:meth:`.topology.Topology.branch_chain`): the twig's chain takes the orphan's points
+    (ordered from the junction) and ends at the orphan, now a free end without points.
+
+    Returns
+    -------
+    set
+        The regions the other branches end at.
+    """
+    beside = _orphans_beside(topo, sc, prm, first)
+    if not beside:
+        return set()
+    P = topo.P
+    region_of = _region_of(topo)
+    linked_region = functools.partial(_linked_region, sc, region_of)
+    reached: set = set()
+    for i, r in beside.items():
+        c, oid = topo.chains[i], topo.regions[r]
+        if not topo.alive[i] or not len(oid):  # (split, or taken by another chain, here)
+            continue
+        n = len(c.ids)
+        hl = float(np.median(sc.h[c.ids]))
+        X = np.r_[P[c.ids], P[oid]]
+        keep = np.r_[_linked_to_a_region(sc, region_of, c.ids), np.ones(len(oid), dtype=bool)]
+        plan = branch_plan(X, hl, sc.noise, keep)
+        if plan is None or max(plan[0]) >= n:
+            continue
+        core, arms = plan
+        twig = [k for k, arm in enumerate(arms) if arm[-1] >= n]
+        if len(twig) != 1:
+            continue
+        t = twig[0]
+        own = [q for q in arms[t] if q < n]
+        if any(q >= n for q in arms[t][:len(own)]) or any(q < n for q in arms[t][len(own):]):
+            continue  # (the twig's branch: the chain's samples, then the orphan's)
+        tip = float(np.max(np.linalg.norm(P[oid] - X[np.asarray(core)].mean(axis=0), axis=1)))
+        if (len(arms[t]) < UNEXPLAINED.min_samples
+                or tip < (prm.min_spur - UNEXPLAINED.tip_short) * hl + UNEXPLAINED.length_noise * sc.noise):
+            continue
+        far, ids = [], []
+        for k, arm in enumerate(arms):
+            if k == t:
+                far.append(r)
+                ids.append(c.ids[np.asarray(own, dtype=np.int64)])
+                continue
+            if any(q >= n for q in arm):
+                break
+            f = _branch_end(topo, sc, c, arm, hl, linked_region)
+            if f < 0 and not _free_branch(X, core, arm, arms, hl, prm):
+                break  # (as in split_branched_chains)
+            far.append(f)
+            ids.append(c.ids[np.asarray(arm)])
+        else:
+            if _ragged_end(topo, list(zip(ids, far)), hl, sc.noise, prm.min_spur):
+                continue
+            other = topo.release(r)  # the twig's last samples, ordered from the junction
+            region_of[other] = -1
+            x0 = X[np.asarray(core)].mean(axis=0)
+            ids[t] = np.r_[ids[t], other[np.lexsort((other, np.linalg.norm(P[other] - x0, axis=1)))]]
+            region_of[c.ids[core]] = topo.branch_chain(i, c.ids[core], ids, far)
+            reached |= {f for k, f in enumerate(far) if f >= 0 and k != t}
+    return reached
 
 
 def _free_branch(X: np.ndarray, core: list[int], arm: list[int], arms: list[list[int]], hl: float,

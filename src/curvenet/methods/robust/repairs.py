@@ -420,7 +420,7 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     are handled in chain order; each moves at most once.
     """
     chains = topo.chains
-    owner, _ = _owners(topo)
+    owner, _ = topo.owners()
     if not (owner >= 0).any():
         return
     tips = [(i, s) for i, c in enumerate(chains) if topo.alive[i] and not c.closed
@@ -454,17 +454,6 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         if not cj.closed:  # the part after the split is a new chain
             jn = len(chains) - 1
             owner[chains[jn].ids] = jn
-
-
-def _owners(topo: Topology) -> tuple[np.ndarray, np.ndarray]:
-    """The live chain of every point (N,) (-1: none) and the point's place in that chain (N,)."""
-    owner = np.full(len(topo.P), -1, dtype=np.int64)
-    place = np.zeros(len(topo.P), dtype=np.int64)
-    for i, c in enumerate(topo.chains):
-        if topo.alive[i]:
-            owner[c.ids] = i
-            place[c.ids] = np.arange(len(c.ids))
-    return owner, place
 
 
 class _Prefilter(NamedTuple):
@@ -672,7 +661,7 @@ def cross_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     rs = np.flatnonzero(topo.v == 2).tolist()
     if not rs:
         return
-    owner, place = _owners(topo)
+    owner, place = topo.owners()
     near_end = REPAIRS.attach_end_points
     span = REPAIRS.attach_span
 

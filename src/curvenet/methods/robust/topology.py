@@ -101,6 +101,16 @@ class Topology:
         """The live chains, in order."""
         return [c for i, c in enumerate(self.chains) if self.alive[i]]
 
+    def owners(self) -> tuple[np.ndarray, np.ndarray]:
+        """The live chain of every point (N,) (-1: none) and the point's place in that chain (N,)."""
+        owner = np.full(len(self.P), -1, dtype=np.int64)
+        place = np.zeros(len(self.P), dtype=np.int64)
+        for i, c in enumerate(self.chains):
+            if self.alive[i]:
+                owner[c.ids] = i
+                place[c.ids] = np.arange(len(c.ids))
+        return owner, place
+
     # ------------------------------------------------------------------------------ changes
     def absorb(self, r: int, t: int) -> None:
         """Merge region ``r`` into region ``t``: its points, the live chain ends at it, its valence.
