@@ -1192,6 +1192,41 @@ def test_split_tails_splits_a_chain_running_on_past_a_free_end_left_by_the_pruni
     assert sorted(int(topo.v[q]) for q in range(len(topo.regions)) if topo.v[q]) == [1, 1, 1, 3]
 
 
+def _fork_past_region_into_orphan(gap):
+    """The terminal fork of :func:`_fork_past_region` (25 degrees) whose chain runs one sample
+    up the first twig only; the twig's other three samples (from ``gap`` h beyond that one, 1 h
+    apart) are an orphan region O, whose links noise cut."""
+    net = _Net()
+    A = net.region([[-11, 0]])
+    t = np.radians(25.0)
+    u, w = np.array([np.cos(t), np.sin(t)]), np.array([np.cos(t), -np.sin(t)])
+    B = net.region([d * w for d in range(1, 6)])
+    O = net.region([(1 + gap + k) * u for k in range(3)])
+    chain = net.chain(np.array([[x, 0] for x in range(-10, 1)] + [u.tolist()], dtype=float), (A, B))
+    return net.topology(), A, B, O, chain
+
+
+def test_split_tails_runs_a_tail_on_into_an_orphan():
+    # the tail (one sample past the fork) is no twig alone; with the orphan's three samples it
+    # is: the fork becomes a junction, the tail's chain takes O's points and ends at O
+    topo, A, B, O, chain = _fork_past_region_into_orphan(1.0)
+    o_ids = topo.regions[O].tolist()
+    _run_near(R.split_tails, topo, noise=TWIG_NOISE)
+    assert not topo.alive[chain]
+    (J,) = [r for r in range(len(topo.regions)) if topo.v[r] == 3]
+    far = {topo.chains[i].ends[1]: topo.chains[i].ids for i, _ in topo.incident(J)}
+    assert set(far) == {A, B, O} and [int(topo.v[q]) for q in (A, B, O)] == [1, 1, 1]
+    assert far[O][-len(o_ids):].tolist() == o_ids and len(topo.regions[O]) == 0
+
+
+def test_split_tails_leaves_an_orphan_beyond_reach_of_the_tail():
+    # the same fork with the orphan starting past the link length (plus the noise gap) from the
+    # tail's last sample: the tail is one sample, no twig
+    gap = PRM.link + LINKS.gap_noise * TWIG_NOISE + EPS
+    topo, *_ = _fork_past_region_into_orphan(gap)
+    _assert_untouched(R.split_tails, topo, noise=TWIG_NOISE, run=_run_near)
+
+
 def test_split_tails_leaves_a_chain_end_within_the_noise_band_of_its_free_end():
     # the same fork under a noise whose band reaches from the tip to the region's samples:
     # the chain's end may be that region's curve, widened by noise

@@ -248,46 +248,80 @@ def _links(sc: Scales, region_of: np.ndarray, ids: np.ndarray) -> tuple[np.ndarr
     return np.repeat(np.arange(len(ids)), sc.indptr[ids + 1] - sc.indptr[ids]), region_of[nb]
 
 
-def _tail_twig(topo: Topology, sc: Scales, i: int, side: int, region_of: np.ndarray) -> int:
+def _orphans(topo: Topology) -> list[int]:
+    """The regions with points where no chain end was ever listed (*orphans*: flagged points the
+    tracer left without a chain)."""
+    return [r for r in range(len(topo.regions)) if topo.v[r] == 0 and len(topo.regions[r]) and not topo.listed(r)]
+
+
+def _orphan_reach(prm: RobustParams, hl: float, noise: float) -> float:
+    """How near a point an orphan lies to continue a curve there: the link length in spacings
+    ``hl``, plus ``LINKS.gap_noise`` times the noise."""
+    return prm.link * hl + LINKS.gap_noise * noise
+
+
+def _tail_twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, side: int, region_of: np.ndarray,
+               orphans: list[int]) -> tuple[int, int]:
     """Where the chain ``i`` forks at its end ``side`` (0: its first point, 1: its last): the
     position in its ids of the last point (counted from that end) linked to the free end's
     region there, when the points past it (the *tail*) and the region's points are two twigs:
     each, with that point, at least ``UNEXPLAINED.min_samples`` samples, and the tip of each
-    (the tail's last point; the region's point farthest from the fork) more than
+    (the tail's point farthest from the fork; the region's) more than
     ``UNEXPLAINED.explain`` spacings plus ``UNEXPLAINED.explain_noise`` times the noise from
     the chain's points before the fork and from the other twig, and at least ``UNEXPLAINED.rise``
-    times its distance from the fork. -1 otherwise."""
+    times its distance from the fork; and the orphan (of ``orphans``) the tail runs on into, -1
+    when none. Where the tail alone is no twig, it runs on into the orphan nearest its last point
+    within :func:`_orphan_reach` (the twig's last samples, whose links noise cut), when the two
+    together are one. ``(-1, -1)`` otherwise."""
     P, r = topo.P, topo.chains[i].ends[side]
     rid = topo.regions[r]
     if len(rid) + 1 < UNEXPLAINED.min_samples:
-        return -1
+        return -1, -1
     ids = topo.end_ids(i, side)  # the end at the region last
     own, rr = _links(sc, region_of, ids)
     at = own[rr == r]  # positions linked to the region
     if not len(at):
-        return -1
+        return -1, -1
     k = int(at.max())
     head, tail = ids[:k], ids[k:]  # (the tail with the fork's point)
-    if len(tail) < UNEXPLAINED.min_samples or not len(head):
-        return -1
+    if not len(head):
+        return -1, -1
     fork = P[ids[k]]
     hl = float(np.median(sc.h[tail]))
-    for twig, other in ((tail, rid), (rid, tail)):
-        tip = P[twig[np.argmax(np.linalg.norm(P[twig] - fork, axis=1))]]
-        off = float(np.min(np.linalg.norm(P[np.r_[head, other]] - tip, axis=1)))
-        if not leaves(off, float(np.linalg.norm(tip - fork)), hl, sc.noise):
-            return -1
-    return k if side == 1 else len(ids) - 1 - k
+
+    def twigs(tail: np.ndarray) -> bool:
+        if len(tail) < UNEXPLAINED.min_samples:
+            return False
+        for twig, other in ((tail, rid), (rid, tail)):
+            tip = P[twig[np.argmax(np.linalg.norm(P[twig] - fork, axis=1))]]
+            off = float(np.min(np.linalg.norm(P[np.r_[head, other]] - tip, axis=1)))
+            if not leaves(off, float(np.linalg.norm(tip - fork)), hl, sc.noise):
+                return False
+        return True
+
+    at_end = k if side == 1 else len(ids) - 1 - k
+    if twigs(tail):
+        return at_end, -1
+    near = [(float(np.min(np.linalg.norm(P[topo.regions[o]] - P[ids[-1]], axis=1))), o)
+            for o in orphans if len(topo.regions[o])]
+    near = [(d, o) for d, o in near if d <= _orphan_reach(prm, hl, sc.noise)]
+    if near:
+        o = min(near)[1]
+        if twigs(np.r_[tail, topo.regions[o]]):
+            return at_end, o
+    return -1, -1
 
 
-def split_tails(topo: Topology, sc: Scales, prm: RobustParams | None = None) -> None:
+def split_tails(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     """Under noise, every open chain that runs on past the region at one of its ends into a
     twig (:func:`_tail_twig`) branches there: the last point linked to that region (a free
     end) becomes a junction, joined to the chain's other end by the chain's points before it, to
     a new free end by the tail, and to that free end by the region's points (the other twig's
-    samples, ordered from the junction; the region keeps its chain end, without points). Read
-    first by :func:`split_branched_chains`, again after :func:`.repairs.prune_spurs` (a region
-    that a dropped spur leaves a free end).
+    samples, ordered from the junction; the region keeps its chain end, without points). Where
+    the tail runs on into an orphan (the twig's last samples, whose links noise cut), the tail's
+    chain takes the orphan's points (ordered from the tail's last point) and ends at the orphan
+    instead of a new free end. Read first by :func:`split_branched_chains`, again after
+    :func:`.repairs.prune_spurs` (a region that a dropped spur leaves a free end).
 
     The failure: a terminal fork of two twigs (3-7 h, 40-60 degrees apart) under noise. The
     shell test misses the fork; one twig's samples form the region of a free end, and the chain
@@ -299,6 +333,7 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams | None = None) -> 
     if sc.clean:
         return
     region_of = _region_of(topo)
+    orphans = _orphans(topo)
     for i in range(len(topo.chains)):
         c = topo.chains[i]
         if not topo.alive[i] or c.closed or len(c.ids) < BRANCHED.min_points:
@@ -307,7 +342,7 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams | None = None) -> 
             b = c.ends[side]
             if b < 0 or topo.v[b] != 1 or c.ends[1 - side] == b:
                 continue
-            k = _tail_twig(topo, sc, i, side, region_of)
+            k, o = _tail_twig(topo, sc, prm, i, side, region_of, orphans)
             if k < 0:
                 continue
             if side == 1:
@@ -315,10 +350,15 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams | None = None) -> 
             else:
                 head, tail = c.ids[k + 1:], c.ids[:k][::-1]
             a, core = c.ends[1 - side], c.ids[k:k + 1]
+            if o >= 0:  # the tail runs on into the orphan: its points, ordered from the tail's last
+                oid = topo.release(o)
+                region_of[oid] = -1
+                last = tail[-1] if len(tail) else core[0]
+                tail = np.r_[tail, oid[np.lexsort((oid, np.linalg.norm(topo.P[oid] - topo.P[last], axis=1)))]]
             other = topo.release(b)  # the other twig's samples, ordered from the fork
             region_of[other] = -1
             other = other[np.lexsort((other, np.linalg.norm(topo.P[other] - topo.P[core], axis=1)))]
-            region_of[core] = topo.branch_chain(i, core, [head, tail, other], [a, -1, b])
+            region_of[core] = topo.branch_chain(i, core, [head, tail, other], [a, o, b])
             break
 
 
@@ -418,8 +458,7 @@ def _orphans_beside(topo: Topology, sc: Scales, prm: RobustParams, first: int) -
     *orphan*: flagged points the tracer left without a chain) with a point within the link
     length (in the orphan's spacing, plus ``LINKS.gap_noise`` times the noise) of one of its
     points. Only chains beside exactly one orphan are returned: ``{chain: orphan}``."""
-    orphans = [r for r in range(len(topo.regions))
-               if topo.v[r] == 0 and len(topo.regions[r]) and not topo.listed(r)]
+    orphans = _orphans(topo)
     if not orphans:
         return {}
     owner, _ = topo.owners()
@@ -427,7 +466,7 @@ def _orphans_beside(topo: Topology, sc: Scales, prm: RobustParams, first: int) -
         owner[topo.chains[i].ids] = -1
     ids = np.concatenate([topo.regions[r] for r in orphans])
     of = np.repeat(np.asarray(orphans), [len(topo.regions[r]) for r in orphans])
-    reach = prm.link * group_medians(sc.h[ids], [len(topo.regions[r]) for r in orphans]) + LINKS.gap_noise * sc.noise
+    reach = _orphan_reach(prm, group_medians(sc.h[ids], [len(topo.regions[r]) for r in orphans]), sc.noise)
     near = sc.tree.query_ball_point(topo.P[ids], np.repeat(reach, [len(topo.regions[r]) for r in orphans]))
     beside: dict = {}
     for r, hits in zip(of.tolist(), near):
