@@ -49,6 +49,7 @@ import functools
 import itertools
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .chains import flat_steps, group_medians, polylen
 from .graph import components, csr_edges
@@ -261,7 +262,7 @@ def _orphan_reach(prm: RobustParams, hl: float, noise: float) -> float:
 
 
 def _tail_twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, side: int, region_of: np.ndarray,
-               orphans: list[int]) -> tuple[int, int]:
+               nearest_orphan) -> tuple[int, int]:
     """Where the chain ``i`` forks at its end ``side`` (0: its first point, 1: its last): the
     position in its ids of the last point (counted from that end) linked to the free end's
     region there, when the points past it (the *tail*) and the region's points are two twigs:
@@ -269,10 +270,10 @@ def _tail_twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, side: int,
     (the tail's point farthest from the fork; the region's) more than
     ``UNEXPLAINED.explain`` spacings plus ``UNEXPLAINED.explain_noise`` times the noise from
     the chain's points before the fork and from the other twig, and at least ``UNEXPLAINED.rise``
-    times its distance from the fork; and the orphan (of ``orphans``) the tail runs on into, -1
-    when none. Where the tail alone is no twig, it runs on into the orphan nearest its last point
-    within :func:`_orphan_reach` (the twig's last samples, whose links noise cut), when the two
-    together are one. ``(-1, -1)`` otherwise."""
+    times its distance from the fork; and the orphan the tail runs on into, -1 when none. Where
+    the tail alone is no twig, it runs on into the orphan nearest its last point within
+    :func:`_orphan_reach` (``nearest_orphan(point, reach)``: the twig's last samples, whose links
+    noise cut), when the two together are one. ``(-1, -1)`` otherwise."""
     P, r = topo.P, topo.chains[i].ends[side]
     rid = topo.regions[r]
     if len(rid) + 1 < UNEXPLAINED.min_samples:
@@ -302,13 +303,9 @@ def _tail_twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, side: int,
     at_end = k if side == 1 else len(ids) - 1 - k
     if twigs(tail):
         return at_end, -1
-    near = [(float(np.min(np.linalg.norm(P[topo.regions[o]] - P[ids[-1]], axis=1))), o)
-            for o in orphans if len(topo.regions[o])]
-    near = [(d, o) for d, o in near if d <= _orphan_reach(prm, hl, sc.noise)]
-    if near:
-        o = min(near)[1]
-        if twigs(np.r_[tail, topo.regions[o]]):
-            return at_end, o
+    o = nearest_orphan(P[ids[-1]], _orphan_reach(prm, hl, sc.noise))
+    if o >= 0 and twigs(np.r_[tail, topo.regions[o]]):
+        return at_end, o
     return -1, -1
 
 
@@ -334,6 +331,20 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         return
     region_of = _region_of(topo)
     orphans = _orphans(topo)
+    opts = np.concatenate([topo.regions[o] for o in orphans]) if orphans else np.zeros(0, dtype=np.int64)
+    of = np.repeat(np.asarray(orphans, dtype=np.int64), [len(topo.regions[o]) for o in orphans])
+    otree = cKDTree(topo.P[opts]) if len(opts) else None
+
+    def nearest_orphan(x: np.ndarray, reach: float) -> int:
+        """The orphan with a point nearest ``x`` within ``reach`` (ties: the lowest), among those
+        that still hold their points; -1 when none."""
+        if otree is None:
+            return -1
+        hits = np.asarray(otree.query_ball_point(x, reach), dtype=np.int64)
+        live = [(float(np.linalg.norm(topo.P[opts[k]] - x)), int(of[k])) for k in hits.tolist()
+                if len(topo.regions[of[k]])]
+        return min(live)[1] if live else -1
+
     for i in range(len(topo.chains)):
         c = topo.chains[i]
         if not topo.alive[i] or c.closed or len(c.ids) < BRANCHED.min_points:
@@ -342,7 +353,7 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams) -> None:
             b = c.ends[side]
             if b < 0 or topo.v[b] != 1 or c.ends[1 - side] == b:
                 continue
-            k, o = _tail_twig(topo, sc, prm, i, side, region_of, orphans)
+            k, o = _tail_twig(topo, sc, prm, i, side, region_of, nearest_orphan)
             if k < 0:
                 continue
             if side == 1:
