@@ -419,7 +419,10 @@ class Shell(NamedTuple):
     """Stage 4: the shell test (:mod:`.junctions`, ``kernels/shell.py``)."""
 
     #: the shell radii grow by this many times the noise (in units of ``shell_*``)
-    #: origin: set with the shell widened for noise (a811460); no measurement recorded
+    #: origin: set with the shell widened for noise (a811460), not measured then; measured on
+    #: 6 December 2026 (928-run harness, the repairs as they stand): 1.0 63 better / 70 worse
+    #: (kinds at noise 0.2 h 0.915 -> 0.877: comb, ladder, plate; real-dev at noise 0.2 h
+    #: 0.959 -> 0.964), 0.5 56 / 107
     widen: float = 1.5
     #: a point in this many shell groups or more is a junction point (1: a free end, 2: a curve)
     #: origin: definition: three branches meet at a junction (first version)
