@@ -57,7 +57,7 @@ from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
 from .thresholds import BRANCHED, LINKS, NODES, UNEXPLAINED
 from .topology import Topology
-from .unexplained import leaves
+from .unexplained import leaves, twig_reach
 
 __all__ = ["split_branched_chains", "branch_plan", "orphan_twigs"]
 
@@ -249,6 +249,11 @@ def _links(sc: Scales, region_of: np.ndarray, ids: np.ndarray) -> tuple[np.ndarr
     return np.repeat(np.arange(len(ids)), sc.indptr[ids + 1] - sc.indptr[ids]), region_of[nb]
 
 
+def _ordered_from(P: np.ndarray, ids: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The point ids ``ids`` ordered by their distance from ``x`` (ties: the lowest id first)."""
+    return ids[np.lexsort((ids, np.linalg.norm(P[ids] - x, axis=1)))]
+
+
 def _orphans(topo: Topology) -> list[int]:
     """The regions with points where no chain end was ever listed (*orphans*: flagged points the
     tracer left without a chain)."""
@@ -365,10 +370,10 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams) -> None:
                 oid = topo.release(o)
                 region_of[oid] = -1
                 last = tail[-1] if len(tail) else core[0]
-                tail = np.r_[tail, oid[np.lexsort((oid, np.linalg.norm(topo.P[oid] - topo.P[last], axis=1)))]]
+                tail = np.r_[tail, _ordered_from(topo.P, oid, topo.P[last])]
             other = topo.release(b)  # the other twig's samples, ordered from the fork
             region_of[other] = -1
-            other = other[np.lexsort((other, np.linalg.norm(topo.P[other] - topo.P[core], axis=1)))]
+            other = _ordered_from(topo.P, other, topo.P[core])
             region_of[core] = topo.branch_chain(i, core, [head, tail, other], [a, o, b])
             break
 
@@ -475,10 +480,11 @@ def _orphans_beside(topo: Topology, sc: Scales, prm: RobustParams, first: int) -
     owner, _ = topo.owners()
     for i in range(first, len(topo.chains)):  # (chains made by the splits: not read here)
         owner[topo.chains[i].ids] = -1
+    sizes = [len(topo.regions[r]) for r in orphans]
     ids = np.concatenate([topo.regions[r] for r in orphans])
-    of = np.repeat(np.asarray(orphans), [len(topo.regions[r]) for r in orphans])
-    reach = _orphan_reach(prm, group_medians(sc.h[ids], [len(topo.regions[r]) for r in orphans]), sc.noise)
-    near = sc.tree.query_ball_point(topo.P[ids], np.repeat(reach, [len(topo.regions[r]) for r in orphans]))
+    of = np.repeat(np.asarray(orphans), sizes)
+    reach = _orphan_reach(prm, group_medians(sc.h[ids], sizes), sc.noise)
+    near = sc.tree.query_ball_point(topo.P[ids], np.repeat(reach, sizes))
     beside: dict = {}
     for r, hits in zip(of.tolist(), near):
         for i in set(owner[np.asarray(hits, dtype=np.int64)].tolist()) - {-1}:
@@ -541,11 +547,10 @@ def orphan_twigs(topo: Topology, sc: Scales, prm: RobustParams, first: int) -> s
             continue
         t = twig[0]
         own = [q for q in arms[t] if q < n]
-        if any(q >= n for q in arms[t][:len(own)]) or any(q < n for q in arms[t][len(own):]):
+        if any(q >= n for q in arms[t][:len(own)]):
             continue  # (the twig's branch: the chain's samples, then the orphan's)
         tip = float(np.max(np.linalg.norm(P[oid] - X[np.asarray(core)].mean(axis=0), axis=1)))
-        if (len(arms[t]) < UNEXPLAINED.min_samples
-                or tip < (prm.min_spur - UNEXPLAINED.tip_short) * hl + UNEXPLAINED.length_noise * sc.noise):
+        if len(arms[t]) < UNEXPLAINED.min_samples or tip < twig_reach(prm.min_spur, hl, sc.noise):
             continue
         far, ids = [], []
         for k, arm in enumerate(arms):
@@ -566,7 +571,7 @@ def orphan_twigs(topo: Topology, sc: Scales, prm: RobustParams, first: int) -> s
             other = topo.release(r)  # the twig's last samples, ordered from the junction
             region_of[other] = -1
             x0 = X[np.asarray(core)].mean(axis=0)
-            ids[t] = np.r_[ids[t], other[np.lexsort((other, np.linalg.norm(P[other] - x0, axis=1)))]]
+            ids[t] = np.r_[ids[t], _ordered_from(P, other, x0)]
             region_of[c.ids[core]] = topo.branch_chain(i, c.ids[core], ids, far)
             reached |= {f for k, f in enumerate(far) if f >= 0 and k != t}
     return reached

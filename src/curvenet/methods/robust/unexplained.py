@@ -62,6 +62,14 @@ from .thresholds import NUMERIC, UNEXPLAINED
 __all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back", "explain_band", "leaves"]
 
 
+def twig_reach(min_spur: float, h, noise: float):
+    """The least reach of a twig from where it joins: ``min_spur`` less ``UNEXPLAINED.tip_short``
+    spacings ``h`` (its tip's sample may lie up to a spacing short of its end), plus
+    ``UNEXPLAINED.length_noise`` times the noise (the stage's branches, and
+    :func:`.branched.orphan_twigs`)."""
+    return (min_spur - UNEXPLAINED.tip_short) * h + UNEXPLAINED.length_noise * noise
+
+
 def explain_band(h, noise: float):
     """How far from every curve a sample is unexplained: ``UNEXPLAINED.explain`` spacings ``h``
     (a float or an array) plus ``UNEXPLAINED.explain_noise`` times the noise (the band in which
@@ -361,9 +369,7 @@ def _joins(P, h, d, nodes, curves, vx, branches, min_spur, link, noise, ptree):
         # from its explained sample to the tip has none, the path through every sample has)
         q = _foot(P, V, tree, path if len(path) > 2 else samples, link * hj + UNEXPLAINED.near_noise * noise)
         x = V[q]
-        # a branch's shortest reach (its tip's sample may lie up to a spacing short of its end)
-        span = (min_spur - UNEXPLAINED.tip_short) * hj + UNEXPLAINED.length_noise * noise
-        if np.linalg.norm(P[tip] - x) < span:
+        if np.linalg.norm(P[tip] - x) < twig_reach(min_spur, hj, noise):  # (a branch's shortest reach)
             continue
         plen = float(np.linalg.norm(np.diff(P[path], axis=0), axis=1).sum() + np.linalg.norm(P[j] - x))
         if d[tip] < UNEXPLAINED.rise * plen:
