@@ -31,8 +31,9 @@ that a chain runs past under noise). It was read on noise-free input only until 
 0.20 -> 0.47; twigs 0.13 -> 0.22), 1 worse (twigs 0.30 -> 0.29); the synthetic models, CASSIE
 and real-dev the same. A branch of the one-junction reading that
 reaches no region is a free branch, its tip a new free end, when it is a sampled curve of
-``min_spur`` spacings or more (:func:`_free_branch`: a twig a few spacings from a junction
-under noise, whose tip no shell saw as an end). Left as it is: a chain with a shorter or sparser
+``min_spur`` spacings or more (on noisy input, or as long as stage 9's twig:
+:func:`_free_branch`; a twig a few spacings from a junction under noise, whose tip no shell saw
+as an end). Left as it is: a chain with a shorter or sparser
 branch that reaches no region (noise at a sharp corner hangs such a branch of a few samples: the
 synthetic corners under noise 0.3h + x3 lost an exact network to it), or with two branches into
 one region (a chain's end widened by noise where it enters a junction), unless the two are
@@ -457,7 +458,7 @@ def _split_jumping(topo: Topology, sc: Scales, prm: RobustParams) -> set:
         far = []
         for arm in arms:
             f = _branch_end(topo, sc, c, arm, hl, linked_region)
-            if f < 0 and not _free_branch(X, core, arm, arms, hl, prm):
+            if f < 0 and not _free_branch(X, core, arm, arms, hl, prm, 0.0 if sc.clean else sc.noise):
                 break  # a branch that reaches no region, too short or too sparse to be a curve
             far.append(f)  # (-1: a free branch, its tip a new free end)
         else:
@@ -561,7 +562,7 @@ def orphan_twigs(topo: Topology, sc: Scales, prm: RobustParams, first: int) -> s
             if any(q >= n for q in arm):
                 break
             f = _branch_end(topo, sc, c, arm, hl, linked_region)
-            if f < 0 and not _free_branch(X, core, arm, arms, hl, prm):
+            if f < 0 and not _free_branch(X, core, arm, arms, hl, prm, 0.0 if sc.clean else sc.noise):
                 break  # (as in split_branched_chains)
             far.append(f)
             ids.append(c.ids[np.asarray(arm)])
@@ -578,18 +579,23 @@ def orphan_twigs(topo: Topology, sc: Scales, prm: RobustParams, first: int) -> s
 
 
 def _free_branch(X: np.ndarray, core: list[int], arm: list[int], arms: list[list[int]], hl: float,
-                 prm: RobustParams) -> bool:
+                 prm: RobustParams, noise: float = 0.0) -> bool:
     """Whether the branch ``arm`` (positions in ``X``, ordered outwards from the junction
     ``core``; one of its branches ``arms``) that reaches no region is a free branch all the
-    same: its polyline from the core's centroid is at least ``min_spur`` spacings ``hl`` long,
-    it holds at least ``BRANCHED.free_fill`` samples per spacing of that length, and every
-    branch of the junction holds ``BRANCHED.free_arm_points`` samples or more (see
-    :class:`.thresholds.Branched`)."""
+    same: its polyline from the core's centroid is at least ``min_spur`` spacings ``hl`` long
+    (on noisy input, ``noise`` > 0, at least as long as stage 9's twig,
+    :func:`.unexplained.twig_reach`, where that is shorter: the same curve under the same noise
+    is a twig there), it holds at least ``BRANCHED.free_fill`` samples per spacing of that
+    length, and every branch of the junction holds ``BRANCHED.free_arm_points`` samples or more
+    (see :class:`.thresholds.Branched`)."""
     if min(len(a) for a in arms) < BRANCHED.free_arm_points:
         return False
     pts = np.r_[X[np.asarray(core)].mean(axis=0)[None], X[np.asarray(arm)]]
     length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
-    return length >= prm.min_spur * hl and len(arm) >= BRANCHED.free_fill * length / hl
+    need = prm.min_spur * hl
+    if noise > 0:
+        need = min(need, twig_reach(prm.min_spur, hl, noise))
+    return length >= need and len(arm) >= BRANCHED.free_fill * length / hl
 
 
 def _branch_end(topo: Topology, sc: Scales, c, arm: list[int], hl: float, linked_region) -> int:

@@ -66,7 +66,7 @@ def twig_reach(min_spur: float, h, noise: float):
     """The least reach of a twig from where it joins: ``min_spur`` less ``UNEXPLAINED.tip_short``
     spacings ``h`` (its tip's sample may lie up to a spacing short of its end), plus
     ``UNEXPLAINED.length_noise`` times the noise (the stage's branches, and
-    :func:`.branched.orphan_twigs`)."""
+    :func:`.branched.orphan_twigs`, :func:`.branched._free_branch` on noisy input)."""
     return (min_spur - UNEXPLAINED.tip_short) * h + UNEXPLAINED.length_noise * noise
 
 
