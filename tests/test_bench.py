@@ -296,3 +296,20 @@ def test_surfacing_section_measures_against_the_true_surface():
     assert "| surfaces | vase |" in md and "| 14.80 | **missed** |" in md
     assert f"Known surfaces at both targets: {len(rows)} of {len(rows) + 1} (missed: vase)" in md
     assert bench._surfacing_lines([]) == []
+
+
+def test_families_are_scored_and_tabled():
+    from curvenet.metrics import contract
+    from curvenet.synth import families
+
+    rows = bench.run_families(["comb", "facade"], members=2, conditions=["clean"])
+    assert [(r["family"], r["model"]) for r in rows] == [("comb", "comb#0"), ("comb", "comb#1"),
+                                                         ("facade", "facade#0"), ("facade", "facade#1")]
+    assert all(r["dataset"] == "families" and r["method"] == "robust" and r["condition"] == "clean" for r in rows)
+    assert rows[3]["true_N_n"] == contract(families.member("facade", 1)).n_nodes
+    text = bench.write_markdown(rows)
+    section = text[text.index("## Families drawn at random"):]
+    f1 = np.mean([r["curve_f1"] for r in rows[2:]])
+    assert f"| facade | clean | 2 | {f1:.3f} |" in section
+    with pytest.raises(InputError, match="unknown family"):
+        bench.run_families(["castle"], members=1)

@@ -489,6 +489,79 @@ def run_kinds(methods: Iterable[str] | None = None, models: Iterable[str] | None
     return run_bench(methods, models, conditions, seed=seed, progress=progress)
 
 
+#: Members of each family (:mod:`curvenet.synth.families`) the benchmark draws, and the
+#: conditions it samples them at (those of the held-out real networks of issue 25).
+FAMILY_MEMBERS = 16
+FAMILY_CONDITIONS = ("clean", "noise 0.2h")
+
+
+def run_families(families: Iterable[str] | None = None, members: int = FAMILY_MEMBERS,
+                 conditions: Iterable[str] | None = None, *, progress=None) -> list[dict[str, Any]]:
+    """Run ``robust`` on families of real-like networks drawn at random
+    (:mod:`curvenet.synth.families`): members ``0 .. members - 1`` of each, sampled with
+    :func:`curvenet.synth.families.sampling_seed` at each condition (default
+    :data:`FAMILY_CONDITIONS`).
+
+    Returns
+    -------
+    list of dict
+        Rows as :func:`run_bench`'s, ``dataset = "families"``, ``model`` the member's name
+        (``"facade#3"``) and ``family`` its family.
+    """
+    from .synth import families as fam
+
+    names = list(families) if families is not None else list(fam.FAMILIES)
+    for f in names:
+        if f not in fam.FAMILIES:
+            raise InputError(f"unknown family {f!r}; expected one of: {', '.join(fam.FAMILIES)}")
+    conditions = list(conditions) if conditions is not None else list(FAMILY_CONDITIONS)
+    allc = {**CONDITIONS, **EXTRA_CONDITIONS}
+    for c in conditions:
+        if c not in allc:
+            raise InputError(f"unknown condition {c!r}; expected one of: {', '.join(allc)}")
+    rows = []
+    for f in names:
+        for k in range(members):
+            truth = fam.member(f, k)
+            h = synth.h_of(truth)
+            for cond in conditions:
+                pts, _ = synth.sample(truth, rng=fam.sampling_seed(k), **allc[cond])
+                row = _run_one("robust", pts, truth, h, {})
+                row.update(dataset="families", family=f, model=truth.parameters["model"], condition=cond, h=h)
+                row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+                rows.append(row)
+                if progress:
+                    progress(_line(row))
+    return rows
+
+
+def _family_lines(rows: list[dict]) -> list[str]:
+    """The Markdown section of :func:`run_families`' rows (none: no lines)."""
+    fr = [r for r in rows if r["dataset"] == "families"]
+    if not fr:
+        return []
+    L = ["", "## Families drawn at random (`robust`)", "",
+         "The models above are one network each, and a rule tuned until they pass may pass them alone. "
+         "`curvenet.synth.families` draws a structure's sizes, spacings and orientation at random (facade "
+         "ladders with verticals 4-5h apart, facades of storeys, street grids with blocks 4-25h, combs with "
+         "teeth 4-5h apart; every member well posed: curves at least 4h long, curves sharing no node at least "
+         "4h apart); each member is sampled once per condition. Mean and worst curve F1 over the members, "
+         "the number with exact topology, and the members below F1 1.", "",
+         "| Family | Condition | members | curve F1 | worst | exact | members below F1 1 |",
+         "|---|---|---|---|---|---|---|"]
+    for f in dict.fromkeys(r["family"] for r in fr):
+        for c in dict.fromkeys(r["condition"] for r in fr):
+            rs = [r for r in fr if r["family"] == f and r["condition"] == c]
+            if not rs:
+                continue
+            f1 = [float(r.get("curve_f1", 0.0)) for r in rs]
+            below = sorted((v, r["model"]) for v, r in zip(f1, rs) if v < 1.0)
+            L.append(f"| {f} | {c} | {len(rs)} | {np.mean(f1):.3f} | {min(f1):.3f} | "
+                     f"{sum(bool(r.get('exact_topology')) for r in rs)} | "
+                     f"{', '.join(f'{m} {v:.2f}' for v, m in below) or 'none'} |")
+    return L
+
+
 def run_realdev(methods: Iterable[str] | None = None, names: Iterable[str] | None = None,
                 conditions: Iterable[str] | None = None, *, seed: int = 0, progress=None) -> list[dict[str, Any]]:
     """Run methods on the real-dev networks (:mod:`curvenet.synth.realdev`) sampled at their spacing.
@@ -1072,6 +1145,7 @@ def write_markdown(rows: list[dict], path=None, *, figures: dict | None = None, 
               "model and condition, scored as the synthetic models.", ""]
         L += _worst_table(real, lambda r: r.get("kind", ""))
     L += _outlier_lines(rows)
+    L += _family_lines(rows)
     L += _surfacing_lines(surfacing or [])
     L += _head_to_head_lines(rows)
     if spread:
@@ -1205,6 +1279,7 @@ def run_all(
         rows += run_realdev(methods, progress=progress)
         if "robust" in _check_methods(methods):
             rows += run_outliers(progress=progress)
+            rows += run_families(progress=progress)
     spread = kind_spread = None
     if spread_seeds and not quick and "robust" in _check_methods(methods):
         spread = seed_spread("robust", spread_seeds, models, conditions, progress=progress)
