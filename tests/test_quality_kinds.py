@@ -146,35 +146,18 @@ def test_a_single_sample_between_close_junctions_is_a_segment(monkeypatch):
     assert now["curve_f1"] > cut["curve_f1"] + 0.1
 
 
-def test_junctions_a_close_scale_misses_stay_a_region(monkeypatch):
-    # the ladder's rail: junctions 3-4h apart; separate_close_junctions' best scale keeps the
-    # two outer ones of four and would free the two between (fine shell groups 0 there: the
-    # shell's radii fall between the samples), their rungs then traced as one chain from rail
-    # to rail. A chain of freed points touching four or more of the junctions kept and the
-    # branches leaving stays a region (split later on its spanning tree). Measured: the clean
-    # sampling 0.72 -> 1.00 (exact); 8 copies jittered by 1e-6 h, mean curve F1 0.77 -> 0.92.
-    # Since split_branched_chains reads chains of several junctions (cores_plan) it recovers
-    # part of that without the rule: clean sampling 0.92 -> 1.00 with it, jittered 0.907 ->
-    # 0.915 (3 copies better, 1 worse)
-    # Since the re-tests count a group going on past their thin shell (goes_on, low noise), the
-    # fine test sees those junctions itself (groups 3, not 0): the ladder is exact without the
-    # rule too; with the groups read by the middle alone (as before) the rule still holds them
-    # Since the spanning-tree split reads regions that a chain leaves and re-enters (a rung
-    # between the two rails), it recovers that case without the rule too (5 December 2026);
-    # the rule still decides on a copy jittered by 1e-6 h (copy 6 of the 832-run harness:
-    # curve F1 0.53 with it, 0.31 without)
-    now = _score("ladder")
-    assert now["exact_topology"] and now["curve_f1"] == 1.0
-    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT._replace(hold_touches=10**6))
-    assert _score("ladder")["exact_topology"]  # the fine test alone
+def test_the_ladder_jittered_is_exact_with_the_close_junctions_separated():
+    # the ladder's rail: junctions 3-4h apart that separate_close_junctions resolves. Until 6
+    # December 2026 the freed points touching four or more junctions kept and branches leaving
+    # stayed a region (SPLIT.hold_touches); since split_large_regions keeps every junction its
+    # scale sees, that rule only cost: this copy jittered by 1e-6 h (copy 6) read 0.77 with it
+    # (before the keep-every split 0.53, and 0.31 without it); now exact, as the clean sampling
+    assert _score("ladder")["exact_topology"]
     truth = synth.model("ladder")
     h = synth.h_of(truth)
     pts, _ = synth.sample(truth, rng=bench.run_seed("kinds", "ladder", "clean"))
     pts = pts + np.random.default_rng(6).normal(scale=1e-6 * h, size=pts.shape)
-    freed = compare(reconstruct(pts, method="robust"), truth, h=h)
-    monkeypatch.setattr(junctions, "SPLIT", thresholds.SPLIT)
-    held = compare(reconstruct(pts, method="robust"), truth, h=h)
-    assert held["curve_f1"] >= freed["curve_f1"] + 0.1, (held["curve_f1"], freed["curve_f1"])
+    assert compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]
 
 
 def _fine_tests_by_the_middle(monkeypatch):
@@ -625,3 +608,21 @@ def test_under_noise_curved_branches_move_only_junctions_near_tangent(monkeypatc
     # (the strand step off: with it the wider band reads this sampling at F1 0.9 or more too)
     _junction_kernel_with(monkeypatch, tangent_weak_noisy=0.25, tangent_ratio=np.inf)
     assert compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["curve_f1"] < 0.9
+
+
+@pytest.mark.parametrize("k", [3, 5])
+def test_random_facades_keep_the_junctions_the_finest_split_sees(monkeypatch, k):
+    # a facade ladder drawn at random (synth.families): verticals 4-5h apart make each rail one
+    # region at the first scales; at the finest the junctions along it read as sub-regions of
+    # 1-3 points, and a split freed those under SPLIT.fine_min_points (the rail's chain then
+    # ran through them). Noise-free, every junction the split's scale sees is kept: members 3
+    # and 5 exact (curve F1 0.811 and 0.768 before); with the small ones freed, not
+    from curvenet.synth import families
+
+    truth = families.member("facade", k)
+    pts, _ = synth.sample(truth, rng=families.sampling_seed(k))
+    h = synth.h_of(truth)
+    assert compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]
+    split_of = junctions._split_of
+    monkeypatch.setattr(junctions, "_split_of", lambda *a, keep_every=False: split_of(*a, keep_every=False))
+    assert not compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]

@@ -495,16 +495,6 @@ class Split(NamedTuple):
     #: at density x3, CASSIE flower)
     #: origin: benchmark: 3.0 -> 3.5, CASSIE flower and window density x3 back to main's; 4.0 lost kinds (junc25)
     close_sep: float = 3.5
-    #: ... and the points a resolution would free stay a region where a chain of them (linked
-    #: graph) touches this many or more of the junctions kept and the branches leaving the
-    #: region: a segment touches two, one junction the scale missed three (found later on its
-    #: chain, :func:`.branched.split_branched_chains`), two or more junctions it missed four or
-    #: more (a ladder's rail: two rungs between the two junctions kept)
-    #: origin: benchmark: kinds clean ladder 0.717 -> 1.000; 3 held a comb's single missed
-    #: junction as its own region, merged later into its neighbour (comb 1.000 -> 0.865); since
-    #: the several-junction reading of branched chains (cores_plan) its share is smaller: ladder
-    #: 0.915 -> 1.000 clean, 8 jittered copies 0.907 -> 0.915
-    hold_touches: int = 4
 
 
 SPLIT = Split()
