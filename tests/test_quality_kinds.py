@@ -16,6 +16,16 @@ def _score(name, condition="clean"):
     return compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
 
 
+def _member_exact(family, k):
+    """Whether the default method gets member ``k`` of a family (synth.families), sampled clean
+    as the benchmark samples it, exact."""
+    from curvenet.synth import families
+
+    truth = families.member(family, k)
+    pts, _ = synth.sample(truth, rng=families.sampling_seed(k))
+    return compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))["exact_topology"]
+
+
 def _without_paired_split(monkeypatch):
     """The repairs without split_paired_junctions and split_multiple_junctions (they separate
     close junctions too: the tests below measure another mechanism alone)."""
@@ -617,15 +627,10 @@ def test_random_facades_keep_the_junctions_the_finest_split_sees(monkeypatch, k)
     # 1-3 points, and a split freed those under SPLIT.fine_min_points (the rail's chain then
     # ran through them). Noise-free, every junction the split's scale sees is kept: members 3
     # and 5 exact (curve F1 0.811 and 0.768 before); with the small ones freed, not
-    from curvenet.synth import families
-
-    truth = families.member("facade", k)
-    pts, _ = synth.sample(truth, rng=families.sampling_seed(k))
-    h = synth.h_of(truth)
-    assert compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]
+    assert _member_exact("facade", k)
     split_of = junctions._split_of
     monkeypatch.setattr(junctions, "_split_of", lambda *a, **kw: split_of(*a, **{**kw, "keep_every": False}))
-    assert not compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]
+    assert not _member_exact("facade", k)
 
 
 @pytest.mark.parametrize("k", [1, 14])
@@ -635,11 +640,6 @@ def test_random_street_grids_split_a_cell_joined_twice(monkeypatch, k):
     # split in halves and kept the region whole (members 1 and 14: curve F1 0.571 and 0.656).
     # Two chains between the same two sub-regions that are apart (BRANCHED.twin_apart) are two
     # sides of a cell: exact; with every such pair read as a crossing (as before), not
-    from curvenet.synth import families
-
-    truth = families.member("grid", k)
-    pts, _ = synth.sample(truth, rng=families.sampling_seed(k))
-    h = synth.h_of(truth)
-    assert compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]
-    monkeypatch.setattr(junctions, "_apart", lambda *a: False)
-    assert not compare(reconstruct(pts, method="robust"), truth, h=h)["exact_topology"]
+    assert _member_exact("grid", k)
+    monkeypatch.setattr(junctions, "points_apart", lambda *a: False)
+    assert not _member_exact("grid", k)

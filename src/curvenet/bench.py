@@ -201,6 +201,27 @@ def _run_one(method: str, points, truth, h, params: dict) -> dict[str, Any]:
     return row
 
 
+def _scored_row(method: str, points, truth, params: dict, **fields) -> dict[str, Any]:
+    """:func:`_run_one`'s row (scored at the spacing ``fields["h"]``) with ``fields``
+    (``dataset``, ``model``, ``condition``, ``h``, ..., in that order) and the truth's counts
+    after contraction (``true_N_n``, ``true_N_c``)."""
+    row = _run_one(method, points, truth, fields["h"], params)
+    row.update(fields)
+    row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+    return row
+
+
+def _checked_conditions(conditions: Iterable[str] | None, default: Iterable[str]) -> tuple[list[str], dict]:
+    """``conditions`` (default ``default``) as a list, each a key of :data:`CONDITIONS` or
+    :data:`EXTRA_CONDITIONS` (InputError otherwise), and those two tables in one."""
+    allc = {**CONDITIONS, **EXTRA_CONDITIONS}
+    conditions = list(conditions) if conditions is not None else list(default)
+    for c in conditions:
+        if c not in allc:
+            raise InputError(f"unknown condition {c!r}; expected one of: {', '.join(allc)}")
+    return conditions, allc
+
+
 def _empty_like(truth):
     """An empty network of the dimension of ``truth`` (what a failed run is scored as)."""
     from .network import CurveNetwork
@@ -258,11 +279,7 @@ def run_bench(
     for m in models:
         if m not in synth.MODELS and m not in synth.KIND_MODELS:
             raise InputError(f"unknown model {m!r}; expected one of: {', '.join([*synth.MODELS, *synth.KIND_MODELS])}")
-    conditions = list(conditions) if conditions is not None else list(CONDITIONS)
-    allc = {**CONDITIONS, **EXTRA_CONDITIONS}
-    for c in conditions:
-        if c not in allc:
-            raise InputError(f"unknown condition {c!r}; expected one of: {', '.join(allc)}")
+    conditions, allc = _checked_conditions(conditions, CONDITIONS)
     if tune_on not in ("clean", "each"):
         raise InputError(f"tune_on must be 'clean' or 'each', got {tune_on!r}")
     grid = _QUICK_GRID if quick else PAPER_GRID
@@ -285,10 +302,9 @@ def run_bench(
                             clean, _ = synth.sample(truth, rng=run_seed(name, "clean") + seed)
                             tuned, _ = tune_paper(clean, truth, h=h, grid=grid)
                     params = dict(tuned)
-                row = _run_one(method, pts, truth, h, params)
-                row.update(dataset="synthetic" if name in synth.MODELS else "kinds", model=name, condition=cond,
-                           h=h)
-                row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+                row = _scored_row(method, pts, truth, params,
+                                  dataset="synthetic" if name in synth.MODELS else "kinds", model=name,
+                                  condition=cond, h=h)
                 if method == "paper-tuned":
                     row["tuned_on"] = "clean" if tune_on == "clean" else cond
                 rows.append(row)
@@ -356,9 +372,8 @@ def run_cassie(
                 if tuned is None:
                     tuned, _ = tune_paper(pts, truth, h=h, grid=_QUICK_GRID)
                 params = dict(tuned)
-            row = _run_one(method, pts, truth, h, params)
-            row.update(dataset=dataset, model=name, condition="clean", h=h, gap_h=gap)
-            row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+            row = _scored_row(method, pts, truth, params, dataset=dataset, model=name, condition="clean",
+                              h=h, gap_h=gap)
             rows.append(row)
             if progress:
                 progress(_line(row))
@@ -514,11 +529,7 @@ def run_families(families: Iterable[str] | None = None, members: int = FAMILY_ME
     for f in names:
         if f not in fam.FAMILIES:
             raise InputError(f"unknown family {f!r}; expected one of: {', '.join(fam.FAMILIES)}")
-    conditions = list(conditions) if conditions is not None else list(FAMILY_CONDITIONS)
-    allc = {**CONDITIONS, **EXTRA_CONDITIONS}
-    for c in conditions:
-        if c not in allc:
-            raise InputError(f"unknown condition {c!r}; expected one of: {', '.join(allc)}")
+    conditions, allc = _checked_conditions(conditions, FAMILY_CONDITIONS)
     rows = []
     for f in names:
         for k in range(members):
@@ -526,9 +537,8 @@ def run_families(families: Iterable[str] | None = None, members: int = FAMILY_ME
             h = synth.h_of(truth)
             for cond in conditions:
                 pts, _ = synth.sample(truth, rng=fam.sampling_seed(k), **allc[cond])
-                row = _run_one("robust", pts, truth, h, {})
-                row.update(dataset="families", family=f, model=truth.parameters["model"], condition=cond, h=h)
-                row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+                row = _scored_row("robust", pts, truth, {}, dataset="families", family=f,
+                                  model=truth.parameters["model"], condition=cond, h=h)
                 rows.append(row)
                 if progress:
                     progress(_line(row))
@@ -590,11 +600,7 @@ def run_realdev(methods: Iterable[str] | None = None, names: Iterable[str] | Non
         return []
     methods = [m for m in _check_methods(methods) if m != "paper-tuned"]
     names = list(names) if names is not None else realdev.names()
-    conditions = list(conditions) if conditions is not None else list(REALDEV_CONDITIONS)
-    allc = {**CONDITIONS, **EXTRA_CONDITIONS}
-    for c in conditions:
-        if c not in allc:
-            raise InputError(f"unknown condition {c!r}; expected one of: {', '.join(allc)}")
+    conditions, allc = _checked_conditions(conditions, REALDEV_CONDITIONS)
     rows = []
     for name in names:
         truth = realdev.load(name)
@@ -602,9 +608,8 @@ def run_realdev(methods: Iterable[str] | None = None, names: Iterable[str] | Non
         for cond in conditions:
             pts, _ = synth.sample(truth, rng=run_seed("realdev", name, cond) + seed, **allc[cond])
             for method in methods:
-                row = _run_one(method, pts, truth, h, {})
-                row.update(dataset="realdev", model=name, kind=truth.parameters["kind"], condition=cond, h=h)
-                row["true_N_n"], row["true_N_c"] = row["n_nodes_true"], row["n_curves_true"]
+                row = _scored_row(method, pts, truth, {}, dataset="realdev", model=name,
+                                  kind=truth.parameters["kind"], condition=cond, h=h)
                 rows.append(row)
                 if progress:
                     progress(_line(row))

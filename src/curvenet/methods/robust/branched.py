@@ -52,7 +52,7 @@ import itertools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .chains import flat_steps, group_medians, polylen
+from .chains import flat_steps, group_medians, points_apart, polylen
 from .graph import components, csr_edges
 from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
@@ -261,6 +261,14 @@ def _orphans(topo: Topology) -> list[int]:
     return [r for r in range(len(topo.regions)) if topo.v[r] == 0 and len(topo.regions[r]) and not topo.listed(r)]
 
 
+def _orphan_points(topo: Topology, orphans: list[int]) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """The points of the regions ``orphans``, region by region, the orphan of each point and
+    each orphan's number of points."""
+    sizes = [len(topo.regions[r]) for r in orphans]
+    ids = np.concatenate([topo.regions[r] for r in orphans]) if orphans else np.zeros(0, dtype=np.int64)
+    return ids, np.repeat(np.asarray(orphans, dtype=np.int64), sizes), sizes
+
+
 def _orphan_reach(prm: RobustParams, hl: float, noise: float) -> float:
     """How near a point an orphan lies to continue a curve there: the link length in spacings
     ``hl``, plus ``LINKS.gap_noise`` times the noise."""
@@ -336,9 +344,7 @@ def split_tails(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     if sc.clean:
         return
     region_of = _region_of(topo)
-    orphans = _orphans(topo)
-    opts = np.concatenate([topo.regions[o] for o in orphans]) if orphans else np.zeros(0, dtype=np.int64)
-    of = np.repeat(np.asarray(orphans, dtype=np.int64), [len(topo.regions[o]) for o in orphans])
+    opts, of, _ = _orphan_points(topo, _orphans(topo))
     otree = cKDTree(topo.P[opts]) if len(opts) else None
 
     def nearest_orphan(x: np.ndarray, reach: float) -> int:
@@ -481,9 +487,7 @@ def _orphans_beside(topo: Topology, sc: Scales, prm: RobustParams, first: int) -
     owner, _ = topo.owners()
     for i in range(first, len(topo.chains)):  # (chains made by the splits: not read here)
         owner[topo.chains[i].ids] = -1
-    sizes = [len(topo.regions[r]) for r in orphans]
-    ids = np.concatenate([topo.regions[r] for r in orphans])
-    of = np.repeat(np.asarray(orphans), sizes)
+    ids, of, sizes = _orphan_points(topo, orphans)
     reach = _orphan_reach(prm, group_medians(sc.h[ids], sizes), sc.noise)
     near = sc.tree.query_ball_point(topo.P[ids], np.repeat(reach, sizes))
     beside: dict = {}
@@ -672,6 +676,4 @@ def _pieces_apart(A: np.ndarray, B: np.ndarray, hl: float, noise: float, min_spu
     few samples each): one curve, and the chain is left as it is."""
     if min(polylen(A), polylen(B)) < min_spur * hl:
         return False
-    lim = BRANCHED.twin_apart * hl + BRANCHED.twin_apart_noise * noise
-    d = np.linalg.norm(A[:, None, :] - B[None, :, :], axis=2)
-    return bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > lim)
+    return points_apart(A, B, BRANCHED.twin_apart * hl + BRANCHED.twin_apart_noise * noise)

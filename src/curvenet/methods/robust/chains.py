@@ -673,3 +673,11 @@ def segment_distance(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     L2 = np.maximum((ab * ab).sum(axis=-1), NUMERIC.tiny)
     t = np.clip(((x - a) * ab).sum(axis=-1) / L2, 0.0, 1.0)
     return np.linalg.norm(x - (a + t[..., None] * ab), axis=-1)
+
+
+def points_apart(A: np.ndarray, B: np.ndarray, lim: float) -> bool:
+    """Whether some point of ``A`` (a, d) lies over ``lim`` from every point of ``B`` (b, d),
+    or some point of ``B`` from every point of ``A``: two pieces that are two curves, not one
+    curve's samples shared out between them."""
+    d = np.linalg.norm(A[:, None, :] - B[None, :, :], axis=2)
+    return bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > lim)

@@ -19,7 +19,7 @@ import numpy as np
 from scipy.sparse.csgraph import dijkstra
 
 from . import kernels as _k
-from .chains import end_portion, fit_line, polylen
+from .chains import end_portion, fit_line, points_apart, polylen
 from .frames import Frames, Neighbours
 from .graph import Graph, components, csr_edges, edge_lengths
 from .params import RobustParams, Scales
@@ -525,7 +525,7 @@ def _split_of(P, ft: _Fine, pts, kept, far, noisy, min_points, keep_every: bool 
 
     ``pts``: the region's points; ``kept``: those still flagged by the fine test; ``far``: how
     far apart two joined sub-regions' centroids must be; ``apart``: how far apart two chains
-    joining the same two must be (:func:`_apart`). The split is decided on the
+    joining the same two must be (:func:`.chains.points_apart`). The split is decided on the
     sub-regions of ``min_points`` points or more; with ``keep_every`` (noise-free or low-noise
     input) the smaller sub-regions with a junction point are kept as well once it is made.
     """
@@ -546,8 +546,7 @@ def _split_of(P, ft: _Fine, pts, kept, far, noisy, min_points, keep_every: bool 
         ok = len(good) >= 2
     if not ok:
         return None
-    links = []
-    chains = {}  # the freed points of the chains joining each pair
+    chains = {}  # the freed points of each chain joining two sub-regions, per pair
     fr = pts[ft.freed[pts]]
     fr = fr[np.argsort(ft.lab[fr], kind="stable")]
     labs_fr, first = np.unique(ft.lab[fr], return_index=True)
@@ -557,17 +556,16 @@ def _split_of(P, ft: _Fine, pts, kept, far, noisy, min_points, keep_every: bool 
         if len(tb) > 2:
             return None
         if len(tb) == 2:
-            links.append(tuple(tb))
             chains.setdefault(tuple(tb), []).append(fr[f0:f1])
     # one chain between two sub-regions and no chain among three: two junctions and
     # the segment between them; two chains between the same two are a crossing split in
     # halves unless they are apart (two sides of a cell: a window, a street block)
-    if not links:
+    if not chains:
         return None
     for two in chains.values():
-        if len(two) > 1 and not all(_apart(P[a], P[b], apart) for i, a in enumerate(two) for b in two[i + 1:]):
+        if len(two) > 1 and not all(points_apart(P[a], P[b], apart) for i, a in enumerate(two) for b in two[i + 1:]):
             return None
-    for a_, b_ in links:  # and the two junctions clearly apart
+    for a_, b_ in chains:  # and the two junctions clearly apart
         ca = P[kept[reg2[kept] == a_]].mean(axis=0)
         cb = P[kept[reg2[kept] == b_]].mean(axis=0)
         if not np.linalg.norm(ca - cb) > far:
@@ -575,13 +573,6 @@ def _split_of(P, ft: _Fine, pts, kept, far, noisy, min_points, keep_every: bool 
     if keep_every:  # (the split made, every junction the scale sees is kept: none is freed)
         return np.union1d(good, labs[jun])
     return good
-
-
-def _apart(A, B, lim):
-    """Whether some point of ``A`` (a, d) lies over ``lim`` from every point of ``B`` (b, d), or
-    the other way round."""
-    d = np.linalg.norm(A[:, None, :] - B[None, :, :], axis=2)
-    return bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > lim)
 
 
 def fork_possible(P, sc: Scales, prm: RobustParams, ids, rid):
