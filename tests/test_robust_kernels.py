@@ -431,6 +431,39 @@ def test_junction_nodes_match_the_numpy_least_squares(py, d, noise):
     assert max(err) < 0.35 and np.mean(err) < 0.3 * np.mean(err_anchor)
 
 
+@pytest.mark.parametrize("py", [False, True])
+def test_a_branch_turning_before_the_junction_is_left_out(py, monkeypatch):
+    # a T in the plane: a post (x = 0) and a stub (y = 0, x < 0) meet at the origin; the third
+    # branch comes down x = 3.5 and turns along y = 0 to the origin, the turn's points in the
+    # junction's region (with the region points around the origin). Its line misses the node
+    # by 3.5 h and drew the least-squares node 1.1 h along the rail; the node of the two others
+    # is the junction. The other reading (the post left out: the stub's and the turned
+    # branch's lines meet at the turn) lies farther from the region's points.
+    s = np.arange(12.0, 0.0, -1.0)
+    post = np.c_[np.zeros_like(s), s]
+    stub = np.c_[-np.arange(5.0, 0.0, -1.0), np.zeros(5)]
+    turned = np.c_[np.full_like(s, 3.5), s + 0.5]
+    region = np.array([[0.0, 0.2], [-0.3, 0.0], [0.5, -0.1], [1.5, 0.1], [2.5, 0.0]])
+    P = np.vstack([post, stub, turned, region])
+    ids = np.arange(len(P), dtype=np.int64)
+    bl = [ids[:12], ids[12:17], ids[17:29]]
+    bflat = np.concatenate(bl)
+    boff = np.r_[0, np.cumsum([len(b) for b in bl])].astype(np.int64)
+    consts = K.JunctionParams(4.0, 6.0, 1.25, 4.5, 1e9, 0.8 * 5.5, 0.9, 1.5, False)
+
+    def node():
+        f = _plain("junction_nodes") if py else K.junction_nodes
+        X, _ = f(P, np.ones(len(P)), np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), bflat, boff,
+                 np.array([0, 3], dtype=np.int64), ids[29:], np.array([0, 5], dtype=np.int64), np.ones(1), 1.0, 0.1,
+                 consts)
+        return X[0]
+
+    assert np.linalg.norm(node()) < 0.2
+    if py:  # (the rule off: the three lines' node)
+        monkeypatch.setattr(nodes, "_without_stray_line", lambda *a: False)
+        assert np.linalg.norm(node()) > 1.0
+
+
 def _tangent_junction(d, ang, gap=6.0, over=3.0):
     """A node at 0 where a line leaves a circle of radius 30 at ``ang`` degrees from its tangent
     (spacing 1, no noise), as sampled near-tangent junctions come: the arc before the node runs

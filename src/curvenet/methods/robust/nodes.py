@@ -8,7 +8,8 @@ its chain's last samples, :func:`_fork_tail`: a twig and its sibling whose tips 
 holds, their junction a few samples back on the chain, placed by :func:`_tail_fork_node`). A region touched by 3 or more ends is a junction: every
 incident branch is walked into the region, its line is fitted on its last
 ``NODES.fit_span h + NODES.fit_noise noise``, and the node is the least-squares intersection of
-those lines (:func:`junction_positions`, one compiled call for all junctions), or the region's
+those lines (:func:`junction_positions`, one compiled call for all junctions; a line that strays
+from the others' node, fitted before its curve turns, left out), or the region's
 median point where that intersection lies off the samples (:func:`median_points`).
 """
 

@@ -843,6 +843,115 @@ def _strand_change(P, h, indptr, indices, use_graph, flat, off, rid, x, V, ev, h
     return True
 
 
+def _region_mean(P, rid, out):  # pragma: no cover - compiled
+    """The mean of the points ``rid`` (at least one) into ``out`` (d,); returns ``out``."""
+    for c in range(out.shape[0]):
+        acc = 0.0
+        for q in range(rid.shape[0]):
+            acc += P[rid[q], c]
+        out[c] = acc / rid.shape[0]
+    return out
+
+
+def _line_dist(x, mu, u):  # pragma: no cover - compiled
+    """Distance from the point ``x`` (d,) to the line through ``mu`` along the unit ``u``."""
+    r2 = 0.0
+    al = 0.0
+    for c in range(x.shape[0]):
+        t = x[c] - mu[c]
+        r2 += t * t
+        al += t * u[c]
+    dv = r2 - al * al
+    return np.sqrt(dv if dv > 0.0 else 0.0)
+
+
+def _without_stray_line(MU, U, nl, x, hs, anchor, centre, nd, la):  # pragma: no cover - compiled
+    """A junction's node from the lines of all its branches but one that strays from the others.
+
+    ``MU``, ``U`` (nl, d): each branch's line (a point on it, its unit direction). A branch whose
+    curve turns a few spacings before the junction (the corner of a roof or a window outline
+    next to a facade's post, a traced neurite's kink) has its line fitted before the turn: it
+    misses the junction by about the turn's distance and pulls the least-squares node along the
+    others by a spacing or two. For each line ``k`` the node of the others (their normal matrix
+    well posed: smallest eigenvalue at least ``nd.stray_cond``, lines about 60 degrees apart or
+    more) is computed; where ``k`` lies over ``nd.stray_off`` junction spacings ``hs`` (widened
+    for noise) from it and every other line within ``nd.stray_agree hs``, ``k`` strays. Of such
+    lines, the one whose others' node lies nearest ``centre`` (d,), the mean of the junction's
+    region points, is left out, and ``x`` (d,), the node of all the lines, becomes the others'
+    node (pulled by ``nd.anchor_pull`` towards ``anchor`` as the full fit is) when that lies
+    nearer ``centre`` than ``x`` (two lines of a kinked traced neurite, 60 degrees apart, can
+    meet a few spacings down one of them). The lines alone cannot tell
+    which branch turned: in a plane any two lines meet, and the turned branch's line meets the
+    straight branch beside it at the turn, so leaving out the third branch's line reads the
+    turn as the junction; the region can (the shell test flags the points around the junction,
+    where three branches leave, not the turn, where two do). Returns whether ``x`` moved. Needs
+    ``nd.junction_valence`` lines or more.
+    """
+    d = x.shape[0]
+    if nl < nd.junction_valence:
+        return False
+    A = np.zeros((d, d))
+    C = np.zeros((d, d))
+    V = np.zeros((d, d))
+    ev = np.zeros(d)
+    b = np.zeros(d)
+    xk = np.zeros(d)
+    best = np.zeros(d)
+    best_r2 = np.inf
+    for k in range(nl):
+        for a in range(d):
+            b[a] = 0.0
+            for c in range(d):
+                A[a, c] = 0.0
+        for q in range(nl):
+            if q == k:
+                continue
+            um = 0.0
+            for c in range(d):
+                um += U[q, c] * MU[q, c]
+            for a in range(d):
+                for c in range(d):
+                    A[a, c] += (1.0 if a == c else 0.0) - U[q, a] * U[q, c]
+                b[a] += MU[q, a] - U[q, a] * um
+        for a in range(d):
+            for c in range(d):
+                C[a, c] = A[a, c]
+        _eig_sym(C, V, ev, la)
+        if not ev[0] >= nd.stray_cond:
+            continue
+        for a in range(d):
+            A[a, a] += nd.anchor_pull
+            b[a] += nd.anchor_pull * anchor[a]
+        if not _solve_small(A, b, xk):
+            continue
+        if not _line_dist(xk, MU[k], U[k]) > nd.stray_off * hs:
+            continue
+        s = 0.0
+        for q in range(nl):
+            if q != k:
+                dq = _line_dist(xk, MU[q], U[q])
+                if dq > s:
+                    s = dq
+        if s <= nd.stray_agree * hs:
+            r2 = 0.0
+            for c in range(d):
+                r2 += (xk[c] - centre[c]) ** 2
+            if r2 < best_r2:
+                best_r2 = r2
+                for c in range(d):
+                    best[c] = xk[c]
+    if best_r2 == np.inf:
+        return False
+    r2 = 0.0
+    for c in range(d):
+        r2 += (x[c] - centre[c]) ** 2
+    if not best_r2 < r2:
+        return False
+    for c in range(d):
+        x[c] = best[c]
+    return True
+
+
 def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, width, noise,  # pragma: no cover - compiled
                     jp, en, nd, la):
     """Node position of many junctions at once (see ``nodes.junction_positions``).
@@ -857,7 +966,9 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     leaves a strip of ``jp.walk_dev`` link widths around the line fitted on the branch's end; the
     node is the least-squares intersection of the lines fitted on the walked ends, pulled a
     little (weight ``nd.anchor_pull``) towards the mean of the branch ends (the anchor), and the anchor when
-    it lands over the largest distance away. A line has the direction of its end portion and
+    it lands over the largest distance away; where the junction has region points, a line that
+    strays from the node of the others (its curve turns before the junction) is left out
+    (:func:`_without_stray_line`). A line has the direction of its end portion and
     passes through the portion's mean, or, on noise-free input (noise at most
     ``nd.tangent_noise`` spacings) at a junction of ``nd.junction_valence`` branches or more,
     through the walked branch's last sample.
@@ -896,6 +1007,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     Vl = np.zeros((d, d))
     evl = np.zeros(d)
     anchor = np.zeros(d)
+    xc = np.zeros(d)
     for j in range(nj):
         b0 = jb[j]
         b1 = jb[j + 1]
@@ -948,6 +1060,9 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             for c in range(d):
                 A[a, c] = 0.0
         ncs = 0
+        nl = 0  # the lines, each kept in MU, U
+        MU = np.zeros((nbr, d))
+        U = np.zeros((nbr, d))
         # noise-free: each line through its branch's last sample, which lies on the curve (the
         # end portion's mean lies off a bent or kinked curve: a traced neurite's lines met 1-2 h
         # off its junctions); two branches keep the mean (their lines are near-parallel, and
@@ -970,6 +1085,10 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             if through_end:
                 for c in range(d):
                     mu[c] = P[ids[n - 1], c]
+            for c in range(d):
+                MU[nl, c] = mu[c]
+                U[nl, c] = u[c]
+            nl += 1
             # M = I - u u^T; A += M; b += M mu
             um = 0.0
             for c in range(d):
@@ -1003,6 +1122,18 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
         if not ok or not np.sqrt(dist2) <= far * hl:
             for c in range(d):
                 x[c] = anchor[c]
+        elif nr > 0:
+            # a branch turning before the junction: the node of the others' lines, when no
+            # farther from the anchor than the lines' node may be
+            for c in range(d):
+                xs[c] = x[c]
+            if _without_stray_line(MU, U, nl, xs, hl + widen * noise, anchor, _region_mean(P, rid, xc), nd, la):
+                dist2 = 0.0
+                for c in range(d):
+                    dist2 += (xs[c] - anchor[c]) ** 2
+                if np.sqrt(dist2) <= far * hl:
+                    for c in range(d):
+                        x[c] = xs[c]
         # near-tangent or curved branches: where their circles meet, and under noise where the
         # strands step from one to two (_strand_change), when no farther from the anchor than
         # the lines' node may be
