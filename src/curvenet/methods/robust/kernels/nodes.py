@@ -865,7 +865,7 @@ def _line_dist(x, mu, u):  # pragma: no cover - compiled
     return np.sqrt(dv if dv > 0.0 else 0.0)
 
 
-def _without_stray_line(MU, U, nl, x, hs, anchor, centre, nd, la):  # pragma: no cover - compiled
+def _without_stray_line(MU, U, nl, x, hs, anchor, centre, A, C, V, W, nd, la):  # pragma: no cover - compiled
     """A junction's node from the lines of all its branches but one that strays from the others.
 
     ``MU``, ``U`` (nl, d): each branch's line (a point on it, its unit direction). A branch whose
@@ -885,18 +885,16 @@ def _without_stray_line(MU, U, nl, x, hs, anchor, centre, nd, la):  # pragma: no
     straight branch beside it at the turn, so leaving out the third branch's line reads the
     turn as the junction; the region can (the shell test flags the points around the junction,
     where three branches leave, not the turn, where two do). Returns whether ``x`` moved. Needs
-    ``nd.junction_valence`` lines or more.
+    ``nd.junction_valence`` lines or more. ``A``, ``C``, ``V`` (d, d) and ``W`` (4, d): scratch
+    space, overwritten.
     """
     d = x.shape[0]
     if nl < nd.junction_valence:
         return False
-    A = np.zeros((d, d))
-    C = np.zeros((d, d))
-    V = np.zeros((d, d))
-    ev = np.zeros(d)
-    b = np.zeros(d)
-    xk = np.zeros(d)
-    best = np.zeros(d)
+    ev = W[0]
+    b = W[1]
+    xk = W[2]
+    best = W[3]
     best_r2 = np.inf
     for k in range(nl):
         for a in range(d):
@@ -1008,6 +1006,17 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     evl = np.zeros(d)
     anchor = np.zeros(d)
     xc = np.zeros(d)
+    # the lines of one junction (the most branches of any) and _without_stray_line's scratch
+    most = 0
+    for j in range(nj):
+        if jb[j + 1] - jb[j] > most:
+            most = jb[j + 1] - jb[j]
+    MU = np.zeros((most, d))
+    U = np.zeros((most, d))
+    sA = np.zeros((d, d))
+    sC = np.zeros((d, d))
+    sV = np.zeros((d, d))
+    sW = np.zeros((4, d))
     for j in range(nj):
         b0 = jb[j]
         b1 = jb[j + 1]
@@ -1061,8 +1070,6 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                 A[a, c] = 0.0
         ncs = 0
         nl = 0  # the lines, each kept in MU, U
-        MU = np.zeros((nbr, d))
-        U = np.zeros((nbr, d))
         # noise-free: each line through its branch's last sample, which lies on the curve (the
         # end portion's mean lies off a bent or kinked curve: a traced neurite's lines met 1-2 h
         # off its junctions); two branches keep the mean (their lines are near-parallel, and
@@ -1127,7 +1134,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             # farther from the anchor than the lines' node may be
             for c in range(d):
                 xs[c] = x[c]
-            if _without_stray_line(MU, U, nl, xs, hl + widen * noise, anchor, _region_mean(P, rid, xc), nd, la):
+            if _without_stray_line(MU, U, nl, xs, hl + widen * noise, anchor, _region_mean(P, rid, xc), sA, sC, sV, sW,
+                                   nd, la):
                 dist2 = 0.0
                 for c in range(d):
                     dist2 += (xs[c] - anchor[c]) ** 2
