@@ -865,7 +865,7 @@ def _line_dist(x, mu, u):  # pragma: no cover - compiled
     return np.sqrt(dv if dv > 0.0 else 0.0)
 
 
-def _without_stray_line(MU, U, nl, x, hs, anchor, centre, A, C, V, W, nd, la):  # pragma: no cover - compiled
+def _without_stray_line(MU, U, nl, x, hs, anchor, centre, A, C, V, ev, b, xk, best, nd, la):  # pragma: no cover - compiled
     """A junction's node from the lines of all its branches but one that strays from the others.
 
     ``MU``, ``U`` (nl, d): each branch's line (a point on it, its unit direction). A branch whose
@@ -885,16 +885,12 @@ def _without_stray_line(MU, U, nl, x, hs, anchor, centre, A, C, V, W, nd, la):  
     straight branch beside it at the turn, so leaving out the third branch's line reads the
     turn as the junction; the region can (the shell test flags the points around the junction,
     where three branches leave, not the turn, where two do). Returns whether ``x`` moved. Needs
-    ``nd.junction_valence`` lines or more. ``A``, ``C``, ``V`` (d, d) and ``W`` (4, d): scratch
-    space, overwritten.
+    ``nd.junction_valence`` lines or more. ``A``, ``C``, ``V`` (d, d) and ``ev``, ``b``, ``xk``,
+    ``best`` (d,): scratch space, overwritten.
     """
     d = x.shape[0]
     if nl < nd.junction_valence:
         return False
-    ev = W[0]
-    b = W[1]
-    xk = W[2]
-    best = W[3]
     best_r2 = np.inf
     for k in range(nl):
         for a in range(d):
@@ -1016,7 +1012,10 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
     sA = np.zeros((d, d))
     sC = np.zeros((d, d))
     sV = np.zeros((d, d))
-    sW = np.zeros((4, d))
+    sev = np.zeros(d)
+    sb = np.zeros(d)
+    sxk = np.zeros(d)
+    sbest = np.zeros(d)
     for j in range(nj):
         b0 = jb[j]
         b1 = jb[j + 1]
@@ -1134,8 +1133,8 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
             # farther from the anchor than the lines' node may be
             for c in range(d):
                 xs[c] = x[c]
-            if _without_stray_line(MU, U, nl, xs, hl + widen * noise, anchor, _region_mean(P, rid, xc), sA, sC, sV, sW,
-                                   nd, la):
+            if _without_stray_line(MU, U, nl, xs, hl + widen * noise, anchor, _region_mean(P, rid, xc), sA, sC, sV, sev,
+                                   sb, sxk, sbest, nd, la):
                 dist2 = 0.0
                 for c in range(d):
                     dist2 += (xs[c] - anchor[c]) ** 2
