@@ -853,6 +853,19 @@ def _region_mean(P, rid, out):  # pragma: no cover - compiled
     return out
 
 
+def _add_line(A, b, mu, u):  # pragma: no cover - compiled
+    """Add the line through ``mu`` along the unit ``u`` (both (d,)) to the least-squares normal
+    equations of the point nearest to lines: ``A += I - u u^T``, ``b += (I - u u^T) mu``."""
+    d = mu.shape[0]
+    um = 0.0
+    for c in range(d):
+        um += u[c] * mu[c]
+    for a in range(d):
+        for c in range(d):
+            A[a, c] += (1.0 if a == c else 0.0) - u[a] * u[c]
+        b[a] += mu[a] - u[a] * um
+
+
 def _line_dist(x, mu, u):  # pragma: no cover - compiled
     """Distance from the point ``x`` (d,) to the line through ``mu`` along the unit ``u``."""
     r2 = 0.0
@@ -898,15 +911,8 @@ def _without_stray_line(MU, U, nl, x, hs, anchor, centre, A, C, V, ev, b, xk, be
             for c in range(d):
                 A[a, c] = 0.0
         for q in range(nl):
-            if q == k:
-                continue
-            um = 0.0
-            for c in range(d):
-                um += U[q, c] * MU[q, c]
-            for a in range(d):
-                for c in range(d):
-                    A[a, c] += (1.0 if a == c else 0.0) - U[q, a] * U[q, c]
-                b[a] += MU[q, a] - U[q, a] * um
+            if q != k:
+                _add_line(A, b, MU[q], U[q])
         for a in range(d):
             for c in range(d):
                 C[a, c] = A[a, c]
@@ -1047,16 +1053,7 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                     lim = nw * noise
                 lim = walk_dev * lim
                 for q in range(n0, L[bi]):
-                    p = ext[eoff[bi] + q - n0]
-                    al = 0.0
-                    r2 = 0.0
-                    for c in range(d):
-                        t = P[p, c] - mu[c]
-                        al += t * u[c]
-                        r2 += t * t
-                    dv = r2 - al * al
-                    dev = np.sqrt(dv if dv > 0.0 else 0.0)
-                    if dev > lim:
+                    if _line_dist(P[ext[eoff[bi] + q - n0]], mu, u) > lim:
                         L[bi] = q
                         break
         else:
@@ -1095,23 +1092,12 @@ def _junction_nodes(P, h, indptr, indices, bflat, boff, jb, rflat, roff, hj, wid
                 MU[nl, c] = mu[c]
                 U[nl, c] = u[c]
             nl += 1
-            # M = I - u u^T; A += M; b += M mu
-            um = 0.0
-            for c in range(d):
-                um += u[c] * mu[c]
-            for a in range(d):
-                for c in range(d):
-                    A[a, c] += (1.0 if a == c else 0.0) - u[a] * u[c]
-                bb[a] += mu[a] - u[a] * um
+            _add_line(A, bb, mu, u)
         if ncs > 0:
             for c in range(d):
                 anchor[c] = anchor[c] / ncs
-        else:
-            for c in range(d):
-                acc = 0.0
-                for q in range(nr):
-                    acc += P[rid[q], c]
-                anchor[c] = acc / nr if nr > 0 else 0.0
+        elif nr > 0:
+            _region_mean(P, rid, anchor)
         hl = hj[j]
         for a in range(d):
             for c in range(d):
