@@ -217,3 +217,79 @@ def test_split_plan_parts_junctions_closer_than_two_core_radii():
         assert len(seg) and np.all(np.abs(X[seg, 1]) < 0.5)
         assert all(min(abs(x - t) for t in (0, 3, 6)) > 0.5 for x in X[seg, 0])
     assert sorted(len(v) for v in plan.ends.values()) == [1, 2, 2]
+
+
+def _cells(xs, ys, reach, rng, noise=0.05):
+    """A lattice of straight curves along x = xs and y = ys, each running ``reach`` spacings
+    past the outer ones, sampled every spacing, with Gaussian noise."""
+    X = np.r_[*[_line((x, ys[0] - reach), (x, ys[-1] + reach)) for x in xs],
+              *[_line((xs[0] - reach, y), (xs[-1] + reach, y)) for y in ys]]
+    X = np.unique(np.round(X, 9), axis=0)
+    return X + rng.normal(0, noise, X.shape)
+
+
+def test_loop_closures_give_a_cell_its_lost_side_back():
+    """A block of 2 x 2 cells 4 h wide: the spanning tree drops one edge of every cell, the
+    pruning then cuts the two halves of that side and its corners lose a branch; with the gaps
+    closed every one of the 9 junctions shows a vertex of three or more branches."""
+    from curvenet.methods.robust.spanning import loop_closures, pruned_trees
+
+    rng = np.random.default_rng(3)
+    X = _cells((0, 4, 8), (0, 4, 8), 6, rng)
+    cut = SPANNING.prune + SPANNING.prune_noise * NOISE
+    junctions = np.array([(x, y) for x in (0, 4, 8) for y in (0, 4, 8)], dtype=float)
+
+    def seen(adj):
+        v = _branching(adj)
+        return int(np.sum(cKDTree(X[v]).query(junctions)[0] <= 1.0)) if v else 0
+
+    assert seen(pruned_tree(X, cut)) < 9
+    (adj,) = pruned_trees([X], [cut], [None], closes=[(1.0, NOISE)])
+    assert seen(adj) == 9
+    edges = np.array([(a, b) for a in range(len(adj)) for b in adj[a] if a < b])
+    from curvenet.methods.emst import emst_edges
+
+    closed = loop_closures(X, emst_edges(X), 1.0, NOISE)
+    assert len(closed) == 4  # one per cell
+    assert len(edges) == len(X) - 1 + 4 - sum(1 for a in adj if not a)  # the tree, pruned, and the 4
+
+
+def test_loop_closures_leave_branches_at_a_small_angle_and_noise_alone():
+    """Two branches leaving a junction 20 degrees apart come within the closing reach of each
+    other some spacings out, but their points are not the tree's leaves; the samples noise
+    hangs beside a curve are leaves whose path back is short: nothing is closed."""
+    from curvenet.methods.emst import emst_edges
+    from curvenet.methods.robust.spanning import loop_closures
+
+    rng = np.random.default_rng(4)
+    a = np.radians(10.0)
+    X = np.r_[_line((-15, 0), (0, 0)), _line((1, 0), (15 * np.cos(a), 15 * np.sin(a)))[0:],
+              _line((np.cos(a), -np.sin(a)), (15 * np.cos(a), -15 * np.sin(a)))]
+    X = np.r_[X, X[::4] + [0.2, 0.8]]
+    X = X + rng.normal(0, 0.05, X.shape)
+    assert len(loop_closures(X, emst_edges(X), 1.0, NOISE)) == 0
+
+
+def test_split_plan_reads_a_block_of_cells_with_its_cycles():
+    """The 9 junctions of a block of 2 x 2 cells 4 h wide in one region (the shell widened for
+    noise covers it): 9 junctions, the 4 cells' sides that the tree lost made chains between
+    split junctions (Plan.joins); the tree alone showed too few for a split."""
+    rng = np.random.default_rng(3)
+    X = _cells((0, 4, 8), (0, 4, 8), 8, rng)
+    region = (X[:, 0] > -3.5) & (X[:, 0] < 11.5) & (X[:, 1] > -3.5) & (X[:, 1] < 11.5)
+    outside = np.flatnonzero(~region)
+    d, _ = cKDTree(X[region]).query(X[outside])
+    plan = _plan(X, region, outside[d < 1.5])
+    assert plan is not None and len(plan.ends) == 9
+    assert len(plan.steps) == 8 and len(plan.joins) == 4
+    centres = np.array(list(plan.centres.values()))
+    junctions = np.array([(x, y) for x in (0, 4, 8) for y in (0, 4, 8)], dtype=float)
+    assert np.all(cKDTree(centres).query(junctions)[0] <= 1.0)
+    segs = [seg for *_, seg in plan.steps] + [seg for *_, seg in plan.joins]
+    ids = np.concatenate(segs)
+    assert len(ids) == len(np.unique(ids))  # no sample on two chains
+    for (u, w, seg) in plan.joins:  # a cell's side: its samples between its two junctions
+        cu, cw = plan.centres[u], plan.centres[w]
+        assert np.linalg.norm(cu - cw) < 6
+        t = (X[seg] - cu) @ (cw - cu) / np.dot(cw - cu, cw - cu)
+        assert np.all((t > 0) & (t < 1))

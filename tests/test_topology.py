@@ -192,6 +192,20 @@ def test_split_chain_makes_a_junction_in_the_middle():
     topo.check()
 
 
+def test_join_regions_adds_a_chain_between_two_regions(t_shape):
+    # the free ends of the right and up chains joined by a new chain (a cell's side found again)
+    topo = t_shape
+    right_end, up_end = topo.chains[RIGHT].ends[1], topo.chains[UP].ends[1]
+    P = np.r_[topo.P, [[3.0, 3.0]]]  # (one point between the two tips)
+    topo.P = P
+    j = topo.join_regions(right_end, up_end, np.array([13], dtype=np.int64))
+    assert j == 3 and topo.chains[j].ends == [right_end, up_end] and topo.alive[j]
+    assert topo.v[right_end] == 2 and topo.v[up_end] == 2 and topo.v[J] == 3
+    assert topo.incident(right_end) == [(RIGHT, 1), (j, 0)] and topo.incident(up_end) == [(UP, 1), (j, 1)]
+    assert topo.v.tolist() == topo.valence().tolist()
+    topo.check()
+
+
 def test_split_chain_takes_the_free_ends_region_points_along():
     topo = _bar_and_stem()
     topo.chains[1].ids = _ids(9, 12)  # the tip point (0, -2) is the stem's free-end region

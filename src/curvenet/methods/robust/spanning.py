@@ -69,7 +69,8 @@ from .params import RobustParams, Scales
 from .thresholds import NODES, PAIRED, SPANNING
 from .topology import Topology
 
-__all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut", "tree_cores", "core_order"]
+__all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut",
+           "loop_closures", "tree_cores", "core_order"]
 
 
 class Plan(NamedTuple):
@@ -85,11 +86,15 @@ class Plan(NamedTuple):
         neighbour, still in the region, to the new region).
     centres : dict of int to (d,) ndarray
         Per core, its position (the tree vertex nearest the mean of its vertices).
+    joins : list of (int, int, ndarray), optional
+        The chains that close cycles of the cores (a cell of the network inside the region):
+        its two cores and its points, ordered from the first; made after the steps (none by default).
     """
 
     ends: dict
     steps: list
     centres: dict
+    joins: list | tuple = ()
 
 
 def pruned_tree(X: np.ndarray, cut: float, keep: np.ndarray | None = None) -> list[set]:
@@ -103,12 +108,115 @@ def pruned_tree(X: np.ndarray, cut: float, keep: np.ndarray | None = None) -> li
     return pruned_trees([X], [cut], [keep])[0]
 
 
-def pruned_trees(blocks, cuts, keeps) -> list[list[set]]:
+def pruned_trees(blocks, cuts, keeps, closes=None) -> list[list[set]]:
     """:func:`pruned_tree` of several point sets, their spanning trees computed at once
     (:func:`..emst.emst_edges_each`): per set ``blocks[b]`` (n_b, d), its cut ``cuts[b]`` and
-    its ``keeps[b]`` ((n_b,) bool or None), the pruned tree as adjacency sets."""
+    its ``keeps[b]`` ((n_b,) bool or None), the pruned tree as adjacency sets. ``closes``: per
+    set, None or its spacing and noise ``(hl, noise)``: the tree's gaps that close a cycle of
+    the network (:func:`loop_closures`) are joined before the pruning (the result is then a
+    graph with those cycles, not a tree)."""
     edges = emst_edges_each(blocks, [min(SPANNING.k, len(X) - 1) for X in blocks])
+    if closes is not None:
+        edges = [e if c is None else np.concatenate([e, loop_closures(X, e, *c)])
+                 for X, e, c in zip(blocks, edges, closes)]
     return [_pruned(X, e, cut, keep) for X, e, cut, keep in zip(blocks, edges, cuts, keeps)]
+
+
+def loop_closures(X: np.ndarray, edges: np.ndarray, hl: float, noise: float) -> np.ndarray:
+    """The gaps of the spanning tree of ``X`` (n, d) that close a cycle of the network.
+
+    A spanning tree has no cycle: a cell of the network among the points (a street block, a
+    window) loses its longest edge, and the two halves of that side hang as leaf branches.
+    A leaf of the tree (``edges``, (E, 2) ids into ``X``) and a point at most
+    ``SPANNING.close`` spacings ``hl`` from it (plus ``SPANNING.prune_noise`` times ``noise``),
+    the gap between them going on along the tree at the leaf (the tree's direction over
+    ``SPANNING.arm`` spacings back within ``SPANNING.close_cos`` of the gap's) and at the point
+    too when it is a leaf (a side's two halves; a point inside a curve: the side of a cell
+    ending at a T, most often at its corner, where the curve's own direction is not defined),
+    whose path in the graph is ``SPANNING.loop`` spacings or longer, are
+    joined; the closest pair first, the path measured in the graph with the edges joined so far
+    (a leaf joined is no longer one). Two branches of a junction at a small angle close
+    no cycle: their points are not leaves, and their path through the junction is short.
+
+    Returns
+    -------
+    (M, 2) ndarray of int64
+        The edges joined, ``(i, j)`` with ``i < j``.
+    """
+    none = np.zeros((0, 2), dtype=np.int64)
+    n = len(X)
+    if not len(edges):
+        return none
+    adj: list[list[int]] = [[] for _ in range(n)]
+    for a, b in edges.tolist():
+        adj[a].append(b)
+        adj[b].append(a)
+    leaf = np.array([len(s) == 1 for s in adj])
+    if not leaf.any():
+        return none
+    from scipy.spatial import cKDTree
+
+    lv = np.flatnonzero(leaf)
+    reach = SPANNING.close * hl + SPANNING.prune_noise * noise
+    found = cKDTree(X).query_ball_point(X[lv], reach)
+    pa = np.repeat(lv, [len(f) for f in found])
+    pb = np.fromiter((v for f in found for v in f), dtype=np.int64, count=len(pa))
+    keep = (pa != pb) & ~(leaf[pb] & (pb < pa))  # (two leaves: once)
+    pa, pb = pa[keep], pb[keep]
+    if not len(pa):
+        return none
+    d = np.linalg.norm(X[pa] - X[pb], axis=1)
+    order = np.lexsort((pb, pa, d))
+    out = []
+    for a, b in zip(pa[order].tolist(), pb[order].tolist()):
+        if len(adj[a]) != 1 or b in adj[a]:
+            continue
+        e = X[b] - X[a]
+        e = e / max(float(np.linalg.norm(e)), np.finfo(float).tiny)
+        if not _leaf_direction(X, adj, a, SPANNING.arm * hl) @ e >= SPANNING.close_cos:
+            continue
+        if len(adj[b]) == 1 and not _leaf_direction(X, adj, b, SPANNING.arm * hl) @ -e >= SPANNING.close_cos:
+            continue
+        if _path_within(X, adj, a, b, SPANNING.loop * hl):
+            continue
+        adj[a].append(b)
+        adj[b].append(a)
+        out.append((min(a, b), max(a, b)))
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _leaf_direction(X: np.ndarray, adj: list, v: int, reach: float) -> np.ndarray:
+    """The unit direction at the leaf ``v`` out of the tree ``adj``: from the vertex ``reach``
+    back along it (or its last before a fork) to ``v``."""
+    prev, cur = v, adj[v][0]
+    length = float(np.linalg.norm(X[cur] - X[v]))
+    while length < reach and len(adj[cur]) == 2:
+        nxt = adj[cur][0] if adj[cur][0] != prev else adj[cur][1]
+        prev, cur = cur, nxt
+        length += float(np.linalg.norm(X[cur] - X[prev]))
+    d = X[v] - X[cur]
+    return d / max(float(np.linalg.norm(d)), np.finfo(float).tiny)
+
+
+def _path_within(X: np.ndarray, adj: list, a: int, b: int, limit: float) -> bool:
+    """Whether the graph ``adj`` joins ``a`` to ``b`` by a path shorter than ``limit``
+    (Dijkstra from ``a``, stopped at ``limit``)."""
+    import heapq
+
+    dist = {a: 0.0}
+    heap = [(0.0, a)]
+    while heap:
+        du, u = heapq.heappop(heap)
+        if u == b:
+            return True
+        if du > dist.get(u, np.inf):
+            continue
+        for w in adj[u]:
+            dw = du + float(np.linalg.norm(X[w] - X[u]))
+            if dw < limit and dw < dist.get(w, np.inf):
+                dist[w] = dw
+                heapq.heappush(heap, (dw, w))
+    return False
 
 
 def _pruned(X: np.ndarray, edges: np.ndarray, cut: float, keep: np.ndarray | None) -> list[set]:
@@ -301,9 +409,9 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         The fewest junctions of a split (``SPANNING.min_cores``, or ``SPANNING.clean_min_cores``
         on noise-free input).
     near_tree : (ndarray, list of set), optional
-        The region's points (:func:`region_points`) and their pruned tree (:func:`pruned_tree`
-        with the cut :func:`prune_cut`), when already built (:func:`split_multiple_junctions`
-        builds every region's at once).
+        The region's points (:func:`region_points`) and their pruned tree with its cycles
+        closed (:func:`pruned_trees` with the cut :func:`prune_cut` and :func:`loop_closures`),
+        when already built (:func:`split_multiple_junctions` builds every region's at once).
 
     Returns
     -------
@@ -312,7 +420,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     hl = float(np.median(h[ids]))
     if near_tree is None:
         near = region_points(P, tree, h, ids, end_points)
-        adj = pruned_tree(P[near], prune_cut(hl, noise))
+        adj = pruned_trees([P[near]], [prune_cut(hl, noise)], [None], closes=[(hl, noise)])[0]
     else:
         near, adj = near_tree
     X = P[near]
@@ -357,17 +465,24 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         live.remove(k)
     if len(live) < min_cores or min(val.values()) < NODES.junction_valence:
         return None
-    regular = sum(1 for k in live if val[k] == NODES.junction_valence)
+    tree_nbr, joins = _core_tree(nbr, centre, live)
+    if tree_nbr is None:  # (the cores not all joined)
+        return None
     # a core over SPANNING.max_valence is a hub of many strokes spread by the noise, unless a row
     # of SPANNING.min_cores plain junctions lies beside it (then it holds a missed junction's
     # ends), or it lies inside a row: the cores a path, it between two of them, and one plain
-    # junction fewer (two junctions of the row the tree did not part)
+    # junction fewer (two junctions of the row the tree did not part). Plain: of valence 3 or
+    # 4 (a crossing: a rail crossing a row of verticals, a street grid)
+    regular = sum(1 for k in live if NODES.junction_valence <= val[k] <= SPANNING.max_valence)
     over = [k for k in live if val[k] > SPANNING.max_valence]
     inside_row = (all(len(nbr[k]) <= 2 for k in live) and all(len(nbr[k]) == 2 for k in over)
                   and regular >= SPANNING.min_cores - 1)
     if over and regular < SPANNING.min_cores and not inside_row:
         return None
-    if sum(len(s) for s in nbr.values()) != 2 * (len(live) - 1):  # the cores' graph is a tree
+    # the centre of a star of SPANNING.min_cores cores or more (every other core's one
+    # neighbour) is a hub all the same: strokes drawn into a pole, their ends read as junctions
+    # around it (a path of three is a row: two junctions of it the tree did not part)
+    if len(live) > SPANNING.min_cores and any(all(nbr[j] == {k} for j in live if j != k) for k in over):
         return None
     C = centre[live]
     gap = np.linalg.norm(C[:, None] - C[None], axis=2)
@@ -378,26 +493,24 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     lost = np.flatnonzero(owner < 0)
     if len(lost):
         owner[lost] = np.array(live)[np.argmin(np.linalg.norm(P[ids[lost]][:, None] - C[None], axis=2), axis=1)]
+    region = ids
+    # the chains that close cycles of the cores (a cell of the network inside the region, its
+    # sides found again by loop_closures) first: their points are no core's
+    ring = []
+    for u, w in joins:
+        seg = _core_segment(P, X, near, adj, lab, cores[u][0], cores[w][0], (u, w), region, hl, noise)
+        if seg is None:
+            return None
+        ring.append((u, w, seg))
+        region = region[~np.isin(region, seg)]
     steps = []
     left = set(live)
-    region = ids
     while len(left) > 1:
-        leaf = min(k for k in left if len(nbr[k] & left) == 1)
-        to = min(nbr[leaf] & left)
-        a, b = cores[to][0], cores[leaf][0]
-        path = _tree_path(adj, a, b)
-        if path is None:
+        leaf = min(k for k in left if len(tree_nbr[k] & left) == 1)
+        to = min(tree_nbr[leaf] & left)
+        seg = _core_segment(P, X, near, adj, lab, cores[to][0], cores[leaf][0], (to, leaf), region, hl, noise)
+        if seg is None:
             return None
-        ra = min(SPANNING.core * hl + noise, SPANNING.core_share * float(np.linalg.norm(X[a] - X[b])))
-        pts = near[path]
-        off = np.minimum(np.linalg.norm(P[pts] - X[a], axis=1), np.linalg.norm(P[pts] - X[b], axis=1))
-        held = np.isin(pts, region)
-        seg = pts[(off > ra) & held]
-        if not len(seg):  # junctions closer than two core radii: the path's point farthest from both
-            mid = np.flatnonzero(held[1:-1]) + 1
-            if not len(mid):
-                return None
-            seg = pts[mid[[np.argmax(off[mid])]]]
         mine = np.isin(region, ids[owner == leaf]) & ~np.isin(region, seg)
         if not mine.any():  # (the core's points all on the chains: no region left for it)
             return None
@@ -406,7 +519,81 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         region = region[~np.isin(region, np.r_[new_ids, seg])]
         left.discard(leaf)
     return Plan({k: [e for e, o in zip(ends, own.tolist()) if o == k] for k in live}, steps,
-                {k: X[cores[k][0]] for k in live})
+                {k: X[cores[k][0]] for k in live}, ring)
+
+
+def _core_tree(nbr: dict, centre: np.ndarray, live: list) -> tuple:
+    """A spanning tree of the cores' graph (``nbr``: core -> neighbouring cores), the edges
+    between nearer cores (``centre``) first, and the graph's other edges (each closes a cycle:
+    a cell of the network inside the region). Returns ``(tree_nbr, joins)``: per core its
+    neighbours in the tree, and the other edges ``(u, w)``, ``u < w``, in the order met; or
+    ``(None, [])`` when the cores are not all joined."""
+    edges = sorted({(min(u, w), max(u, w)) for u in live for w in nbr[u]},
+                   key=lambda e: (float(np.linalg.norm(centre[e[0]] - centre[e[1]])), e))
+    root = {k: k for k in live}
+
+    def find(k):
+        while root[k] != k:
+            k = root[k]
+        return k
+
+    tree_nbr = {k: set() for k in live}
+    joins = []
+    for u, w in edges:
+        ru, rw = find(u), find(w)
+        if ru == rw:
+            joins.append((u, w))
+            continue
+        root[max(ru, rw)] = min(ru, rw)
+        tree_nbr[u].add(w)
+        tree_nbr[w].add(u)
+    if sum(len(t) for t in tree_nbr.values()) != 2 * (len(live) - 1):
+        return None, []
+    return tree_nbr, joins
+
+
+def _core_segment(P, X, near, adj, lab, a: int, b: int, two: tuple, region, hl: float, noise: float):
+    """The points of the new chain between the junctions at tree vertices ``a`` and ``b``
+    (cores ``two``; :func:`split_plan`'s arrays), ordered from ``a``: the ``region`` points of
+    the path between them through their two cores' vertices only that lie over a core radius
+    from both (``SPANNING.core``, ``SPANNING.core_share``), or, when none does, the path's
+    region point farthest from both; None when there is no such path or point."""
+    path = _core_path(adj, lab, a, b, two)
+    if path is None:
+        return None
+    ra = min(SPANNING.core * hl + noise, SPANNING.core_share * float(np.linalg.norm(X[a] - X[b])))
+    pts = near[path]
+    off = np.minimum(np.linalg.norm(P[pts] - X[a], axis=1), np.linalg.norm(P[pts] - X[b], axis=1))
+    held = np.isin(pts, region)
+    seg = pts[(off > ra) & held]
+    if not len(seg):  # junctions closer than two core radii: the path's point farthest from both
+        mid = np.flatnonzero(held[1:-1]) + 1
+        if not len(mid):
+            return None
+        seg = pts[mid[[np.argmax(off[mid])]]]
+    return seg
+
+
+def _core_path(adj: list, lab: np.ndarray, a: int, b: int, two: tuple) -> list | None:
+    """The vertices of a path with fewest edges from ``a`` to ``b`` in the graph ``adj``
+    through vertices of the cores ``two`` only (``lab``: each vertex's core); on a tree the
+    one path between two neighbouring cores. None: there is none."""
+    prev = {a: -1}
+    front = [a]
+    while front and b not in prev:
+        nxt = []
+        for u in front:
+            for w in sorted(adj[u]):
+                if w not in prev and lab[w] in two:
+                    prev[w] = u
+                    nxt.append(w)
+        front = nxt
+    if b not in prev:
+        return None
+    out = [b]
+    while out[-1] != a:
+        out.append(prev[out[-1]])
+    return out[::-1]
 
 
 def _branches_apart(L, ends: list, plan: Plan) -> bool:
@@ -500,7 +687,8 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
     hls = group_medians(sc.h[np.concatenate(regions)], [len(ids) for ids in regions]) if read else np.zeros(0)
     nears = region_points_each(topo.P, sc.tree, hls, regions, end_points)
     cuts = [prune_cut(float(hl), sc.noise) for hl in hls]
-    trees = pruned_trees([topo.P[near] for near in nears], cuts, [None] * len(read))
+    trees = pruned_trees([topo.P[near] for near in nears], cuts, [None] * len(read),
+                         closes=[(float(hl), sc.noise) for hl in hls])
     plans = []
     for j, ep, near, adj in zip(read, end_points, nears, trees):
         r, inc = cand[j], incs[j]
@@ -516,8 +704,14 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
         plans.append((r, plan))
     for r, plan in plans:
         ends = {k: list(v) for k, v in plan.ends.items()}
+        ring = np.concatenate([seg for _, _, seg in plan.joins]) if plan.joins else np.zeros(0, dtype=np.int64)
+        if len(ring):
+            topo.regions[r] = topo.regions[r][~np.isin(topo.regions[r], ring)]
+        where = {}
         for leaf, to, new_ids, seg in plan.steps:
             rest = topo.regions[r]
             rest = rest[~np.isin(rest, np.r_[new_ids, seg])]
-            topo.split_region(r, ends[leaf], rest, new_ids, seg)
+            where[leaf] = topo.split_region(r, ends[leaf], rest, new_ids, seg)
             ends[to].append((len(topo.chains) - 1, 0))  # the new chain's end at the rest
+        for u, w, seg in plan.joins:
+            topo.join_regions(where.get(u, r), where.get(w, r), seg)

@@ -773,7 +773,8 @@ class Spanning(NamedTuple):
     #: each junction of the row has at most this valence (rows of real networks: a comb's, a
     #: street's, a facade's junctions of valence 3 and 4); a core of more is a hub of many
     #: strokes spread by the noise (a real sketch's pole), left whole with its region, unless
-    #: ``min_cores`` plain junctions (valence 3) lie beside it: then the region is a row, and the
+    #: ``min_cores`` plain junctions (valence 3 or 4: a crossing of a block of cells; valence 3
+    #: only before the loop closures) lie beside it: then the region is a row, and the
     #: core holds the chain ends of a junction of the row the pruned tree did not show (a ladder's
     #: rail under noise); it is split, that core kept as one junction. So too when the core lies
     #: inside a row (the cores a path, it between two of them) beside ``min_cores`` - 1 plain
@@ -789,7 +790,10 @@ class Spanning(NamedTuple):
     #: row (6 December 2026): 928 + 352 runs 5 better, 0 worse (ladder noise 0.2h s3 0.561 ->
     #: 0.800, streets 0.3h + x3 s1 0.700 -> 0.806), CASSIE 256 noisy runs 3 better, 1 worse
     #: (10-2-1 at 0.2h by 0.004); any core beside 2 plain ones instead: the flower's hub (a star
-    #: of cores, valence 10) split, 0.788 -> 0.713
+    #: of cores, valence 10) split, 0.788 -> 0.713. Plain junctions of valence 4 too (with the
+    #: loop closures, 7 December 2026): the families' storeys at noise 0.2h 0.852 -> 0.909, grid
+    #: 0.710 -> 0.732, grid density x3 0.847 -> 0.881; the centre of a star of more than
+    #: ``min_cores`` cores is still a hub (the flower's [4, 4, 9, 3, 3], 0.788 kept)
     max_valence: int = 4
     #: the fewest chain ends of such a region: three junctions of valence 3 in a row show
     #: 3 + 3 + 3 - 2 x 2
@@ -840,6 +844,26 @@ class Spanning(NamedTuple):
     #: under noise 0.2h (10 junctions found, the row left whole: two nodes of valence 12);
     #: 832-run harness 21 better, 1 worse (+7.05)
     core_share: float = 0.35
+    #: the spanning tree has no cycle, so a cell of the network inside the region (a street
+    #: block or a window 4-5 h wide, its four sides within the widened shell) loses a side:
+    #: the tree drops the cell's longest edge, the side's two halves hang as leaf branches of
+    #: about half its length and are pruned, and its corners lose a branch. A leaf of the tree
+    #: and a point at most this many spacings from it (plus ``prune_noise`` times the noise),
+    #: the gap going on along the tree at the leaf (and at the point when that is a leaf too,
+    #: ``close_cos``), are joined again when the graph's path between them is ``loop`` spacings
+    #: or longer (the closest pair first; :func:`.spanning.loop_closures`)
+    #: origin: set with the loop closure (issue 25), not tuned; the 90 gaps it closed on the
+    #: grid and storeys families at noise 0.1h and 0.2h were 1.3-2.4 spacings long, each on a
+    #: true curve (midpoint within 0.7 h of one)
+    close: float = 2.0
+    #: the shortest cycle closed: a cell 2.5 h square (the families' cells are 4 h or more; the
+    #: gap between two branches of a junction at a small angle closes a shorter cycle)
+    #: origin: set with the loop closure (issue 25), not tuned
+    loop: float = 10.0
+    #: a gap is closed only when it goes on along the tree's direction at its leaf ends
+    #: (measured ``arm`` spacings back along the tree): within 45 degrees
+    #: origin: set with the loop closure (issue 25), not tuned
+    close_cos: float = float(np.cos(np.radians(45.0)))
 
 
 SPANNING = Spanning()

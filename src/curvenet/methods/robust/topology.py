@@ -326,6 +326,25 @@ class Topology:
         self._changed()
         return nr
 
+    def join_regions(self, a: int, b: int, seg: np.ndarray) -> int:
+        """A new chain of the points ``seg`` (ordered from region ``a`` to region ``b``, n >= 1)
+        between the two regions (a cell's side inside a region split into its junctions).
+
+        Returns
+        -------
+        int
+            The new chain.
+        """
+        self.chains.append(Chain(np.asarray(seg, dtype=np.int64), [a, b]))
+        self.alive.append(True)
+        j = len(self.chains) - 1
+        self._ends_at[a].append((j, 0))
+        self._ends_at[b].append((j, 1))
+        self.v[a] += 1
+        self.v[b] += 1
+        self._changed()
+        return j
+
     def branch_chain(self, i: int, core: np.ndarray, arms: list[np.ndarray], far: list[int]) -> int:
         """Open chain ``i`` branches at a junction: it dies, the points ``core`` become a new
         region, and each branch of ``arms`` (ids ordered from the junction outwards) a chain
