@@ -498,6 +498,8 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     # sides found again by loop_closures) first: their points are no core's
     ring = []
     for u, w in joins:
+        if _joined_outside(near, _core_path(adj, lab, cores[u][0], cores[w][0], (u, w)), region):
+            continue
         seg = _core_segment(P, X, near, adj, lab, cores[u][0], cores[w][0], (u, w), region, hl, noise)
         if seg is None:
             return None
@@ -550,6 +552,14 @@ def _core_tree(nbr: dict, centre: np.ndarray, live: list) -> tuple:
     if sum(len(t) for t in tree_nbr.values()) != 2 * (len(live) - 1):
         return None, []
     return tree_nbr, joins
+
+
+def _joined_outside(near: np.ndarray, path: list | None, region: np.ndarray) -> bool:
+    """Whether the path (vertices into ``near``, from one core's vertex to another's) runs
+    through samples outside the ``region`` only: the two junctions are joined by a chain of
+    the topology already (a cell's side long enough to leave the region; grid#15 of the
+    families at noise 0.2 h: such a cycle had no chain to make, and the region was left whole)."""
+    return path is not None and not np.isin(near[path[1:-1]], region).any()
 
 
 def _core_segment(P, X, near, adj, lab, a: int, b: int, two: tuple, region, hl: float, noise: float):
