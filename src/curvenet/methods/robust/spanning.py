@@ -61,12 +61,12 @@ from typing import NamedTuple
 import numpy as np
 
 from ..emst import emst_edges_each
-from .chains import group_medians
+from .chains import group_medians, points_apart
 from .graph import components
 from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_each, region_stats, straight_pairs,
                      towards_tips)
 from .params import RobustParams, Scales
-from .thresholds import NODES, PAIRED, SPANNING
+from .thresholds import BRANCHED, NODES, PAIRED, SPANNING
 from .topology import Topology
 
 __all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut",
@@ -386,7 +386,7 @@ def region_points_each(P: np.ndarray, tree, hls: np.ndarray, regions: list, end_
 
 def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray, ends: list,
                end_points: np.ndarray, min_cores: int = SPANNING.min_cores,
-               near_tree: tuple[np.ndarray, list[set]] | None = None) -> Plan | None:
+               near_tree: tuple[np.ndarray, list[set]] | None = None, chain_ids: dict | None = None) -> Plan | None:
     """How the region of points ``ids`` splits into a row of junctions (None: it does not).
 
     Parameters
@@ -412,6 +412,9 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         The region's points (:func:`region_points`) and their pruned tree with its cycles
         closed (:func:`pruned_trees` with the cut :func:`prune_cut` and :func:`loop_closures`),
         when already built (:func:`split_multiple_junctions` builds every region's at once).
+    chain_ids : dict of int to ndarray, optional
+        The samples of each chain of ``ends`` (:func:`_twin_of_chain`: a cycle of junctions
+        closed by a chain already gets no new chain beside it).
 
     Returns
     -------
@@ -503,6 +506,8 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         seg = _core_segment(P, X, near, adj, lab, cores[u][0], cores[w][0], (u, w), region, hl, noise)
         if seg is None:
             return None
+        if _twin_of_chain(P, ends, own, u, w, seg, chain_ids, hl, noise):
+            continue
         ring.append((u, w, seg))
         region = region[~np.isin(region, seg)]
     steps = []
@@ -552,6 +557,25 @@ def _core_tree(nbr: dict, centre: np.ndarray, live: list) -> tuple:
     if sum(len(t) for t in tree_nbr.values()) != 2 * (len(live) - 1):
         return None, []
     return tree_nbr, joins
+
+
+def _twin_of_chain(P, ends: list, own: np.ndarray, u: int, w: int, seg: np.ndarray, chain_ids: dict | None,
+                   hl: float, noise: float) -> bool:
+    """Whether a chain of the topology from core ``u`` to core ``w`` (both its ends at the
+    region, ``ends``, one owned by each, ``own``) runs where the new chain ``seg`` would: no
+    sample of either over ``BRANCHED.twin_apart`` spacings ``hl`` (plus
+    ``BRANCHED.twin_apart_noise`` times ``noise``) from the other (:func:`.chains.points_apart`,
+    as stage 4 tells a cell's two sides from one side). The cycle of cores is that chain's: a
+    new one would be its twin (grid#11 of the families at noise 0.1 h: two sides made twice).
+    ``chain_ids``: the samples of each chain of ``ends`` (None: no chain is known)."""
+    if chain_ids is None:
+        return False
+    at = {}
+    for (i, side), o in zip(ends, own.tolist()):
+        at.setdefault(i, {})[side] = o
+    lim = BRANCHED.twin_apart * hl + BRANCHED.twin_apart_noise * noise
+    return any(len(sides) == 2 and {sides[0], sides[1]} == {u, w} and i in chain_ids
+               and not points_apart(P[seg], P[chain_ids[i]], lim) for i, sides in at.items())
 
 
 def _joined_outside(near: np.ndarray, path: list | None, region: np.ndarray) -> bool:
@@ -704,7 +728,8 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
         r, inc = cand[j], incs[j]
         ids = topo.regions[r]
         L = Lines(*(a[off[j]:off[j + 1]] for a in L_all))
-        plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), ep, min_cores, (near, adj))
+        plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), ep, min_cores, (near, adj),
+                          {i: topo.chains[i].ids for i, _ in inc})
         if plan is None:
             continue
         if len(plan.ends) == 2 and not _branches_apart(L, list(inc), plan):  # converging curves
