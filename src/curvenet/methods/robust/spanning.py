@@ -187,14 +187,8 @@ def loop_closures(X: np.ndarray, edges: np.ndarray, hl: float, noise: float) -> 
 
 def _leaf_direction(X: np.ndarray, adj: list, v: int, reach: float) -> np.ndarray:
     """The unit direction at the leaf ``v`` out of the tree ``adj``: from the vertex ``reach``
-    back along it (or its last before a fork) to ``v``."""
-    prev, cur = v, adj[v][0]
-    length = float(np.linalg.norm(X[cur] - X[v]))
-    while length < reach and len(adj[cur]) == 2:
-        nxt = adj[cur][0] if adj[cur][0] != prev else adj[cur][1]
-        prev, cur = cur, nxt
-        length += float(np.linalg.norm(X[cur] - X[prev]))
-    d = X[v] - X[cur]
+    back along it (or its last before a fork) to ``v`` (:func:`_walk_out`)."""
+    d = X[v] - X[_walk_out(X, adj, v, adj[v][0], reach)]
     return d / max(float(np.linalg.norm(d)), np.finfo(float).tiny)
 
 
@@ -265,19 +259,25 @@ def _arms_apart(X: np.ndarray, adj: list[set], v: int, reach: float) -> bool:
     tree, or their last before a fork) pairwise over ``SPANNING.arm_cos`` apart."""
     dirs = []
     for s in sorted(adj[v]):
-        prev, cur = v, s
-        length = float(np.linalg.norm(X[s] - X[v]))
-        while length < reach:
-            nxt = [u for u in adj[cur] if u != prev]
-            if len(nxt) != 1:
-                break
-            prev, cur = cur, nxt[0]
-            length += float(np.linalg.norm(X[cur] - X[prev]))
-        d = X[cur] - X[v]
+        d = X[_walk_out(X, adj, v, s, reach)] - X[v]
         dirs.append(d / max(float(np.linalg.norm(d)), np.finfo(float).tiny))
     D = np.array(dirs)
     cos = D @ D.T
     return bool(np.all(cos[np.triu_indices(len(D), 1)] <= SPANNING.arm_cos))
+
+
+def _walk_out(X: np.ndarray, adj: list, v: int, s: int, reach: float) -> int:
+    """The vertex reached from ``v`` through its neighbour ``s`` along the graph ``adj``: the
+    first ``reach`` or farther along it, or the last before a fork or an end."""
+    prev, cur = v, s
+    length = float(np.linalg.norm(X[s] - X[v]))
+    while length < reach:
+        nxt = [u for u in adj[cur] if u != prev]
+        if len(nxt) != 1:
+            break
+        prev, cur = cur, nxt[0]
+        length += float(np.linalg.norm(X[cur] - X[prev]))
+    return cur
 
 
 def _tree_edges(adj: list[set]) -> tuple[np.ndarray, np.ndarray]:
@@ -303,26 +303,6 @@ def _labels(X: np.ndarray, a: np.ndarray, b: np.ndarray, sources: dict) -> np.nd
     ok = nearest >= 0
     lab[ok] = [sources[int(s)] for s in nearest[ok].tolist()]
     return lab
-
-
-def _tree_path(adj: list[set], a: int, b: int) -> list[int] | None:
-    """The vertices of the tree path from ``a`` to ``b`` (None: not connected)."""
-    prev = {a: -1}
-    stack = [a]
-    while stack:
-        u = stack.pop()
-        if u == b:
-            break
-        for w in sorted(adj[u]):
-            if w not in prev:
-                prev[w] = u
-                stack.append(w)
-    if b not in prev:
-        return None
-    out = [b]
-    while out[-1] != a:
-        out.append(prev[out[-1]])
-    return out[::-1]
 
 
 def _clusters(Y: np.ndarray, r: float) -> np.ndarray:
@@ -501,9 +481,10 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     # sides found again by loop_closures) first: their points are no core's
     ring = []
     for u, w in joins:
-        if _joined_outside(near, _core_path(adj, lab, cores[u][0], cores[w][0], (u, w)), region):
+        path = _core_path(adj, lab, cores[u][0], cores[w][0], (u, w))
+        if _joined_outside(near, path, region):
             continue
-        seg = _core_segment(P, X, near, adj, lab, cores[u][0], cores[w][0], (u, w), region, hl, noise)
+        seg = _core_segment(P, X, near, path, region, hl, noise)
         if seg is None:
             return None
         if _twin_of_chain(P, ends, own, u, w, seg, chain_ids, hl, noise):
@@ -515,7 +496,8 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     while len(left) > 1:
         leaf = min(k for k in left if len(tree_nbr[k] & left) == 1)
         to = min(tree_nbr[leaf] & left)
-        seg = _core_segment(P, X, near, adj, lab, cores[to][0], cores[leaf][0], (to, leaf), region, hl, noise)
+        seg = _core_segment(P, X, near, _core_path(adj, lab, cores[to][0], cores[leaf][0], (to, leaf)), region, hl,
+                            noise)
         if seg is None:
             return None
         mine = np.isin(region, ids[owner == leaf]) & ~np.isin(region, seg)
@@ -595,15 +577,15 @@ def _joined_outside(near: np.ndarray, path: list | None, region: np.ndarray) -> 
     return path is not None and not np.isin(near[path[1:-1]], region).any()
 
 
-def _core_segment(P, X, near, adj, lab, a: int, b: int, two: tuple, region, hl: float, noise: float):
-    """The points of the new chain between the junctions at tree vertices ``a`` and ``b``
-    (cores ``two``; :func:`split_plan`'s arrays), ordered from ``a``: the ``region`` points of
-    the path between them through their two cores' vertices only that lie over a core radius
-    from both (``SPANNING.core``, ``SPANNING.core_share``), or, when none does, the path's
-    region point farthest from both; None when there is no such path or point."""
-    path = _core_path(adj, lab, a, b, two)
+def _core_segment(P, X, near, path: list | None, region, hl: float, noise: float):
+    """The points of the new chain between the junctions at the two ends ``a``, ``b`` of
+    ``path`` (:func:`_core_path`, vertices into ``near``; :func:`split_plan`'s arrays), ordered
+    from ``a``: the ``region`` points of the path that lie over a core radius from both
+    (``SPANNING.core``, ``SPANNING.core_share``), or, when none does, the path's region point
+    farthest from both; None when there is no path or no such point."""
     if path is None:
         return None
+    a, b = path[0], path[-1]
     ra = min(SPANNING.core * hl + noise, SPANNING.core_share * float(np.linalg.norm(X[a] - X[b])))
     pts = near[path]
     off = np.minimum(np.linalg.norm(P[pts] - X[a], axis=1), np.linalg.norm(P[pts] - X[b], axis=1))

@@ -316,14 +316,9 @@ class Topology:
         ea.append([e for e in ends_b])
         for i, s in ends_b:
             self.chains[i].ends[s] = nr
-        self.chains.append(Chain(np.asarray(seg, dtype=np.int64), [r, nr]))
-        self.alive.append(True)
-        jn = len(self.chains) - 1
-        ea[r].append((jn, 0))
-        ea[nr].append((jn, 1))
-        self.v[r] += 1 - len(ends_b)
-        self.v = np.r_[self.v, len(ends_b) + 1]
-        self._changed()
+        self.v[r] -= len(ends_b)
+        self.v = np.r_[self.v, len(ends_b)]
+        self.join_regions(r, nr, seg)
         return nr
 
     def join_regions(self, a: int, b: int, seg: np.ndarray) -> int:
@@ -381,13 +376,7 @@ class Topology:
                 f = len(self.regions) - 1
             elif f < -1:
                 f = first + (-f - 2)
-            self.chains.append(Chain(np.asarray(ids, dtype=np.int64), [na, f]))
-            self.alive.append(True)
-            j = len(self.chains) - 1
-            ea[na].append((j, 0))
-            ea[f].append((j, 1))
-            self.v[na] += 1
-            self.v[f] += 1
+            self.join_regions(na, f, ids)
         self._changed()
 
     # ------------------------------------------------------------------------------ checks
