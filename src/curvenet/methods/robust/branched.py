@@ -25,7 +25,11 @@ may keep the chain's regions there. A tree of two or more junctions is read too
 (:func:`cores_plan`): each piece of the tree between two of them (a path) becomes a chain joining
 them, the branches leaving end as above (a chain that ran past a building notch's ground corner
 and on up its vertical past the eave corner; rungs of a ladder, teeth of a comb 3-5 h apart
-that a chain runs past under noise). It was read on noise-free input only until 4 December
+that a chain runs past under noise). The whole chain's tree has its cycles closed
+(:func:`.spanning.loop_closures`, as a region's tree has them; 7 December 2026): a chain that
+ran round a cell of the network (a ladder's two rails and two rungs under noise, a facade's
+window) lost a side of each cell in its spanning tree, the side's halves were pruned as leaf
+branches, and the cell's corners showed no junction. It was read on noise-free input only until 4 December
 2026; at every noise (A/B, issue 25): 7 of 992 networks changed, 6 better (kinds at noise
 0.2 h and 0.3 h + x3: ladder 0.28 -> 0.51, 0.13 -> 0.31, 0.46 -> 0.69; comb 0.61 -> 0.87,
 0.20 -> 0.47; twigs 0.13 -> 0.22), 1 worse (twigs 0.30 -> 0.29); the synthetic models, CASSIE
@@ -391,7 +395,8 @@ def split_branched_chains(topo: Topology, sc: Scales, prm: RobustParams) -> None
     chain whose points, in order, jump by over ``BRANCHED.jump`` spacings (plus
     the noise) and whose spanning tree shows one junction (:func:`branch_plan`) becomes that
     junction and one chain per branch (:meth:`.topology.Topology.branch_chain`); a tree of
-    two or more junctions is split at each (:func:`_split_at_cores`). A chain that neither
+    two or more junctions is split at each (:func:`_split_at_cores`), the whole chain's tree
+    with the cycles of the cells it runs round closed (:func:`.spanning.loop_closures`). A chain that neither
     split touched and that runs past a region no chain ends at branches into it when the two
     make one junction (:func:`orphan_twigs`). The regions the split chains' branches reached
     are then read again by :func:`.spanning.split_multiple_junctions` (a rail's region, joined
@@ -450,7 +455,8 @@ def _split_jumping(topo: Topology, sc: Scales, prm: RobustParams) -> set:
     near = {j: _near_jump_branches(Xs[j][wins[j][0]], adj, cand[j][1], sc.noise) for j, adj in zip(looked, wtrees)}
     whole = [j for j in range(len(cand)) if near.get(j, True)]
     trees = dict(zip(whole, pruned_trees([Xs[j] for j in whole], [prune_cut(cand[j][1], sc.noise) for j in whole],
-                                         [keeps[j] for j in whole])))
+                                         [keeps[j] for j in whole],
+                                         closes=[(cand[j][1], sc.noise) for j in whole])))
     reached: set = set()  # the regions the split chains' branches end at
     for j, (i, hl) in enumerate(cand):
         if j not in trees:
