@@ -12,7 +12,10 @@ and merges back a pair whose branches aim at one node (two strokes drawn into a 
 One reading is left as one junction: a straight curve passing through both points with two
 branches crossing it at different angles, a few spacings apart, is strokes meeting loosely
 where one junction was meant (real sketches); branches crossing it in parallel (a ladder's
-rungs, a comb's teeth) are two junctions. And a straight curve with a half in each group
+rungs, a comb's teeth) are two junctions; a branch whose whole chain is shorter than the end
+portion its line is fitted on (:func:`short_branches`: a street grid's 4 h link into the next
+crossing, its line bent by the turn there) tells no crossing angle and counts as parallel
+(7 December 2026). And a straight curve with a half in each group
 (:func:`straight_pairs`) must run along the segment (its direction, the mean of its halves',
 within ``PAIRED.parallel_cos``): it passes through both points (under heavy noise an X crossing
 otherwise splits into two V's).
@@ -30,13 +33,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .chains import end_portion, group_medians
+from .chains import end_portion, group_medians, polylen
 from .params import RobustParams, Scales
 from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
 __all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "best_pair",
-           "best_pairs", "straight_pairs", "towards_tips", "curve_directions", "meet_at_one_point_each", "region_stats"]
+           "best_pairs", "short_branches", "straight_pairs", "towards_tips", "curve_directions",
+           "meet_at_one_point_each", "region_stats"]
 
 
 class Lines(NamedTuple):
@@ -252,7 +256,7 @@ def best_pair(L: Lines, anchor: np.ndarray, h: float):
     return _splits(len(L.c))[k].copy(), xa, xb
 
 
-def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
+def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray, short: np.ndarray | None = None):
     """:func:`best_pair` of many regions of ``m`` lines each, at once.
 
     Parameters
@@ -261,6 +265,10 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
         Arrays of shape (R, m, d) (``lim``: (R, m)): the lines of R regions.
     anchor : (R, d) ndarray
     h : (R,) ndarray
+    short : (R, m) ndarray of bool, optional
+        Lines of branches whose whole chain is shorter than the end portion a line is fitted
+        on (:func:`short_branches`): their direction is no crossing angle, so they count as
+        parallel to the others in the test of one straight curve through both points.
 
     Returns
     -------
@@ -319,6 +327,8 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray):
     first = np.argmax(~along, axis=1)
     v0 = Lr.u[np.arange(len(first)), first]
     par = (np.abs(np.einsum("nmi,ni->nm", Lr.u, v0)) > PAIRED.parallel_cos) | along
+    if short is not None:
+        par |= np.repeat(short, S, axis=0)
     good &= ~through | par.all(axis=1)
     # a straight curve with a half in each group (two lines facing each other, each through the
     # other's centroid) passes through both points: it must run along the segment (an X
@@ -500,6 +510,7 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
     nl = np.diff(off)
     single = np.logical_or.reduceat(~(np.linalg.norm(L.u, axis=1) > 0), off[:-1])  # a one-point branch
     anchors, hr = region_stats(P, h, [topo.regions[r] for r in cand])
+    short = short_branches(topo, sc, incs)
     found: dict[int, tuple] = {}
     for m in np.unique(nl).tolist():  # the regions of m lines at once
         js = np.flatnonzero((nl == m) & ~single)
@@ -507,7 +518,7 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
             continue
         rows = off[js][:, None] + np.arange(m)
         Lm = Lines(L.c[rows], L.u[rows], L.tip[rows], L.lim[rows])
-        k, xa, xb = best_pairs(Lm, anchors[js], hr[js])
+        k, xa, xb = best_pairs(Lm, anchors[js], hr[js], short[rows])
         hit = np.flatnonzero(k >= 0).tolist()
         B = _splits(m) if hit else None  # (none over PAIRED.max_lines: never enumerated)
         for q in hit:
@@ -532,6 +543,23 @@ def split_paired_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> Non
         near_b = t > 0.5 * float(np.linalg.norm(xb - xa))
         topo.split_region(r, [e for e, mk in zip(inc, mask.tolist()) if mk], rid[rest & ~near_b],
                           rid[rest & near_b], seg)
+
+
+def short_branches(topo: Topology, sc: Scales, incs: list[list[tuple[int, int]]]) -> np.ndarray:
+    """Per branch of ``incs`` (as :func:`branch_lines` orders them): whether its whole chain
+    is shorter than the end portion its line is fitted on (``NODES.fit_span`` spacings at its
+    end plus ``NODES.fit_noise`` times the noise). Such a line runs from this junction into the
+    next one (a street grid's short link, 4 h between two crossings): its direction is bent by
+    the turn there and tells no crossing angle.
+
+    Returns
+    -------
+    (n_branches,) ndarray of bool
+    """
+    P, h = topo.P, sc.h
+    ends = [topo.end_ids(i, s) for inc in incs for i, s in inc]
+    span = np.array([NODES.fit_span * h[e[-1]] for e in ends]) + NODES.fit_noise * float(sc.noise)
+    return np.array([polylen(P[e]) for e in ends]) < span
 
 
 def region_stats(P: np.ndarray, h: np.ndarray, rids: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
