@@ -764,3 +764,17 @@ def test_a_short_link_tells_no_crossing_angle(monkeypatch):
     monkeypatch.setattr(paired, "short_branches", lambda topo, sc, incs: np.zeros(sum(map(len, incs)), dtype=bool))
     before = compare(reconstruct(pts, method="robust"), truth, h=h)
     assert before["curve_f1"] < 0.7, before["curve_f1"]
+
+
+def test_a_tooth_wholly_inside_a_region_is_a_free_branch(monkeypatch):
+    """A comb drawn at random (synth.families, member 11) at noise 0.2 h: teeth of 8 h, 4 h
+    apart, lie wholly inside the widened shell of the spine's region. No chain runs along such
+    a tooth, so its junction showed two branches and was merged away. A leaf branch of the
+    region's pruned tree made of region points only (:func:`.spanning._free_arms`) is a branch
+    of its junction and a chain to a new free end: curve F1 1.000, 0.615 without."""
+    from curvenet.methods.robust import spanning
+
+    assert _member_score("comb", 11, "noise 0.2h")["curve_f1"] >= 0.95
+    monkeypatch.setattr(spanning, "_free_arms", lambda *a: [])
+    assert _member_score("comb", 11, "noise 0.2h")["curve_f1"] < 0.7
+

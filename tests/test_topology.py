@@ -206,6 +206,20 @@ def test_join_regions_adds_a_chain_between_two_regions(t_shape):
     topo.check()
 
 
+def test_free_branch_adds_a_chain_to_a_new_free_end(t_shape):
+    # a free branch that lay inside the junction's region (a comb's tooth under noise): one
+    # point beside the junction, split out as a chain to a new empty free-end region
+    topo = t_shape
+    topo.P = np.r_[topo.P, [[-1.0, -1.0]]]
+    n = len(topo.regions)
+    j = topo.free_branch(J, np.array([13], dtype=np.int64))
+    assert j == 3 and topo.chains[j].ends == [J, n] and topo.alive[j]
+    assert len(topo.regions) == n + 1 and len(topo.regions[n]) == 0
+    assert topo.v[J] == 4 and topo.v[n] == 1
+    assert topo.v.tolist() == topo.valence().tolist()
+    topo.check()
+
+
 def test_split_chain_takes_the_free_ends_region_points_along():
     topo = _bar_and_stem()
     topo.chains[1].ids = _ids(9, 12)  # the tip point (0, -2) is the stem's free-end region

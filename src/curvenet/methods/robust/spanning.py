@@ -68,6 +68,7 @@ from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_ea
 from .params import RobustParams, Scales
 from .thresholds import BRANCHED, NODES, PAIRED, SPANNING
 from .topology import Topology
+from .unexplained import twig_reach
 
 __all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut",
            "loop_closures", "tree_cores", "core_order"]
@@ -89,12 +90,16 @@ class Plan(NamedTuple):
     joins : list of (int, int, ndarray), optional
         The chains that close cycles of the cores (a cell of the network inside the region):
         its two cores and its points, ordered from the first; made after the steps (none by default).
+    free : list of (int, ndarray), optional
+        The free branches wholly inside the region (:func:`_free_arms`): its core and its
+        points, ordered from the core outwards; each becomes a chain to a new free end.
     """
 
     ends: dict
     steps: list
     centres: dict
     joins: list | tuple = ()
+    free: list | tuple = ()
 
 
 def pruned_tree(X: np.ndarray, cut: float, keep: np.ndarray | None = None) -> list[set]:
@@ -366,7 +371,8 @@ def region_points_each(P: np.ndarray, tree, hls: np.ndarray, regions: list, end_
 
 def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray, ends: list,
                end_points: np.ndarray, min_cores: int = SPANNING.min_cores,
-               near_tree: tuple[np.ndarray, list[set]] | None = None, chain_ids: dict | None = None) -> Plan | None:
+               near_tree: tuple[np.ndarray, list[set]] | None = None, chain_ids: dict | None = None,
+               free_len: float = np.inf) -> Plan | None:
     """How the region of points ``ids`` splits into a row of junctions (None: it does not).
 
     Parameters
@@ -419,6 +425,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     ea, eb = _tree_edges(adj)
     lab = _labels(X, ea, eb, {v: k for k, mem in enumerate(cores) for v in mem})
     at = np.searchsorted(near, end_points)
+    arms = _free_arms(X, adj, inside, free_len, hl)
     live = list(range(len(cores)))
     while True:  # cores of valence under 3 merged into their nearest neighbour
         nbr = {k: set() for k in live}
@@ -429,7 +436,8 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         own = np.array([lab[j] if lab[j] >= 0 else
                         live[int(np.argmin(np.linalg.norm(centre[live] - P[e], axis=1)))]
                         for j, e in zip(at.tolist(), end_points.tolist())], dtype=np.int64)
-        val = {k: int(np.sum(own == k)) + len(nbr[k]) for k in live}
+        arm_of = np.array([lab[arm[0]] for arm in arms], dtype=np.int64)
+        val = {k: int(np.sum(own == k)) + len(nbr[k]) + int(np.sum(arm_of == k)) for k in live}
         if len(live) < min_cores:
             break
         weak = [k for k in live if val[k] < NODES.junction_valence and nbr[k]]
@@ -477,6 +485,9 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     if len(lost):
         owner[lost] = np.array(live)[np.argmin(np.linalg.norm(P[ids[lost]][:, None] - C[None], axis=2), axis=1)]
     region = ids
+    free = [(int(lab[arm[0]]), near[np.asarray(arm[1:])]) for arm in arms]
+    if free:
+        region = region[~np.isin(region, np.concatenate([a for _, a in free]))]
     # the chains that close cycles of the cores (a cell of the network inside the region, its
     # sides found again by loop_closures) first: their points are no core's
     ring = []
@@ -508,7 +519,32 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
         region = region[~np.isin(region, np.r_[new_ids, seg])]
         left.discard(leaf)
     return Plan({k: [e for e, o in zip(ends, own.tolist()) if o == k] for k in live}, steps,
-                {k: X[cores[k][0]] for k in live}, ring)
+                {k: X[cores[k][0]] for k in live}, ring, free)
+
+
+def _free_arms(X: np.ndarray, adj: list, inside: np.ndarray, free_len: float, hl: float) -> list[list[int]]:
+    """The free branches of the pruned tree ``adj`` that run wholly inside the region: leaf
+    branches (from a leaf to the first vertex of three or more edges) whose vertices are all
+    region points (``inside``), no chain beyond them, at least ``free_len`` long (absolute) and
+    holding at least ``BRANCHED.free_fill`` samples per spacing ``hl`` of that length (as
+    :func:`.branched._free_branch` reads a chain's branch): a comb's tooth shorter than the
+    widened shell, its tip a free end no chain reaches. Each as vertex positions, the branch
+    vertex first, then the branch ordered outwards."""
+    out = []
+    for v in range(len(X)):
+        if len(adj[v]) != 1 or not inside[v]:
+            continue
+        path, prev, u = [v], v, next(iter(adj[v]))
+        while len(adj[u]) == 2 and inside[u]:
+            path.append(u)
+            prev, u = u, next(w for w in adj[u] if w != prev)
+        if len(adj[u]) < NODES.junction_valence or not inside[u]:
+            continue
+        arm = [u] + path[::-1]
+        length = float(np.linalg.norm(np.diff(X[arm], axis=0), axis=1).sum())
+        if length >= free_len and len(path) >= BRANCHED.free_fill * length / hl:
+            out.append(arm)
+    return out
 
 
 def _block_of_cells(joins: list) -> bool:
@@ -681,7 +717,9 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
     its ends goes to its core, so the junctions joined by it and by the tree form a cycle (such
     regions were left whole: ladder, outline and street kinds under noise, 11 runs better, 4
     worse by 0.01-0.02 of the 832-run harness, +2.98; CASSIE 2 better). The regions are planned
-    first, then split in region order (a split leaves the other regions as they are). ``only``:
+    first, then split in region order (a split leaves the other regions as they are). A free
+    branch wholly inside the region (:func:`_free_arms`: a comb's tooth shorter than the widened
+    shell) counts as a branch of its junction and becomes a chain to a new free end. ``only``:
     the regions to read (default: all); :func:`.branched.split_branched_chains` reads again
     those its split chains reached (a rail's region, joined to the rungs that a chain ran past
     only then).
@@ -715,12 +753,15 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
     trees = pruned_trees([topo.P[near] for near in nears], cuts, [None] * len(read),
                          closes=[(float(hl), sc.noise) for hl in hls])
     plans = []
-    for j, ep, near, adj in zip(read, end_points, nears, trees):
+    for j, ep, near, adj, hl in zip(read, end_points, nears, trees, hls):
         r, inc = cand[j], incs[j]
         ids = topo.regions[r]
         L = Lines(*(a[off[j]:off[j + 1]] for a in L_all))
+        free_len = prm.min_spur * float(hl)
+        if not sc.clean:
+            free_len = min(free_len, twig_reach(prm.min_spur, float(hl), sc.noise))
         plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), ep, min_cores, (near, adj),
-                          {i: topo.chains[i].ids for i, _ in inc})
+                          {i: topo.chains[i].ids for i, _ in inc}, free_len)
         if plan is None:
             continue
         if len(plan.ends) == 2 and not _branches_apart(L, list(inc), plan):  # converging curves
@@ -731,6 +772,8 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
     for r, plan in plans:
         ends = {k: list(v) for k, v in plan.ends.items()}
         ring = np.concatenate([seg for _, _, seg in plan.joins]) if plan.joins else np.zeros(0, dtype=np.int64)
+        if plan.free:
+            ring = np.r_[ring, np.concatenate([a for _, a in plan.free])]
         if len(ring):
             topo.regions[r] = topo.regions[r][~np.isin(topo.regions[r], ring)]
         where = {}
@@ -741,3 +784,5 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
             ends[to].append((len(topo.chains) - 1, 0))  # the new chain's end at the rest
         for u, w, seg in plan.joins:
             topo.join_regions(where.get(u, r), where.get(w, r), seg)
+        for k, arm in plan.free:
+            topo.free_branch(where.get(k, r), arm)

@@ -340,6 +340,21 @@ class Topology:
         self._changed()
         return j
 
+    def free_branch(self, r: int, ids: np.ndarray) -> int:
+        """A new chain of the points ``ids`` (ordered from region ``r`` outwards, n >= 1, none of
+        them a region's) from ``r`` to a new empty free-end region (a free branch that lay
+        inside the region).
+
+        Returns
+        -------
+        int
+            The new chain.
+        """
+        self.regions.append(np.zeros(0, dtype=np.int64))
+        self._ends_at.append([])
+        self.v = np.r_[self.v, 0]
+        return self.join_regions(r, len(self.regions) - 1, ids)
+
     def branch_chain(self, i: int, core: np.ndarray, arms: list[np.ndarray], far: list[int]) -> int:
         """Open chain ``i`` branches at a junction: it dies, the points ``core`` become a new
         region, and each branch of ``arms`` (ids ordered from the junction outwards) a chain
