@@ -401,6 +401,9 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     chain_ids : dict of int to ndarray, optional
         The samples of each chain of ``ends`` (:func:`_twin_of_chain`: a cycle of junctions
         closed by a chain already gets no new chain beside it).
+    free_len : float
+        The least length (absolute) of a free branch wholly inside the region
+        (:func:`_free_arms`; infinite: none is read).
 
     Returns
     -------
@@ -523,7 +526,8 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
 
 
 def _free_arms(X: np.ndarray, adj: list, inside: np.ndarray, free_len: float, hl: float) -> list[list[int]]:
-    """The free branches of the pruned tree ``adj`` that run wholly inside the region: leaf
+    """The free branches of the pruned tree ``adj`` (adjacency sets over the points ``X``,
+    (n, d); ``inside``: (n,) bool, the region's points) that run wholly inside the region: leaf
     branches (from a leaf to the first vertex of three or more edges) whose vertices are all
     region points (``inside``), no chain beyond them, at least ``free_len`` long (absolute) and
     holding at least ``BRANCHED.free_fill`` samples per spacing ``hl`` of that length (as
