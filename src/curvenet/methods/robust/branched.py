@@ -62,7 +62,7 @@ from .params import RobustParams, Scales
 from .spanning import core_order, prune_cut, pruned_tree, pruned_trees, split_multiple_junctions, tree_cores
 from .thresholds import BRANCHED, LINKS, NODES, UNEXPLAINED
 from .topology import Topology
-from .unexplained import leaves, twig_reach
+from .unexplained import free_reach, leaves, twig_reach
 
 __all__ = ["split_branched_chains", "branch_plan", "orphan_twigs"]
 
@@ -592,20 +592,16 @@ def _free_branch(X: np.ndarray, core: list[int], arm: list[int], arms: list[list
                  prm: RobustParams, noise: float = 0.0) -> bool:
     """Whether the branch ``arm`` (positions in ``X``, ordered outwards from the junction
     ``core``; one of its branches ``arms``) that reaches no region is a free branch all the
-    same: its polyline from the core's centroid is at least ``min_spur`` spacings ``hl`` long
-    (on noisy input, ``noise`` > 0, at least as long as stage 9's twig,
-    :func:`.unexplained.twig_reach`, where that is shorter: the same curve under the same noise
-    is a twig there), it holds at least ``BRANCHED.free_fill`` samples per spacing of that
+    same: its polyline from the core's centroid is at least :func:`.unexplained.free_reach`
+    long (``min_spur`` spacings ``hl``; on noisy input, ``noise`` > 0, as stage 9's twig where
+    that is shorter), it holds at least ``BRANCHED.free_fill`` samples per spacing of that
     length, and every branch of the junction holds ``BRANCHED.free_arm_points`` samples or more
     (see :class:`.thresholds.Branched`)."""
     if min(len(a) for a in arms) < BRANCHED.free_arm_points:
         return False
     pts = np.r_[X[np.asarray(core)].mean(axis=0)[None], X[np.asarray(arm)]]
     length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
-    need = prm.min_spur * hl
-    if noise > 0:
-        need = min(need, twig_reach(prm.min_spur, hl, noise))
-    return length >= need and len(arm) >= BRANCHED.free_fill * length / hl
+    return length >= free_reach(prm.min_spur, hl, noise) and len(arm) >= BRANCHED.free_fill * length / hl
 
 
 def _branch_end(topo: Topology, sc: Scales, c, arm: list[int], hl: float, linked_region) -> int:

@@ -61,14 +61,14 @@ from typing import NamedTuple
 import numpy as np
 
 from ..emst import emst_edges_each
-from .chains import group_medians, points_apart
+from .chains import group_medians, points_apart, polylen
 from .graph import components
 from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_each, region_stats, straight_pairs,
                      towards_tips)
 from .params import RobustParams, Scales
 from .thresholds import BRANCHED, NODES, PAIRED, SPANNING
 from .topology import Topology
-from .unexplained import twig_reach
+from .unexplained import free_reach
 
 __all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut",
            "loop_closures", "tree_cores", "core_order"]
@@ -545,7 +545,7 @@ def _free_arms(X: np.ndarray, adj: list, inside: np.ndarray, free_len: float, hl
         if len(adj[u]) < NODES.junction_valence or not inside[u]:
             continue
         arm = [u] + path[::-1]
-        length = float(np.linalg.norm(np.diff(X[arm], axis=0), axis=1).sum())
+        length = polylen(X[arm])
         if length >= free_len and len(path) >= BRANCHED.free_fill * length / hl:
             out.append(arm)
     return out
@@ -761,9 +761,7 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
         r, inc = cand[j], incs[j]
         ids = topo.regions[r]
         L = Lines(*(a[off[j]:off[j + 1]] for a in L_all))
-        free_len = prm.min_spur * float(hl)
-        if not sc.clean:
-            free_len = min(free_len, twig_reach(prm.min_spur, float(hl), sc.noise))
+        free_len = free_reach(prm.min_spur, float(hl), 0.0 if sc.clean else sc.noise)
         plan = split_plan(topo.P, sc.tree, sc.h, sc.noise, ids, list(inc), ep, min_cores, (near, adj),
                           {i: topo.chains[i].ids for i, _ in inc}, free_len)
         if plan is None:

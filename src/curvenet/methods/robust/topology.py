@@ -350,10 +350,14 @@ class Topology:
         int
             The new chain.
         """
+        return self.join_regions(r, self._free_end_region(), ids)
+
+    def _free_end_region(self) -> int:
+        """A new empty free-end region, no chain end at it yet; its index."""
         self.regions.append(np.zeros(0, dtype=np.int64))
         self._ends_at.append([])
         self.v = np.r_[self.v, 0]
-        return self.join_regions(r, len(self.regions) - 1, ids)
+        return len(self.regions) - 1
 
     def branch_chain(self, i: int, core: np.ndarray, arms: list[np.ndarray], far: list[int]) -> int:
         """Open chain ``i`` branches at a junction: it dies, the points ``core`` become a new
@@ -385,10 +389,7 @@ class Topology:
         for ids, a, f in pieces:
             na = first + a
             if f == -1:
-                self.regions.append(np.zeros(0, dtype=np.int64))
-                ea.append([])
-                self.v = np.r_[self.v, 0]
-                f = len(self.regions) - 1
+                f = self._free_end_region()
             elif f < -1:
                 f = first + (-f - 2)
             self.join_regions(na, f, ids)

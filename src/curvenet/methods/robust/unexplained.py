@@ -70,6 +70,15 @@ def twig_reach(min_spur: float, h, noise: float):
     return (min_spur - UNEXPLAINED.tip_short) * h + UNEXPLAINED.length_noise * noise
 
 
+def free_reach(min_spur: float, h, noise: float):
+    """The least length of a free branch read where no shell saw its end (a chain's branch,
+    :func:`.branched._free_branch`; a branch wholly inside a region, :func:`.spanning._free_arms`):
+    ``min_spur`` spacings ``h``; on noisy input (``noise`` > 0) as long as stage 9's twig
+    (:func:`twig_reach`) where that is shorter: the same curve under the same noise is a twig there."""
+    need = min_spur * h
+    return min(need, twig_reach(min_spur, h, noise)) if noise > 0 else need
+
+
 def explain_band(h, noise: float):
     """How far from every curve a sample is unexplained: ``UNEXPLAINED.explain`` spacings ``h``
     (a float or an array) plus ``UNEXPLAINED.explain_noise`` times the noise (the band in which
