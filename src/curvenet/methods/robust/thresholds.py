@@ -527,9 +527,18 @@ class Chains(NamedTuple):
     #: origin: a rounding guard, not a tuning
     min_edge: float = 1e-12
     #: an end of a chain reads its contacts within ``min(L / 2, end_reach h)`` of it
-    #: (spacings)
-    #: origin: first version (3e727c1); no measurement recorded
-    end_reach: float = 4.0
+    #: (spacings): the default link length (``RobustParams.link``), the farthest a curve's next
+    #: sample is linked; a contact farther along is the chain running past a region, not its end
+    #: origin: benchmark (issue 25, 7 December 2026; ``benchmarks/ab_eval.py``, 1,599 runs, and
+    #: ``benchmarks/family_eval.py``), against 4.0 (first version, 3e727c1, never measured): kinds,
+    #: synthetic and real-dev 16 runs better, 9 worse (kinds at noise 0.2 h mean 0.9465 -> 0.9502,
+    #: ladder s0 0.714 -> 0.828, outline s7 0.940 -> 1.000: an end given to a region the chain
+    #: passes 3-4 h before it, whose contacts outnumbered those of the region at its last
+    #: samples; worse: the eye at noise 0.3 h + x3 s1 0.800 -> 0.182, its valence-4 junction now
+    #: read whole, then split in two by ``split_paired_junctions``), families 7 members better,
+    #: 3 worse, CASSIE 17 better, 16 worse (means within 0.001); 2.0: 23 better, 12 worse; 3.0:
+    #: 9 better, 7 worse
+    end_reach: float = 2.5
     #: a chain of at most this many points with one end only, between two junctions separated
     #: a few spacings apart (``junctions.separate_close_junctions``), takes the other one as its
     #: second end: a segment of a single sample (points)
