@@ -510,14 +510,29 @@ def _hinge_gain(ch: "_Chains", cand: np.ndarray, L: int, sigma: float):
     one = np.ones_like(s)
     rss, coef = [], []
     for A in (np.stack([one, s, s * s], axis=2), np.stack([one, s, np.maximum(s, 0.0)], axis=2)):
-        At = A.transpose(0, 2, 1)
-        cf = np.linalg.solve(At @ A, At @ Y)  # (C, 3, d)
-        r = Y - A @ cf
+        # (einsum's own loops and Cramer's rule, not BLAS and LAPACK: the same bits under every
+        # processor's kernels of OpenBLAS, whose sums round differently)
+        cf = _solve3(np.einsum("cki,ckj->cij", A, A), np.einsum("cki,ckd->cid", A, Y))  # (C, 3, d)
+        r = Y - np.einsum("cki,cid->ckd", A, cf)
         rss.append((r * r).sum(axis=(1, 2)))
         coef.append(cf)
     a, b = coef[1][:, 1], coef[1][:, 1] + coef[1][:, 2]  # the slopes before and after the knot
     turn = (a * b).sum(axis=1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), NUMERIC.tiny)
     return J, (rss[0] - rss[1]) / sigma**2, turn, coef[1][:, 0]
+
+
+def _solve3(M: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """The solutions ``X`` (C, 3, d) of the 3 x 3 systems ``M X = B`` (``M`` (C, 3, 3), ``B``
+    (C, 3, d)) by Cramer's rule: the cofactors of ``M`` over its determinant."""
+    a, b, c = M[:, 0, 0], M[:, 0, 1], M[:, 0, 2]
+    d, e, f = M[:, 1, 0], M[:, 1, 1], M[:, 1, 2]
+    g, h, i = M[:, 2, 0], M[:, 2, 1], M[:, 2, 2]
+    inv = np.empty_like(M)
+    inv[:, 0, 0], inv[:, 0, 1], inv[:, 0, 2] = e * i - f * h, c * h - b * i, b * f - c * e
+    inv[:, 1, 0], inv[:, 1, 1], inv[:, 1, 2] = f * g - d * i, a * i - c * g, c * d - a * f
+    inv[:, 2, 0], inv[:, 2, 1], inv[:, 2, 2] = d * h - e * g, b * g - a * h, a * e - b * d
+    det = a * inv[:, 0, 0] + b * inv[:, 1, 0] + c * inv[:, 2, 0]
+    return np.einsum("cij,cjd->cid", inv, B) / det[:, None, None]
 
 
 def _window_mean(value: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
