@@ -1129,3 +1129,20 @@ def test_strip_edge_over_a_gap_is_kept_and_one_cutting_a_corner_is_not(plain):
             edges = set(zip(src.tolist(), dst.tolist()))
             assert ((3, 4) in edges) == (not (bump and lens)), (bump, lens)
             assert ((4, 3) in edges) == (not (bump and lens)), (bump, lens)
+
+
+def test_the_corner_test_s_3x3_solve_matches_lapack_and_never_raises():
+    import warnings
+
+    from curvenet.methods.robust.curves import _solve3
+
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(50, 9, 3))
+    M = np.einsum("cki,ckj->cij", A, A)  # (normal equations: symmetric, well conditioned)
+    B = rng.normal(size=(50, 3, 2))
+    np.testing.assert_allclose(_solve3(M, B), np.linalg.solve(M, B), rtol=1e-10, atol=1e-12)
+    M[0] = np.outer([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])  # singular: no solution, no error
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        X = _solve3(M, B)
+    assert not np.isfinite(X[0]).all() and np.isfinite(X[1:]).all()

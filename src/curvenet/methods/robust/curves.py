@@ -532,7 +532,8 @@ def _solve3(M: np.ndarray, B: np.ndarray) -> np.ndarray:
     inv[:, 1, 0], inv[:, 1, 1], inv[:, 1, 2] = f * g - d * i, a * i - c * g, c * d - a * f
     inv[:, 2, 0], inv[:, 2, 1], inv[:, 2, 2] = d * h - e * g, b * g - a * h, a * e - b * d
     det = a * inv[:, 0, 0] + b * inv[:, 1, 0] + c * inv[:, 2, 0]
-    return np.einsum("cij,cjd->cid", inv, B) / det[:, None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):  # (a singular system: inf or nan, no corner)
+        return np.einsum("cij,cjd->cid", inv, B) / det[:, None, None]
 
 
 def _window_mean(value: np.ndarray, ch: "_Chains", w: int) -> np.ndarray:
