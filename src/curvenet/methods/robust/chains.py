@@ -268,7 +268,7 @@ def order_chains(P, h, src, dst, dd, chn, n_chn, reg, lin, close=None):
     cb = np.searchsorted(c_chain, np.arange(n_chn + 1))
 
     # compiled: for each chain with contacts, the most frequent region among the contacts
-    # within reach = min(L / 2, 4 h) of each end (h: the chain's median spacing; a chain
+    # within reach = min(L / 2, CHAINS.end_reach h) of each end (h: the chain's median spacing; a chain
     # shorter than 2 reach is split at L / 2); ties: the lowest region id
     ends, touch = _k.chain_ends(np.ascontiguousarray(h, dtype=np.float64), ids_o, par_o, bounds,
                                 c_reg, c_par, cb)
