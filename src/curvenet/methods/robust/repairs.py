@@ -480,9 +480,11 @@ def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
     """
     P, h, regions = topo.P, sc.h, topo.regions
     tchain = [topo.chains[i] for i, _ in tips]
-    tids = [c.ids if s == 1 else c.ids[::-1] for c, (_, s) in zip(tchain, tips)]  # towards the tip
+    past = _tip_reach(sc, prm)
+    tids = [_tip_path(P, h, past, c.ids if s == 1 else c.ids[::-1], regions[c.ends[s]])
+            for c, (_, s) in zip(tchain, tips)]  # towards the tip
     tms = end_counts(P, h, tids, REPAIRS.attach_span).tolist()
-    tpts = [np.r_[regions[c.ends[s]], ids[-1]].astype(np.int64) for c, (_, s), ids in zip(tchain, tips, tids)]
+    tpts = [np.r_[regions[c.ends[s]], c.ids[-1 if s == 1 else 0]].astype(np.int64) for c, (_, s) in zip(tchain, tips)]
     reach_of = REPAIRS.attach * prm.link * h[[int(ids[-1]) for ids in tids]] + LINKS.gap_noise * sc.noise
     # chain points within reach of each tip point (one threaded query of the tree over all
     # points, built for the k-NN query: points of no chain are left out by their owner -1)
@@ -509,6 +511,34 @@ def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
     return _Prefilter(tchain, tms, tpts, toff, qall, qoff, cnt, has_cand)
 
 
+def _tip_reach(sc: Scales, prm: RobustParams) -> float | None:
+    """How far past its chain's last point a free end's region must reach for its far end to be
+    the tip (:func:`_tip_path`): a link, on noise-free input; under noise never (an end region
+    there is the noise's scatter as often as the curve)."""
+    return prm.link if sc.clean else None
+
+
+def _tip_path(P: np.ndarray, h: np.ndarray, past: float | None, ids: np.ndarray, region: np.ndarray) -> np.ndarray:
+    """The way to a free end's tip, as the attach test reads it: the chain's ids ``ids`` (n,)
+    (running towards its end) and, where its end region ``region`` (r,) reaches more than
+    ``past`` spacings (``h`` at the chain's last point) beyond that last point, then the
+    region's points by distance from it (ties: lowest id): its farthest is the tip. On
+    noise-free input the samples of a curve that stops short of another can be flagged as
+    its end region over several spacings (a neurite's stem, a sketched stroke): read from the
+    chain's last point, the curve it stops at may lie over 45 degrees off its direction.
+
+    Returns
+    -------
+    (n,) or (n + r,) ndarray of int64
+    """
+    if past is None or not len(region):
+        return ids
+    d = ((P[region] - P[ids[-1]]) ** 2).sum(axis=1)
+    if d.max() <= (past * h[ids[-1]]) ** 2:
+        return ids
+    return np.r_[ids, region[np.lexsort((region, d))]].astype(np.int64)
+
+
 def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
     """Where tip ``t_`` (end ``s`` of chain ``i``) attaches: ``(point, chain)``, or None.
 
@@ -518,7 +548,7 @@ def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
     P, h = topo.P, sc.h
     c = topo.chains[i]
     r = c.ends[s]
-    ids = c.ids if s == 1 else c.ids[::-1]  # running towards the tip
+    ids = _tip_path(P, h, _tip_reach(sc, prm), c.ids if s == 1 else c.ids[::-1], topo.regions[r])  # towards the tip
     e = int(ids[-1])
     same = c is pre.tchain[t_]
     E = end_portion(P, h, ids, span=REPAIRS.attach_span, m=pre.tms[t_] if same else None)
@@ -534,7 +564,7 @@ def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
         q = pre.qall[pre.qoff[a0]:pre.qoff[a1]]
         tp = np.repeat(pre.tpts[t_], pre.cnt[a0:a1])
     else:  # its chain was split meanwhile: queried again
-        tip_pts = np.r_[topo.regions[r], e].astype(np.int64)
+        tip_pts = np.r_[topo.regions[r], c.ids[-1 if s == 1 else 0]].astype(np.int64)
         near_t = sc.tree.query_ball_point(P[tip_pts], REPAIRS.attach * prm.link * float(h[e]) + LINKS.gap_noise * sc.noise)
         cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
         if not cnt_t.sum():
