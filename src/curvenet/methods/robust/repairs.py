@@ -478,13 +478,10 @@ def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
     changes only the valence-1 ends it involves), and its chain's points unless that chain was
     split meanwhile (then its end is redone in :func:`_attach_target`).
     """
-    P, h, regions = topo.P, sc.h, topo.regions
+    P, h = topo.P, sc.h
     tchain = [topo.chains[i] for i, _ in tips]
-    past = _tip_reach(sc, prm)
-    tids = [_tip_path(P, h, past, c.ids if s == 1 else c.ids[::-1], regions[c.ends[s]])
-            for c, (_, s) in zip(tchain, tips)]  # towards the tip
+    tids, tpts = (list(x) for x in zip(*(_tip(topo, sc, prm, i, s) for i, s in tips)))
     tms = end_counts(P, h, tids, REPAIRS.attach_span).tolist()
-    tpts = [np.r_[regions[c.ends[s]], c.ids[-1 if s == 1 else 0]].astype(np.int64) for c, (_, s) in zip(tchain, tips)]
     reach_of = REPAIRS.attach * prm.link * h[[int(ids[-1]) for ids in tids]] + LINKS.gap_noise * sc.noise
     # chain points within reach of each tip point (one threaded query of the tree over all
     # points, built for the k-NN query: points of no chain are left out by their owner -1)
@@ -509,6 +506,14 @@ def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
                >= (REPAIRS.attach_cos - NUMERIC.rel_loose) * np.sqrt((vq_all * vq_all).sum(axis=1))))
     has_cand = np.bincount(tip_of[cand], minlength=len(tips)) > 0
     return _Prefilter(tchain, tms, tpts, toff, qall, qoff, cnt, has_cand)
+
+
+def _tip(topo: Topology, sc: Scales, prm: RobustParams, i: int, s: int) -> tuple[np.ndarray, np.ndarray]:
+    """Free end ``s`` of chain ``i`` as the attach test reads it: the ids running to its tip
+    (:func:`_tip_path`) and the points whose neighbours are its candidates (its region's and
+    the chain's last point), both (n,) int64."""
+    ids, region = topo.end_ids(i, s), topo.regions[topo.chains[i].ends[s]]
+    return _tip_path(topo.P, sc.h, _tip_reach(sc, prm), ids, region), np.r_[region, ids[-1]].astype(np.int64)
 
 
 def _tip_reach(sc: Scales, prm: RobustParams) -> float | None:
@@ -547,8 +552,7 @@ def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
     """
     P, h = topo.P, sc.h
     c = topo.chains[i]
-    r = c.ends[s]
-    ids = _tip_path(P, h, _tip_reach(sc, prm), c.ids if s == 1 else c.ids[::-1], topo.regions[r])  # towards the tip
+    ids, tip_pts = _tip(topo, sc, prm, i, s)
     e = int(ids[-1])
     same = c is pre.tchain[t_]
     E = end_portion(P, h, ids, span=REPAIRS.attach_span, m=pre.tms[t_] if same else None)
@@ -564,7 +568,6 @@ def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
         q = pre.qall[pre.qoff[a0]:pre.qoff[a1]]
         tp = np.repeat(pre.tpts[t_], pre.cnt[a0:a1])
     else:  # its chain was split meanwhile: queried again
-        tip_pts = np.r_[topo.regions[r], c.ids[-1 if s == 1 else 0]].astype(np.int64)
         near_t = sc.tree.query_ball_point(P[tip_pts], REPAIRS.attach * prm.link * float(h[e]) + LINKS.gap_noise * sc.noise)
         cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
         if not cnt_t.sum():
