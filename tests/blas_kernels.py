@@ -26,3 +26,13 @@ def output_under(core: str, code: str) -> str:
     r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     return r.stdout.strip()
+
+
+def network_digest_code(setup: str, network: str) -> str:
+    """A snippet for :func:`output_under` that prints the SHA-256 of a network's node
+    coordinates and curve points (their float64 bits): ``setup`` (lines ending in a newline)
+    imports what ``network``, an expression, needs (``np`` and ``curvenet`` are imported)."""
+    return ("import hashlib, numpy as np, curvenet\n" + setup + f"n = {network}\n"
+            "d = hashlib.sha256(np.ascontiguousarray(n.nodes).tobytes())\n"
+            "[d.update(np.ascontiguousarray(x.points).tobytes()) for x in n.curves]\n"
+            "print(d.hexdigest())\n")

@@ -5,22 +5,17 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-pytestmark = pytest.mark.skipif(not (BENCH / "ab_eval.py").exists(), reason="benchmarks/ not in this checkout")
+from bench_scripts import BENCH, has, load
+
+pytestmark = pytest.mark.skipif(not has("ab_eval"), reason="benchmarks/ not in this checkout")
 
 
 @pytest.fixture(scope="module")
 def ab_eval():
-    sys.path.insert(0, str(BENCH))
-    try:
-        import ab_eval as mod
-    finally:
-        sys.path.remove(str(BENCH))
-    return mod
+    return load("ab_eval")
 
 
 def test_quick_run_and_compare(tmp_path, ab_eval):

@@ -4,22 +4,17 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-pytestmark = pytest.mark.skipif(not (BENCH / "fork_stress.py").exists(), reason="benchmarks/ not in this checkout")
+from bench_scripts import BENCH, has, load
+
+pytestmark = pytest.mark.skipif(not has("fork_stress"), reason="benchmarks/ not in this checkout")
 
 
 @pytest.fixture(scope="module")
 def fork_stress():
-    sys.path.insert(0, str(BENCH))
-    try:
-        import fork_stress as mod
-    finally:
-        sys.path.remove(str(BENCH))
-    return mod
+    return load("fork_stress")
 
 
 def test_quick_run_counts_every_case(fork_stress):

@@ -9,9 +9,7 @@ seconds) and its PNGs are read back with matplotlib.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +18,8 @@ import pytest
 from curvenet.methods.robust import thresholds
 from curvenet.methods.robust.params import RobustParams
 from curvenet.methods.robust.repairs import ORDER
+
+from bench_scripts import load
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "benchmarks" / "method_figures.py"
@@ -31,14 +31,7 @@ pytestmark = pytest.mark.skipif(not SCRIPT.exists(), reason="benchmarks/method_f
 
 
 def _load():
-    name = "curvenet_method_figures"
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod  # (its dataclasses look their module up there)
-    spec.loader.exec_module(mod)
-    return mod
+    return load("method_figures")
 
 
 def _groups() -> dict[str, tuple]:

@@ -14,7 +14,7 @@ from curvenet.methods.robust.thresholds import ENDS, LINALG, NODES, NUMERIC, SHE
 from curvenet import synth
 from curvenet.neighbors import build_tree, knn
 
-from blas_kernels import has_avx512, output_under
+from blas_kernels import has_avx512, network_digest_code, output_under
 
 
 def _plain(name):
@@ -1005,13 +1005,9 @@ def test_noisy_network_does_not_depend_on_openblas_s_processor_kernels():
     # the curve fit's banded Cholesky and sparse LU (LAPACK, SuperLU) gave other last bits
     # with OpenBLAS's AVX-512 kernels (12 of the 20 CI digest runs differed between its Haswell
     # and SkylakeX kernels): the same network to the bit under both
-    code = ("import hashlib, numpy as np, curvenet\n"
-            "from curvenet import synth\n"
-            "pts, _ = synth.sample(synth.model('wheel'), noise=0.2, rng=11)\n"
-            "c = curvenet.reconstruct(pts).canonical()\n"
-            "d = hashlib.sha256(np.ascontiguousarray(c.nodes).tobytes())\n"
-            "[d.update(np.ascontiguousarray(x.points).tobytes()) for x in c.curves]\n"
-            "print(d.hexdigest())\n")
+    code = network_digest_code("from curvenet import synth\n"
+                               "pts, _ = synth.sample(synth.model('wheel'), noise=0.2, rng=11)\n",
+                               "curvenet.reconstruct(pts).canonical()")
     assert output_under("Haswell", code) == output_under("SkylakeX", code)
 
 
@@ -1020,15 +1016,11 @@ def test_corner_fit_does_not_depend_on_openblas_s_processor_kernels():
     # the fit's corner test (curves._hinge_gain) solved its 3 x 3 least squares by matmul and
     # LAPACK: under OpenBLAS's Haswell kernels the knots' last bits differed, and so did the
     # corners model's fitted curves at noise 0.3 h + x3, sampling 2 (one of the CI digest runs)
-    code = ("import hashlib, numpy as np, curvenet\n"
-            "from curvenet import synth\n"
-            "from curvenet.bench import CONDITIONS, run_seed\n"
-            "c = 'noise 0.3h + density x3'\n"
-            "pts, _ = synth.sample(synth.model('corners'), rng=run_seed('corners', c) + 2, **CONDITIONS[c])\n"
-            "n = curvenet.reconstruct(pts)\n"
-            "d = hashlib.sha256(np.ascontiguousarray(n.nodes).tobytes())\n"
-            "[d.update(np.ascontiguousarray(x.points).tobytes()) for x in n.curves]\n"
-            "print(d.hexdigest())\n")
+    code = network_digest_code("from curvenet import synth\n"
+                               "from curvenet.bench import CONDITIONS, run_seed\n"
+                               "c = 'noise 0.3h + density x3'\n"
+                               "pts, _ = synth.sample(synth.model('corners'), rng=run_seed('corners', c) + 2, **CONDITIONS[c])\n",
+                               "curvenet.reconstruct(pts)")
     assert output_under("Haswell", code) == output_under("SkylakeX", code)
 
 
