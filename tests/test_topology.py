@@ -220,6 +220,21 @@ def test_free_branch_adds_a_chain_to_a_new_free_end(t_shape):
     topo.check()
 
 
+def test_extend_end_takes_region_points_onto_the_chain(t_shape):
+    # the up chain read short of its junction: two region points between it and the junction
+    # join it at its start (ordered from its end into the region), the region keeps the rest
+    topo = t_shape
+    topo.P = np.r_[topo.P, [[0.0, 0.7], [0.0, 0.4]]]
+    topo.regions[J] = np.array([0, 14, 13], dtype=np.int64)
+    topo.extend_end(UP, 0, np.array([13, 14], dtype=np.int64))
+    assert topo.chains[UP].ids.tolist() == [14, 13, 9, 10, 11, 12]
+    assert topo.regions[J].tolist() == [0]
+    assert topo.v[J] == 3 and topo.chains[UP].ends == [J, topo.chains[UP].ends[1]]
+    topo.extend_end(RIGHT, 1, np.zeros(0, dtype=np.int64))  # (nothing to take: unchanged)
+    assert topo.chains[RIGHT].ids.tolist() == [5, 6, 7, 8]
+    topo.check()
+
+
 def test_split_chain_takes_the_free_ends_region_points_along():
     topo = _bar_and_stem()
     topo.chains[1].ids = _ids(9, 12)  # the tip point (0, -2) is the stem's free-end region

@@ -21,6 +21,7 @@ from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
 from .spanning import split_multiple_junctions
+from .endtrees import read_end_junctions
 from .branched import split_branched_chains, split_tails
 from .params import RobustParams, Scales
 from .thresholds import LINKS, NODES, NUMERIC, REPAIRS, SHELL, UNEXPLAINED
@@ -886,6 +887,7 @@ ORDER = (
     merge_near_pass_through,
     absorb_short_loops,
     absorb_orphans,
+    read_end_junctions,  # (after the orphans: a twig's tip can be one)
     tips_to_junctions,
     join_facing_tips,
     attach_dangling,

@@ -161,6 +161,17 @@ class Topology:
         self.regions[r] = np.r_[self.regions[r], moved].astype(np.int64)
         self._changed()
 
+    def extend_end(self, i: int, s: int, ids: np.ndarray) -> None:
+        """The points ``ids`` of the region at end ``s`` of chain ``i`` (ordered from that end
+        outwards, into the region) join the chain at that end; the chain's end stays at the
+        region (a chain end read short of its junction)."""
+        c = self.chains[i]
+        ids = np.asarray(ids, dtype=np.int64)
+        c.ids = np.r_[c.ids, ids] if s == 1 else np.r_[ids[::-1], c.ids]
+        r = c.ends[s]
+        self.regions[r] = self.regions[r][~np.isin(self.regions[r], ids)]
+        self._changed()
+
     def drop(self, i: int) -> None:
         """Chain ``i`` dies (its ends leave the valence of their regions)."""
         c = self.chains[i]
