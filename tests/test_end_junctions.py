@@ -40,6 +40,17 @@ def test_twigs_inside_a_free_end_region_are_read(monkeypatch):
     assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] < 0.75
 
 
+def test_a_junction_on_a_chain_traced_through_it(monkeypatch):
+    # sampling 3: a chain traced through the junction and on in and out of two twigs (its end
+    # region the longer twig's outer samples): the junction lies on the chain; 0.884 (41 of 46
+    # nodes) read there, 0.833 (39) with the junction looked for among the region's points only
+    pts, truth = _sampled("twigs", "noise 0.2h", 3)
+    h = synth.h_of(truth)
+    assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] >= 0.88
+    monkeypatch.setattr(endtrees, "_core_points", lambda topo, r, inc: topo.regions[r])
+    assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] < 0.85
+
+
 def test_noise_free_input_is_not_read(monkeypatch):
     # on clean input the twigs kind is exact with or without the reading (it read the ends of
     # clean twigs as junctions: 8 of 8 samplings 46 -> 44 nodes when it ran there)

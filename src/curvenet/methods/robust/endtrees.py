@@ -8,14 +8,15 @@ as a pass (valence 2): the junction and its twigs vanish, the chain runs on alon
 
 The pruned spanning tree of the region's points (:func:`.spanning.pruned_trees`, as
 :func:`.spanning.split_plan` builds it for a row of junctions) shows such a junction: one core
-(:func:`.spanning.tree_cores`) with three or more branches. :func:`read_end_junctions` reads
-every region of valence ``ENDTREES.min_valence`` to ``ENDTREES.max_valence`` that way, under
-noise only. A branch that holds a chain's end is that chain's; a chain that enters by one
-branch and ends in another ran past the core along a twig, and its points past the core go
-back to the region. A branch no chain holds
-is a free arm when its path from the core out to its farthest vertex runs through region points
-only, at least :func:`.unexplained.free_reach` long, filled as :func:`.spanning._free_arms`
-asks (``BRANCHED.free_fill`` samples per spacing, the core's counted), its tip off the other
+(:func:`.spanning.tree_cores`) with three or more branches, on the region's points or on a
+chain ending there (a chain traced through the junction and on along a twig).
+:func:`read_end_junctions` reads every region of valence ``ENDTREES.min_valence`` to
+``ENDTREES.max_valence`` that way, under noise only. A branch that holds a chain's end is that
+chain's; a chain that enters by one branch and ends in another ran past the core along a twig
+(under noise, in and out of two twigs), and its points after the last of its own branch go back
+to the region. A branch no chain holds is a free arm when its path from the core out to its
+farthest vertex runs through region points only, at least :func:`.unexplained.free_reach` long,
+filled as :func:`.spanning._free_arms` asks (``BRANCHED.free_fill`` samples per spacing, the core's counted), its tip off the other
 branches (:func:`.unexplained.leaves`: not a bend of one curve) and not a fold: holding at most
 ``ENDTREES.fold`` times the samples per length of the densest other branch (a curve that runs
 out and straight back along itself, a spike of a neuron tracing, holds about twice). When the
@@ -93,6 +94,12 @@ def _arm_path(X: np.ndarray, adj: list[set], lab: np.ndarray, b: int) -> list[in
     return path[::-1]
 
 
+def _core_points(topo: Topology, r: int, inc: list) -> np.ndarray:
+    """The points the junction of region ``r`` may lie on: the region's and those of the chains
+    ending there (``inc``; a chain traced through the junction and on along a twig holds it)."""
+    return np.concatenate([topo.regions[r]] + [topo.chains[i].ids for i, _ in inc])
+
+
 def _fill(X: np.ndarray, Y: np.ndarray, band: float) -> float:
     """The points of ``X`` (n, d) within ``band`` of the polyline ``Y`` (m, d), m >= 2, per
     unit of its length."""
@@ -136,7 +143,7 @@ def _read(topo: Topology, r: int, inc: list, near: np.ndarray, adj: list[set], h
     X = topo.P[near]
     ids = topo.regions[r]
     inside = np.isin(near, ids)
-    cores = tree_cores(X, adj, inside, hl, noise, 1)
+    cores = tree_cores(X, adj, np.isin(near, _core_points(topo, r, inc)), hl, noise, 1)
     if len(cores) != 1:
         return
     lab = core_branches(adj, cores[0])
@@ -153,7 +160,7 @@ def _read(topo: Topology, r: int, inc: list, near: np.ndarray, adj: list[set], h
             return
         own = seen[-1][1]  # the branch the chain enters by
         owned.add(own)
-        past = next(k for k, b in enumerate(bl) if b == own or b == -1)  # its points beyond the core
+        past = next(k for k, b in enumerate(bl) if b == own)  # its points beyond its own branch
         if any(b >= 0 for b in bl[:past]):  # (in another branch: it ran on along that one)
             trims.append((i, s, past))
         else:
