@@ -102,3 +102,30 @@ def test_the_neurites_kind_under_noise_gains(monkeypatch, offset):
     assert got["curve_f1"] >= without["curve_f1"] + 0.02, (got["curve_f1"], without["curve_f1"])
     # the stage moves no node; the samples it takes are no longer read as unexplained branches
     assert got["n_nodes_found"] <= without["n_nodes_found"]
+
+
+def test_the_paths_of_many_ends_at_one_node_list_no_pair_of_two_ends(monkeypatch):
+    # 20 curve ends at one node share the same 100 samples: the pairs within a step are listed
+    # per end (20 x 4,950), not across the ends (20 x 100 samples as one cloud: about 2 million,
+    # growing as the square of the ends; 3,000 points of a hub once needed over 12 GB)
+    rng = np.random.default_rng(0)
+    P = np.r_[np.zeros((1, 2)), rng.uniform(0.0, 1.0, (100, 2))]
+    h = np.ones(len(P))
+    blob = np.arange(1, len(P), dtype=np.int64)
+    n_ends = 20
+    listed = []
+    build = walkins.build_tree
+
+    class Counting:
+        def __init__(self, X):
+            self.tree = build(X)
+
+        def query_pairs(self, r, output_type):
+            out = self.tree.query_pairs(r, output_type=output_type)
+            listed.append(len(out))
+            return out
+
+    monkeypatch.setattr(walkins, "build_tree", Counting)
+    paths = walkins._paths(P, h, 2.0, np.zeros(n_ends, dtype=np.int64), [blob] * n_ends, np.full(n_ends, 1))
+    assert listed == [n_ends * len(blob) * (len(blob) + 1) // 2]  # (each end's source and samples)
+    assert all(p is not None and p[-1] == 1 for p in paths)
