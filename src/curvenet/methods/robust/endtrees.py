@@ -129,8 +129,10 @@ def read_end_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     regions = [topo.regions[r] for r in cand]
     hls = np.array([float(np.median(sc.h[ids])) for ids in regions])
     nears = region_points_each(topo.P, sc.tree, hls, regions, end_points)
+    # (trees: no cycle closed, as split_plan closes a row's cells; one junction's branches are
+    # told apart by the tree)
     trees = pruned_trees([topo.P[near] for near in nears], [prune_cut(float(hl), sc.noise) for hl in hls],
-                         [None] * len(cand), closes=[(float(hl), sc.noise) for hl in hls])
+                         [None] * len(cand))
     noise = 0.0 if sc.clean else sc.noise
     for r, inc, near, adj, hl in zip(cand, incs, nears, trees, hls):
         _read(topo, r, inc, near, adj, float(hl), sc.noise, free_reach(prm.min_spur, float(hl), noise))
