@@ -8,6 +8,7 @@ import pytest
 
 import curvenet
 from curvenet import synth
+from curvenet.methods.robust import endtrees
 from curvenet.methods.robust import excursions as EXC
 from curvenet.methods.robust.excursions import split_excursions
 from curvenet.methods.robust.thresholds import EXCURSION
@@ -86,17 +87,24 @@ def test_the_twigs_kind_clean_needs_the_stage(monkeypatch):
     assert np.array_equal(again.nodes, net.nodes) and len(again.curves) == len(net.curves)
 
 
+def _twigs_f1(noise):
+    m = synth.model("twigs")
+    return [compare(curvenet.reconstruct(synth.sample(m, rng=seed, noise=noise)[0]), m,
+                    h=m.parameters["h"])["curve_f1"] for seed in range(3)]
+
+
 @pytest.mark.parametrize("noise", [0.1, 0.2])
 def test_the_twigs_kind_under_noise_gains_twigs(noise, monkeypatch):
-    m = synth.model("twigs")
-    h = m.parameters["h"]
-    f = []
-    for seed in range(3):
-        P, _ = synth.sample(m, rng=seed, noise=noise)
-        f.append(compare(curvenet.reconstruct(P), m, h=h)["curve_f1"])
-    monkeypatch.setattr(EXC, "EXCURSION", EXCURSION._replace(turn_cos=-2.0))
-    g = []
-    for seed in range(3):
-        P, _ = synth.sample(m, rng=seed, noise=noise)
-        g.append(compare(curvenet.reconstruct(P), m, h=h)["curve_f1"])
+    # the rule's own gain, measured without stage 6's read_end_junctions (which since 7 December
+    # 2026 recovers some of the same twigs another way): 0.050 at noise 0.1, 0.084 at 0.2
+    with monkeypatch.context() as mp:
+        mp.setattr(endtrees, "_read", lambda *a: None)
+        f = _twigs_f1(noise)
+        mp.setattr(EXC, "EXCURSION", EXCURSION._replace(turn_cos=-2.0))
+        g = _twigs_f1(noise)
     assert np.mean(f) >= np.mean(g) + 0.05
+    # with it: still a gain on every sampling (0.048 and 0.043 in the mean)
+    f = _twigs_f1(noise)
+    monkeypatch.setattr(EXC, "EXCURSION", EXCURSION._replace(turn_cos=-2.0))
+    g = _twigs_f1(noise)
+    assert all(a >= b for a, b in zip(f, g)) and np.mean(f) > np.mean(g)
