@@ -51,6 +51,17 @@ def test_a_junction_on_a_chain_traced_through_it(monkeypatch):
     assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] < 0.85
 
 
+def test_a_sharp_corner_traced_round_its_apex_is_left(monkeypatch):
+    # synthetic corners at noise 0.2h, sampling 5, unfitted (the fit hides a wrong branch from
+    # the curve match): a pass whose chain ran round the apex, whose samples hang past the
+    # tree's core like a twig; read as a junction: curve F1 1.000 -> 0.500
+    pts, truth = _sampled("corners", "noise 0.2h", 5)
+    h = synth.h_of(truth)
+    assert compare(reconstruct(pts, method="robust", fit=False), truth, h=h)["curve_f1"] == 1.0
+    monkeypatch.setattr(endtrees, "_corner", lambda trims, inc: False)
+    assert compare(reconstruct(pts, method="robust", fit=False), truth, h=h)["curve_f1"] < 1.0
+
+
 def test_noise_free_input_is_not_read(monkeypatch):
     # on clean input the twigs kind is exact with or without the reading (it read the ends of
     # clean twigs as junctions: 8 of 8 samplings 46 -> 44 nodes when it ran there)

@@ -14,7 +14,7 @@ chain ending there (a chain traced through the junction and on along a twig).
 ``ENDTREES.max_valence`` that way, under noise only. A branch that holds a chain's end is that
 chain's; a chain that enters by one branch and ends in another ran past the core along a twig
 (under noise, in and out of two twigs), and its points after the last of its own branch go back
-to the region. A branch no chain holds is a free arm when its path from the core out to its
+to the region; in a pass that is a sharp corner traced round its apex (:func:`_corner`), left. A branch no chain holds is a free arm when its path from the core out to its
 farthest vertex runs through region points only, at least :func:`.unexplained.free_reach` long,
 filled as :func:`.spanning._free_arms` asks (``BRANCHED.free_fill`` samples per spacing, the core's counted), its tip off the other
 branches (:func:`.unexplained.leaves`: not a bend of one curve) and not a fold: holding at most
@@ -98,6 +98,14 @@ def _core_points(topo: Topology, r: int, inc: list) -> np.ndarray:
     """The points the junction of region ``r`` may lie on: the region's and those of the chains
     ending there (``inc``; a chain traced through the junction and on along a twig holds it)."""
     return np.concatenate([topo.regions[r]] + [topo.chains[i].ids for i, _ in inc])
+
+
+def _corner(trims: list, inc: list) -> bool:
+    """Whether a pass (two chain ends ``inc``) has a chain that ran past the core (``trims``):
+    a sharp corner under noise, traced round its apex, whose apex samples hang past the tree's
+    core like a twig (synthetic corners at noise 0.2 h, sampling 5, read without the fit: curve
+    F1 1.000 -> 0.500); a free end's chain may run on along a twig."""
+    return bool(trims) and len(inc) > 1
 
 
 def _fill(X: np.ndarray, Y: np.ndarray, band: float) -> float:
@@ -191,7 +199,7 @@ def _read(topo: Topology, r: int, inc: list, near: np.ndarray, adj: list[set], h
         if others and _fill(X, X[path], band) > ENDTREES.fold * max(others):  # a fold, not a twig
             continue
         arms.append(near[path])
-    if not arms or len(owned) + len(arms) < NODES.junction_valence:
+    if not arms or len(owned) + len(arms) < NODES.junction_valence or _corner(trims, inc):
         return
     for i, s, k in trims:
         topo.trim_end(i, s, k)
