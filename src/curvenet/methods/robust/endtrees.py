@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .chains import polylen, segment_distance
+from .chains import group_medians, polylen, segment_distance
 from .params import RobustParams, Scales
 from .spanning import prune_cut, pruned_trees, region_points_each, tree_cores
 from .thresholds import BRANCHED, ENDTREES, NODES, NUMERIC
@@ -135,15 +135,14 @@ def read_end_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     incs = [topo.incident(r) for r in cand]
     end_points = [np.array([int(topo.end_ids(i, s)[-1]) for i, s in inc], dtype=np.int64) for inc in incs]
     regions = [topo.regions[r] for r in cand]
-    hls = np.array([float(np.median(sc.h[ids])) for ids in regions])
+    hls = group_medians(sc.h[np.concatenate(regions)], [len(ids) for ids in regions])
     nears = region_points_each(topo.P, sc.tree, hls, regions, end_points)
     # (trees: no cycle closed, as split_plan closes a row's cells; one junction's branches are
     # told apart by the tree)
     trees = pruned_trees([topo.P[near] for near in nears], [prune_cut(float(hl), sc.noise) for hl in hls],
                          [None] * len(cand))
-    noise = 0.0 if sc.clean else sc.noise
     for r, inc, near, adj, hl in zip(cand, incs, nears, trees, hls):
-        _read(topo, r, inc, near, adj, float(hl), sc.noise, free_reach(prm.min_spur, float(hl), noise))
+        _read(topo, r, inc, near, adj, float(hl), sc.noise, free_reach(prm.min_spur, float(hl), sc.noise))
 
 
 def _read(topo: Topology, r: int, inc: list, near: np.ndarray, adj: list[set], hl: float, noise: float,
@@ -175,7 +174,8 @@ def _read(topo: Topology, r: int, inc: list, near: np.ndarray, adj: list[set], h
             trims.append((i, s, past))
         else:
             reach.append((i, s, own))
-    inside = inside.copy()
+    if _corner(trims, inc):
+        return
     for i, s, k in trims:
         inside[[pos[p] for p in topo.end_ids(i, s)[-k:].tolist() if p in pos]] = True
     paths = [_arm_path(X, adj, lab, b) for b in range(n_branch)]
@@ -199,7 +199,7 @@ def _read(topo: Topology, r: int, inc: list, near: np.ndarray, adj: list[set], h
         if others and _fill(X, X[path], band) > ENDTREES.fold * max(others):  # a fold, not a twig
             continue
         arms.append(near[path])
-    if not arms or len(owned) + len(arms) < NODES.junction_valence or _corner(trims, inc):
+    if not arms or len(owned) + len(arms) < NODES.junction_valence:
         return
     for i, s, k in trims:
         topo.trim_end(i, s, k)
