@@ -31,13 +31,14 @@ def _off(topo, r, inc, near, adj, hl, noise, free_len):
 
 def test_twigs_inside_a_free_end_region_are_read(monkeypatch):
     # the twigs kind at noise 0.2h, sampling 7: twigs of 3-6 h whose junction the shell test
-    # read whole with them, as a free end or a pass of the curve they leave; 0.837 with the
-    # reading (42 of 46 nodes), 0.732 without (38)
+    # read whole with them, as a free end or a pass of the curve they leave; 0.907 with the
+    # reading, 0.805 without (0.837 and 0.732 before absorb_orphans left the samples a chain
+    # passes over, 7 December 2026)
     pts, truth = _sampled("twigs", "noise 0.2h", 7)
     h = synth.h_of(truth)
-    assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] >= 0.83
+    assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] >= 0.90
     monkeypatch.setattr(endtrees, "_read", _off)
-    assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] < 0.75
+    assert compare(reconstruct(pts, method="robust"), truth, h=h)["curve_f1"] < 0.85
 
 
 def test_a_junction_on_a_chain_traced_through_it(monkeypatch):

@@ -320,6 +320,42 @@ def test_absorb_orphans_leaves_a_region_a_chain_ended_at():
     _assert_untouched(R.absorb_orphans, topo)
 
 
+def _orphan_on_a_gap(off, noise):
+    """Under noise: a chain along x with a gap of 2 h between x = 2 and x = 4, a clump ``O`` of
+    one point at (3, ``off``) in the gap, and a chain coming down x = 3 to a free end ``T`` at
+    (3, 2), within the tip gap of ``O`` (a twig's free end beside another curve, whose flagged
+    sample the chain along x stepped over)."""
+    net = _Net()
+    T = net.region([[3, 2]])
+    O = net.region([[3, off]])
+    net.chain([[0, 0], [1, 0], [2, 0], [4, 0], [5, 0], [6, 0]])
+    c = net.chain(_line((3, 8), (3, 3), 6), (-1, T))
+    topo = net.topology()
+    assert np.linalg.norm(topo.P[topo.regions[O][0]] - topo.P[topo.regions[T][0]]) < GAP + LINKS.gap_noise * noise
+    return topo, T, O, c
+
+
+def test_absorb_orphans_leaves_a_clump_a_chain_passes_over():
+    noise = 0.2
+    topo, T, O, c = _orphan_on_a_gap(UNEXPLAINED.explain_noise * noise - EPS, noise)
+    _assert_untouched(R.absorb_orphans, topo, noise)
+
+
+def test_absorb_orphans_joins_a_clump_off_the_chain_beside_it():
+    # the same clump beyond the noise band of the chain along x: a lost tip, joined
+    noise = 0.2
+    topo, T, O, c = _orphan_on_a_gap(UNEXPLAINED.explain_noise * noise + EPS, noise)
+    _run(R.absorb_orphans, topo, noise)
+    assert len(topo.regions[O]) == 0 and len(topo.regions[T]) == 2
+
+
+def test_absorb_orphans_joins_a_clump_on_a_chain_on_noise_free_input():
+    # noise-free: the test is off (there it cost the kinds' twigs four nodes)
+    topo, T, O, c = _orphan_on_a_gap(0.0, 0.0)
+    _run(R.absorb_orphans, topo)
+    assert len(topo.regions[O]) == 0 and len(topo.regions[T]) == 2
+
+
 # ------------------------------------------------------------------------------ tips_to_junctions
 def _stem_below_junction(d, region_pts=()):
     """A junction ``J`` at the origin passed by a curve along x (valence 2) and a stem along

@@ -59,7 +59,7 @@ from .chains import segment_distance
 from .curves import renumbered
 from .thresholds import NUMERIC, UNEXPLAINED
 
-__all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back", "explain_band", "leaves"]
+__all__ = ["add_unexplained_branches", "network_distance", "pairs_within", "walk_back", "explain_band", "noise_band", "leaves"]
 
 
 def twig_reach(min_spur: float, h, noise: float):
@@ -79,11 +79,16 @@ def free_reach(min_spur: float, h, noise: float):
     return min(need, twig_reach(min_spur, h, noise)) if noise > 0 else need
 
 
+def noise_band(noise: float) -> float:
+    """The band in which noise scatters a curve's samples about it: ``UNEXPLAINED.explain_noise``
+    times the noise scale ``noise``."""
+    return UNEXPLAINED.explain_noise * noise
+
+
 def explain_band(h, noise: float):
     """How far from every curve a sample is unexplained: ``UNEXPLAINED.explain`` spacings ``h``
-    (a float or an array) plus ``UNEXPLAINED.explain_noise`` times the noise (the band in which
-    noise scatters a curve's samples)."""
-    return UNEXPLAINED.explain * h + UNEXPLAINED.explain_noise * noise
+    (a float or an array) plus the noise band (:func:`noise_band`)."""
+    return UNEXPLAINED.explain * h + noise_band(noise)
 
 
 def leaves(off: float, length: float, h: float, noise: float) -> bool:
