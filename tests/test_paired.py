@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from curvenet import reconstruct, synth
-from curvenet.methods.robust import repairs
+from curvenet.methods.robust import paired, repairs
 from curvenet.methods.robust.chains import Chain
 from curvenet.methods.robust.paired import Lines, best_pair, meeting_point
 from curvenet.methods.robust.topology import Topology
@@ -148,6 +148,43 @@ def test_strokes_crossing_a_curve_loosely_are_one_junction():
     assert best_pair(loose, (A + B) / 2, H) is None
     rungs = _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, [1, 0, 0]), (B, [0, 1, 0])], noise=0.05)
     assert best_pair(rungs, (A + B) / 2, H) is not None
+
+
+def _street_lines():
+    """The lines of a street grid's two junctions 4.6 h apart under noise 0.2 h (the kinds'
+    streets, sampling 0, in h about the region's centroid): a street along x through both (lines
+    0 and 4, tilted 7 and 3 degrees by the noise), a street ending at the left junction from
+    below (1), and one crossing at the right junction (2 from below, 3 from above)."""
+    c = np.array([[-8.3, 0.7], [-2.6, -6.9], [2.0, -6.8], [2.4, 5.7], [8.2, 0.7]])
+    u = np.array([[0.99, 0.13], [0.06, 1.0], [0.04, 1.0], [0.02, -1.0], [-1.0, -0.06]])
+    u = u / np.linalg.norm(u, axis=1)[:, None]
+    pad = np.zeros((5, 1))
+    return Lines(np.hstack([c, pad]), np.hstack([u, pad]), np.hstack([c + 2 * u, pad]), np.full(5, 1.16))
+
+
+def test_a_street_through_two_junctions_passes_through_both_points():
+    # the segment between the two points runs 19 degrees off the mean of the street's halves'
+    # directions (the noise tilts them 7 and 3 degrees), but 13 degrees off the street's line
+    # drawn through its halves' centroids 16 h apart: two junctions (measured on the mean of
+    # the directions, before 7 December 2026, one of valence 5)
+    pair = best_pair(_street_lines(), np.zeros(3), H)
+    assert pair is not None
+    mask, xa, xb = pair
+    assert mask.tolist() in ([True, True, False, False, False], [False, False, True, True, True])
+
+
+def test_a_street_whose_points_lie_off_its_line_is_no_pair(monkeypatch):
+    # the street's halves turned 8 degrees the same way: the two points they give lie on a
+    # segment 21 degrees off the street's line (centroid to centroid, still horizontal): no
+    # curve through both, no pair; without the straight-curve rule the split is taken
+    L = _street_lines()
+    t = np.radians(8.0)
+    u = L.u.copy()
+    u[0], u[4] = [np.cos(t), np.sin(t), 0.0], [-np.cos(t), -np.sin(t), 0.0]
+    L = L._replace(u=u, tip=L.c + 2 * u)
+    assert best_pair(L, np.zeros(3), H) is None
+    monkeypatch.setattr(paired, "straight_pairs", lambda L, ud: np.zeros(L.c.shape[:2] + L.c.shape[1:2], dtype=bool))
+    assert best_pair(L, np.zeros(3), H) is not None
 
 
 def test_jogs_are_two_junctions_on_noise_free_samples_too():

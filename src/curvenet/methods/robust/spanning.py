@@ -696,7 +696,7 @@ def _straight_across(L, ends: list, plan: Plan) -> bool:
     R = Lines(L.c[None], L.u[None], L.tip[None], L.lim[None])
     ud = towards_tips(R)
     straight = straight_pairs(R, ud)[0] & (of[:, None] != of[None, :])
-    along = np.abs(curve_directions(ud)[0] @ e) > PAIRED.parallel_cos
+    along = np.abs(curve_directions(R)[0] @ e) > PAIRED.parallel_cos
     if np.any(straight & ~along):
         return True
     # a straight curve along the segment: the other branches cross it at two places, junctions
