@@ -626,6 +626,20 @@ def test_prune_spurs_drops_a_lone_sample_far_from_the_junction_under_noise():
     assert not topo.alive[spur]
 
 
+def test_prune_spurs_keeps_a_twig_of_two_samples_beyond_its_junction_under_noise():
+    # two samples past the junction's region, reaching min_spur from the node, tip far off the
+    # other branches: with its foot in the junction the three samples stage 9 asks of a branch
+    # (UNEXPLAINED.min_samples); the lone sample above is one short
+    assert UNEXPLAINED.min_samples == 3
+    net = _Net()
+    J = net.region([[0, 0]])
+    for end in ((-6, 0), (6, 0), (0, -6)):
+        net.chain(_line(np.sign(end), end, 6), (J, -1))
+    net.chain(_line((0, 2), (0, PRM.min_spur + EPS), 2), (J, -1))
+    topo = net.topology()
+    _assert_untouched(R.prune_spurs, topo, noise=TWIG_NOISE)
+
+
 def _pass_through_with_spur():
     """A region of valence 2: one branch and a spur under ``min_spur`` to a free end without
     tip points."""

@@ -639,7 +639,9 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     region, which is a free end again (a whole fork with two short branches in one region: the
     hidden fork of :func:`~.junctions.hidden_fork`). Under noise a short chain from a junction to
     a free end stays when it is a twig all the same (:func:`_twig`): measured from the junction's
-    node it reaches ``min_spur``, it holds ``UNEXPLAINED.min_samples`` samples or more, and its
+    node it reaches ``min_spur``, it holds ``UNEXPLAINED.min_samples`` samples or more with its
+    foot in the junction (as stage 9 counts a branch's path, its explained end included; since
+    7 December 2026: a twig of two samples past its junction's region was pruned), and its
     tip lies off the junction's other branches. Up to ``REPAIRS.prune_passes`` passes (a dropped
     spur can leave another).
     """
@@ -699,8 +701,10 @@ def _twig(topo: Topology, sc: Scales, prm: RobustParams, i: int, hl: float, leng
         return False
     j, first = c.ends[s], c.ids[0] if s == 0 else c.ids[-1]
     tip_ids = np.r_[topo.regions[c.ends[1 - s]], c.ids[-1] if s == 0 else c.ids[0]].astype(np.int64)
-    if len(c.ids) + len(topo.regions[c.ends[1 - s]]) < UNEXPLAINED.min_samples:
-        return False  # a stray sample or two, not a sampled curve
+    # the twig's samples with its foot, the junction's sample it leaves from (as stage 9 counts a
+    # branch's path, its explained end included)
+    if len(c.ids) + len(topo.regions[c.ends[1 - s]]) + 1 < UNEXPLAINED.min_samples:
+        return False  # a stray sample, not a sampled curve
     X, _ = junction_positions(P, sc, prm, [(topo.chains, topo.incident(j), topo.regions[j])])
     reach = length + float(np.linalg.norm(X[0] - P[first]))
     if reach < prm.min_spur * hl:
