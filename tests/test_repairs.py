@@ -1690,6 +1690,43 @@ def test_merge_twin_chains_leaves_two_curves_apart():
     _assert_untouched(R.merge_twin_chains, topo)
 
 
+def _stem_traced_twice(d):
+    """A bar along x (free ends) and a stem below it traced twice: two chains between ``S``, a
+    region at (0, -d) below the bar, and a junction ``F`` 6 h lower with two more branches (the
+    samples shared out between the chains, every other one in each). ``S`` holds two chain ends,
+    so it is no free end for :func:`attach_dangling` until the twins are merged."""
+    net = _Net()
+    S = net.region([[0, -d]])
+    F = net.region([[0, -d - 6]])
+    bar = net.chain(_line((-6, 0), (6, 0), 13))
+    net.chain(_line((-1, -d - 7), (-6, -d - 12), 6), (F, -1))
+    net.chain(_line((1, -d - 7), (6, -d - 12), 6), (F, -1))
+    one = net.chain([[0, -d - 1], [0, -d - 3], [0, -d - 5]], (S, F))
+    two = net.chain([[0, -d - 4], [0, -d - 2]], (F, S))
+    return net.topology(), S, bar, one, two
+
+
+def test_merge_twin_chains_attaches_the_free_end_it_leaves():
+    # merged, S is a free end stopping short of the bar (a T's stem traced twice, its junction
+    # passed by the bar: the plate kind at noise 0.2 h, sampling 7): attached as attach_dangling
+    # attaches, the bar split there
+    topo, S, bar, one, two = _stem_traced_twice(REACH - EPS)
+    assert topo.v[S] == 2
+    n_regions = len(topo.regions)
+    _run(R.merge_twin_chains, topo)
+    assert not topo.alive[two]
+    top = topo.chains[one].ends[0]
+    assert len(topo.regions) == n_regions + 1 and topo.v[top] == 3
+    assert topo.chains[bar].ends[1] == top
+
+
+def test_merge_twin_chains_leaves_a_free_end_beyond_reach():
+    # the same stem ending just beyond the attach reach: merged, left a free end
+    topo, S, bar, one, two = _stem_traced_twice(REACH + EPS)
+    _run(R.merge_twin_chains, topo)
+    assert not topo.alive[two] and topo.v[S] == 1 and topo.chains[one].ends[0] == S
+
+
 def test_two_pass_through_regions_joined_by_a_long_chain_stay_apart(monkeypatch):
     # the synthetic corners at noise 0.3 h + x3, sampling 6: a sharp corner's two legs, close
     # together, were each flagged a few spacings below the tip; merged as the two halves of a
