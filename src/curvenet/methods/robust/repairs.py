@@ -273,7 +273,9 @@ def _passed_over(topo: Topology, sc: Scales, prm: RobustParams, groups: list[np.
     x, A, B = P[q[row]], P[a], P[b]
     ab = B - A
     t = ((x - A) * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), NUMERIC.tiny)
-    hit = (t > 0) & (t < 1) & (segment_distance(x, A, B) < noise_band(sc.noise))
+    # (the foot inside the segment: the distance to it is the segment's, segment_distance's)
+    off = np.linalg.norm(x - (A + t[:, None] * ab), axis=1)
+    hit = (t > 0) & (t < 1) & (off < noise_band(sc.noise))
     on = np.zeros(len(q), dtype=bool)
     on[row[hit]] = True
     cut = np.cumsum([len(g) for g in groups])[:-1]
@@ -474,12 +476,12 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams, only: set | N
     are handled in chain order; each moves at most once.
     """
     chains = topo.chains
-    owner, _ = topo.owners()
-    if not (owner >= 0).any():
-        return
     tips = [(i, s) for i, c in enumerate(chains) if topo.alive[i] and not c.closed
             for s in (0, 1) if topo.v[c.ends[s]] == 1 and (only is None or c.ends[s] in only)]
     if not tips:
+        return
+    owner, _ = topo.owners()
+    if not (owner >= 0).any():
         return
     pre = _attach_prefilter(topo, sc, prm, tips, owner)
     for t_, (i, s) in enumerate(tips):

@@ -146,7 +146,6 @@ def _paths(P, h, link, sources, sets, targets):
     U = np.concatenate([np.r_[a, b] for a, b in zip(sources.tolist(), sets)]).astype(np.int64)
     sizes = np.array([1 + len(b) for b in sets], dtype=np.int64)
     start = np.r_[0, np.cumsum(sizes)[:-1]]
-    grp = np.repeat(np.arange(len(sets)), sizes)
     r = link * h[U]
     # the items' samples overlap (the ends at one node share them): each item set apart along
     # an extra axis, so that no pair of two items is ever listed (listed and dropped, they grew
@@ -154,7 +153,7 @@ def _paths(P, h, link, sources, sets, targets):
     apart = np.repeat(np.arange(len(sets), dtype=np.float64) * (2.0 * float(r.max()) + 1.0), sizes)
     pa, pb = build_tree(np.column_stack([P[U], apart])).query_pairs(float(r.max()), output_type="ndarray").T
     d = np.linalg.norm(P[U[pa]] - P[U[pb]], axis=1)
-    keep = (grp[pa] == grp[pb]) & (d <= np.minimum(r[pa], r[pb]))
+    keep = d <= np.minimum(r[pa], r[pb])  # (every pair within one item: the items lie apart)
     # squared lengths: of two ways the one by shorter steps, through every sample on it
     G = coo_matrix((d[keep] ** 2 + NUMERIC.tiny, (pa[keep], pb[keep])), shape=(len(U), len(U))).tocsr()
     _, pred, _ = dijkstra(G, directed=False, indices=start, min_only=True, return_predecessors=True)
