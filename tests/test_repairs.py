@@ -1089,6 +1089,44 @@ def test_split_multiple_junctions_keeps_a_hub_of_higher_valence():
     _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
 
 
+def _row_with_spurs():
+    """:func:`_row` (three teeth) with two spurs of a few samples at its first junction, down
+    and down-left, their tips free: valence 7."""
+    topo, r = _row(4.0)
+    net = _Net()
+    net.pts, net.chains, net.regions = topo.P.tolist(), list(topo.chains), list(topo.regions)
+    net.chain(np.array([[0.0, -1.5], [0.0, -2.3]]), (r, -1))
+    net.chain(np.array([[-1.2, -1.2]]), (r, -1))
+    return net.topology(), r
+
+
+def test_split_rows_again_parts_a_row_once_its_spurs_are_pruned():
+    # read first, the spurs make the first junction one of valence 5: a hub, the row left whole;
+    # pruned, the row reads as three junctions of valence 3
+    topo, r = _row_with_spurs()
+    assert topo.v[r] == 7
+    _assert_untouched(R.split_multiple_junctions, topo, PAIR_NOISE)
+    _run(R.prune_spurs, topo, PAIR_NOISE)
+    assert topo.v[r] == 5
+    n_reg = len(topo.regions)
+    _run(R.split_rows_again, topo, PAIR_NOISE)
+    assert len(topo.regions) == n_reg + 2
+    assert [int(topo.v[q]) for q in (r, n_reg, n_reg + 1)] == [3, 3, 3]
+    centre = sorted(float(topo.P[topo.regions[q]].mean(axis=0)[0]) for q in (r, n_reg, n_reg + 1))
+    assert np.allclose(centre, [0, 4, 8], atol=1.0)
+
+
+def test_split_rows_again_leaves_a_pair_on_noise_free_input():
+    # a pair is split by split_multiple_junctions on noise-free input, but not read again here:
+    # left to split_paired_junctions (a loose crossing of strokes stays whole there)
+    topo, _ = _row(4.0, teeth=2)
+    n_reg = len(topo.regions)
+    _run(R.split_multiple_junctions, topo)
+    assert len(topo.regions) == n_reg + 1
+    topo, _ = _row(4.0, teeth=2)
+    _assert_untouched(R.split_rows_again, topo)
+
+
 def _row_with_a_hub_first(teeth):
     """:func:`_row` with two branches more (up-left, down) at its first junction: valence 5."""
     topo, r = _row(4.0, teeth=teeth)
@@ -1548,7 +1586,7 @@ def test_read_end_junctions_leaves_noise_free_input():
     _assert_untouched(R.read_end_junctions, topo, run=_run_near)
 
 
-TESTED = (R.split_multiple_junctions, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
+TESTED = (R.split_multiple_junctions, R.split_rows_again, R.split_branched_chains, R.merge_near_pass_through, R.absorb_short_loops, R.absorb_orphans, R.tips_to_junctions,
           R.join_facing_tips, R.attach_dangling, R.prune_spurs, R.join_through_pass_regions,
           R.merge_close_junctions, R.split_paired_junctions, R.merge_twin_chains, R.split_tails,
           R.cross_pass_regions, R.read_end_junctions)

@@ -20,7 +20,7 @@ from .graph import csr_edges
 from .junctions import swallowed_branches
 from .nodes import free_end, junction, junction_positions
 from .paired import split_paired_junctions
-from .spanning import split_multiple_junctions
+from .spanning import split_multiple_junctions, split_rows_again
 from .endtrees import read_end_junctions
 from .branched import split_branched_chains, split_tails
 from .params import RobustParams, Scales
@@ -30,7 +30,7 @@ from .unexplained import leaves, noise_band
 
 __all__ = ["ORDER", "run_repairs", "merge_twin_chains", "merge_near_pass_through", "absorb_short_loops", "absorb_orphans",
            "tips_to_junctions", "join_facing_tips", "attach_dangling", "prune_spurs", "cross_pass_regions", "join_through_pass_regions",
-           "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions", "split_branched_chains"]
+           "merge_close_junctions", "close_tip_pairs", "split_multiple_junctions", "split_rows_again", "split_branched_chains"]
 
 
 def merge_near_pass_through(topo: Topology, sc: Scales, prm: RobustParams) -> None:
@@ -955,6 +955,7 @@ ORDER = (
     merge_twin_chains,  # (after the tips joined junctions: a tip's chain can become a twin)
     cross_pass_regions,  # (before the valence-2 regions are joined through)
     join_through_pass_regions,
+    split_rows_again,  # (the rows again, their ends cleaned: a spur pruned, a tip joined)
     split_paired_junctions,
     merge_close_junctions,  # (after the split: it merges back what it takes for one junction)
     absorb_short_loops,  # a short chain between two merged junctions is now a short loop

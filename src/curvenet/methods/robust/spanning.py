@@ -70,7 +70,7 @@ from .thresholds import BRANCHED, NODES, PAIRED, SPANNING
 from .topology import Topology
 from .unexplained import free_reach
 
-__all__ = ["split_multiple_junctions", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut",
+__all__ = ["split_multiple_junctions", "split_rows_again", "split_plan", "region_points", "Plan", "pruned_tree", "pruned_trees", "prune_cut",
            "loop_closures", "tree_cores", "core_order"]
 
 
@@ -710,7 +710,26 @@ def _straight_across(L, ends: list, plan: Plan) -> bool:
     return False
 
 
-def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only: set | None = None) -> None:
+def split_rows_again(topo: Topology, sc: Scales, prm: RobustParams) -> None:
+    """Every row of junctions :func:`split_multiple_junctions` reads, read again once the
+    repairs since have cleaned the chain ends at it.
+
+    The repairs between prune spurs, join tips to their junctions and chains through passes.
+    Read first, a row's region may hold an end too many (a spur of a few samples that noise or
+    an uneven sampling hangs off a junction): the junction it is given reads over
+    ``SPANNING.max_valence``, as a hub of strokes, and the row is left whole (a storey's row of
+    three crossings under noise read [3, 5, 5]); it is split now, as
+    :func:`split_multiple_junctions` splits it, rows only (``SPANNING.min_cores`` junctions or
+    more at every noise level: a pair, on noise-free input too, is left to
+    :func:`.paired.split_paired_junctions`, whose through-curve rule keeps a loose crossing
+    whole; read here, two crossings of CASSIE study sketches drawn loosely became two
+    junctions each). A region the repairs left as it was reads as before.
+    """
+    split_multiple_junctions(topo, sc, prm, rows_only=True)
+
+
+def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only: set | None = None,
+                             rows_only: bool = False) -> None:
     """Every region of valence ``SPANNING.region_valence`` or more that holds a row of
     junctions (:func:`split_plan`) becomes those junctions, joined by new chains.
 
@@ -726,9 +745,12 @@ def split_multiple_junctions(topo: Topology, sc: Scales, prm: RobustParams, only
     shell) counts as a branch of its junction and becomes a chain to a new free end. ``only``:
     the regions to read (default: all); :func:`.branched.split_branched_chains` reads again
     those its split chains reached (a rail's region, joined to the rungs that a chain ran past
-    only then).
+    only then). ``rows_only``: rows of ``SPANNING.min_cores`` junctions or more on noise-free
+    input too (:func:`split_rows_again`).
     """
-    if sc.low:
+    if sc.low and rows_only:
+        min_cores, min_points, valence = SPANNING.min_cores, SPANNING.clean_min_points, SPANNING.region_valence
+    elif sc.low:
         min_cores, min_points, valence = SPANNING.clean_min_cores, SPANNING.clean_min_points, SPANNING.clean_region_valence
     else:
         min_cores, min_points, valence = SPANNING.min_cores, SPANNING.min_points, SPANNING.region_valence
