@@ -471,7 +471,7 @@ def split_plan(P: np.ndarray, tree, h: np.ndarray, noise: float, ids: np.ndarray
     over = [k for k in live if val[k] > SPANNING.max_valence]
     inside_row = (all(len(nbr[k]) <= 2 for k in live) and all(len(nbr[k]) == 2 for k in over)
                   and regular >= SPANNING.min_cores - 1)
-    if over and regular < SPANNING.min_cores and not inside_row and not _block_of_cells(joins):
+    if over and regular < SPANNING.min_cores and not inside_row:
         return None
     # the centre of a star of SPANNING.min_cores cores or more (every other core's one
     # neighbour) is a hub all the same: strokes drawn into a pole, their ends read as junctions
@@ -549,15 +549,6 @@ def _free_arms(X: np.ndarray, adj: list, inside: np.ndarray, free_len: float, hl
         if length >= free_len and len(path) >= BRANCHED.free_fill * length / hl:
             out.append(arm)
     return out
-
-
-def _block_of_cells(joins: list) -> bool:
-    """Whether the cores' graph has cycles (``joins``, the edges :func:`_core_tree` left out
-    of its tree): a block of cells (a street grid's, a storey's windows), not a hub of strokes,
-    so its cores of high valence (two or three of the block's junctions the pruned graph did
-    not part) do not keep the region whole (grid#1 of the families at noise 0.2 h: 7 cores of
-    valence 3-7 for 16 junctions, 0.585 -> 0.791)."""
-    return bool(joins)
 
 
 def _core_tree(nbr: dict, centre: np.ndarray, live: list) -> tuple:
