@@ -36,11 +36,15 @@ def _member_score(family, k, condition):
     return compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
 
 
+def _without_repairs(monkeypatch, *names):
+    """The repairs of ``repairs.ORDER`` without those named."""
+    monkeypatch.setattr(repairs, "ORDER", tuple(r for r in repairs.ORDER if r.__name__ not in names))
+
+
 def _without_paired_split(monkeypatch):
     """The repairs without split_paired_junctions, split_multiple_junctions and split_rows_again
     (they separate close junctions too: the tests below measure another mechanism alone)."""
-    off = ("split_paired_junctions", "split_multiple_junctions", "split_rows_again")
-    monkeypatch.setattr(repairs, "ORDER", tuple(r for r in repairs.ORDER if r.__name__ not in off))
+    _without_repairs(monkeypatch, "split_paired_junctions", "split_multiple_junctions", "split_rows_again")
 
 
 def test_noise_free_pairs_and_rows_are_read_from_the_spanning_tree(monkeypatch):
@@ -48,8 +52,7 @@ def test_noise_free_pairs_and_rows_are_read_from_the_spanning_tree(monkeypatch):
     # 0.44 -> 0.72, the comb 0.65 -> 0.80 with split_multiple_junctions reading clean regions
     # (both its readings off without: split_rows_again alone reads the ladder's rows too)
     with_split = {m: _score(m) for m in ("ladder", "comb")}
-    off = ("split_multiple_junctions", "split_rows_again")
-    monkeypatch.setattr(repairs, "ORDER", tuple(r for r in repairs.ORDER if r.__name__ not in off))
+    _without_repairs(monkeypatch, "split_multiple_junctions", "split_rows_again")
     for m, got in with_split.items():
         without = _score(m)
         assert got["curve_f1"] >= without["curve_f1"] + 0.1, (m, got["curve_f1"], without["curve_f1"])
@@ -722,7 +725,7 @@ def test_a_block_of_cells_with_crowded_junctions_is_read_again(monkeypatch):
     once read a block of cells, cores in cycles, as no hub whatever their valences:
     ``_block_of_cells``, 0.696 with the second reading, removed.)"""
     assert _member_score("grid", 1, "noise 0.2h")["curve_f1"] >= 0.72
-    monkeypatch.setattr(repairs, "ORDER", tuple(r for r in repairs.ORDER if r.__name__ != "split_rows_again"))
+    _without_repairs(monkeypatch, "split_rows_again")
     assert _member_score("grid", 1, "noise 0.2h")["curve_f1"] < 0.6
 
 
