@@ -1803,3 +1803,43 @@ def test_split_branched_chains_free_branch_as_short_as_a_twig_on_noisy_input():
     ends = {topo.chains[i].ends[1]: topo.P[topo.chains[i].ids].tolist() for i, s in topo.incident(n_reg)}
     assert set(ends) == {T, R, n_reg + 1}
     assert ends[n_reg + 1] == [[-1.0, 0.0], [-2.0, 0.0], [-2.9, 0.0]]
+
+
+def _t_at_pass_region(d):
+    """A bar along x traced as two chains that meet in a pass region ``Rp`` (x from -3 to 3 h:
+    region points, no chain point) and a stem from below whose tip stops at (0, -d): the bar's
+    nearest chain points lie 4 h to either side, beyond the attach reach."""
+    net = _Net()
+    Rp = net.region(_line((-3, 0), (3, 0), 7))
+    left = net.chain(_line((-10, 0), (-4, 0), 7), (-1, Rp))
+    right = net.chain(_line((4, 0), (10, 0), 7), (Rp, -1))
+    stem = net.chain(_line((0, -d - 8), (0, -d), 9))  # ids run towards the tip
+    return net.topology(), Rp, left, right, stem
+
+
+def test_attach_dangling_again_takes_a_stem_once_the_bar_is_joined_through():
+    # the first attach_dangling finds no chain point ahead of the tip (the bar there is the
+    # pass region's points); join_through_pass_regions makes the bar one chain through them,
+    # and the second attach_dangling of ORDER splits it under the tip (real-dev
+    # nrn_Image001-005-01 at noise 0.2 h: a T's stem ending short of a bar whose pass region
+    # was joined later)
+    topo, Rp, left, right, stem = _t_at_pass_region(REACH - EPS)
+    _assert_untouched(R.attach_dangling, topo)
+    _run(R.join_through_pass_regions, topo)
+    assert topo.v[Rp] == 0 and sum(topo.alive[:2]) == 1
+    tip = topo.chains[stem].ends[1]
+    n_regions = len(topo.regions)
+    _run(R.attach_dangling, topo)
+    top = topo.chains[stem].ends[1]
+    assert top != tip and top == n_regions and topo.v[top] == 3 and topo.v[tip] == 0
+    assert np.allclose(topo.P[topo.regions[top]].mean(axis=0), [0, 0])
+    order = list(R.ORDER)
+    first = order.index(R.attach_dangling)
+    assert R.attach_dangling in order[order.index(R.join_through_pass_regions) + 1:] and first < order.index(
+        R.join_through_pass_regions)
+
+
+def test_attach_dangling_again_leaves_a_stem_beyond_reach_of_the_joined_bar():
+    topo, Rp, left, right, stem = _t_at_pass_region(REACH + EPS)
+    _run(R.join_through_pass_regions, topo)
+    _assert_untouched(R.attach_dangling, topo)

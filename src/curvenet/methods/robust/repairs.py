@@ -955,6 +955,7 @@ ORDER = (
     merge_twin_chains,  # (after the tips joined junctions: a tip's chain can become a twin)
     cross_pass_regions,  # (before the valence-2 regions are joined through)
     join_through_pass_regions,
+    attach_dangling,  # (again: a bar joined through its pass region can now take a stem)
     split_rows_again,  # (the rows again, their ends cleaned: a spur pruned, a tip joined)
     split_paired_junctions,
     merge_close_junctions,  # (after the split: it merges back what it takes for one junction)
