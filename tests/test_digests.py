@@ -8,24 +8,17 @@ which also checks the whole sweep by hand).
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pytest
+from bench_scripts import load
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "benchmarks" / "robust_digests.py"
 
 
-def _script():
-    spec = importlib.util.spec_from_file_location("curvenet_robust_digests", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-DIG = _script()
+DIG = load("robust_digests")
 STORED = json.loads(DIG.STORE.read_text())["digests"]
 
 

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from bench_scripts import load
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "fit_eval.py"
 
@@ -14,11 +13,7 @@ pytestmark = pytest.mark.skipif(not SCRIPT.exists(), reason="benchmarks/fit_eval
 
 
 def _load():
-    spec = importlib.util.spec_from_file_location("curvenet_fit_eval", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["curvenet_fit_eval"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load("fit_eval")
 
 
 def test_quick_run_fits_and_keeps_the_topology(capsys):

@@ -2,23 +2,20 @@
 
 from __future__ import annotations
 
-import importlib.util
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from bench_scripts import load
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "perf.py"
 pytestmark = pytest.mark.skipif(not SCRIPT.exists(), reason="benchmarks/perf.py not in this checkout")
 
 
 def _load():
-    spec = importlib.util.spec_from_file_location("curvenet_perf", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load("perf")
 
 
 def test_make_points_reaches_the_size_with_whole_models():
