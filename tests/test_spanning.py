@@ -127,6 +127,28 @@ def test_straight_across_tells_an_x_from_a_comb_s_pair():
     assert case([150.0, 210.0, 30.0, 330.0], [0, 0, 1, 1], through=[1.5, 0.0])
 
 
+
+def test_straight_across_reads_skew_teeth_as_two_junctions():
+    # a spine along x through junctions at (0, 0, 0) and (3, 0, 0), a tooth at each, 30 degrees
+    # apart: in the spine's plane, both teeth's lines meet (strokes drawn loosely into one point
+    # of the curve: one junction); one tooth tilted out of that plane instead, the lines pass
+    # 3 h apart (a 3D comb's teeth, the kinds' comb at noise 0.1 h sampling 3): two junctions
+    from curvenet.methods.robust.paired import Lines
+    from curvenet.methods.robust.spanning import Plan, _straight_across
+
+    def case(u_second):
+        u = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], u_second, [1.0, 0.0, 0.0]])
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        at = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
+        tip = at + 2.5 * u
+        ends = [(i, 1) for i in range(4)]
+        plan = Plan({0: ends[:2], 1: ends[2:]}, [], {0: np.zeros(3), 1: np.array([3.0, 0.0, 0.0])})
+        return _straight_across(Lines(tip + 4 * u, u, tip, np.full(4, 0.5)), ends, plan)
+
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    assert case([-s, c, 0.0])  # in the plane, leaning back to the first tooth: their lines meet
+    assert not case([0.0, c, s])  # tilted out of the plane: skew lines, two junctions
+
 def test_branches_apart_tells_converging_curves_from_a_junction_s_branches():
     from curvenet.methods.robust.paired import Lines
     from curvenet.methods.robust.spanning import Plan, _branches_apart
