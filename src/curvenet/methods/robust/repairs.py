@@ -476,8 +476,7 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams, only: set | N
     are handled in chain order; each moves at most once.
     """
     chains = topo.chains
-    tips = [(i, s) for i, c in enumerate(chains) if topo.alive[i] and not c.closed
-            for s in (0, 1) if topo.v[c.ends[s]] == 1 and (only is None or c.ends[s] in only)]
+    tips = _free_tips(topo, only)
     if not tips:
         return
     owner, _ = topo.owners()
@@ -512,6 +511,20 @@ def attach_dangling(topo: Topology, sc: Scales, prm: RobustParams, only: set | N
             owner[chains[jn].ids] = jn
 
 
+def _free_tips(topo: Topology, only: set | None = None) -> list[tuple[int, int]]:
+    """The free ends ``(chain, side)`` of the live open chains (their region of valence 1), in
+    chain order; with ``only``, those at these regions alone."""
+    return [(i, s) for i, c in enumerate(topo.chains) if topo.alive[i] and not c.closed
+            for s in (0, 1) if topo.v[c.ends[s]] == 1 and (only is None or c.ends[s] in only)]
+
+
+def _attach_reach(sc: Scales, prm: RobustParams, h_tip):
+    """How far from a tip point :func:`attach_dangling` looks for chain points:
+    ``REPAIRS.attach`` links of the spacing ``h_tip`` at the tip (a float or an array) plus
+    ``LINKS.gap_noise`` times the noise."""
+    return REPAIRS.attach * prm.link * h_tip + LINKS.gap_noise * sc.noise
+
+
 class _Prefilter(NamedTuple):
     """What :func:`attach_dangling` finds for all tips at once, before any moves."""
 
@@ -538,7 +551,7 @@ def _attach_prefilter(topo, sc, prm, tips, owner) -> _Prefilter:
     tchain = [topo.chains[i] for i, _ in tips]
     tids, tpts = (list(x) for x in zip(*(_tip(topo, sc, prm, i, s) for i, s in tips)))
     tms = end_counts(P, h, tids, REPAIRS.attach_span).tolist()
-    reach_of = REPAIRS.attach * prm.link * h[[int(ids[-1]) for ids in tids]] + LINKS.gap_noise * sc.noise
+    reach_of = _attach_reach(sc, prm, h[[int(ids[-1]) for ids in tids]])
     # chain points within reach of each tip point (one threaded query of the tree over all
     # points, built for the k-NN query: points of no chain are left out by their owner -1)
     allp = np.concatenate(tpts)
@@ -624,7 +637,7 @@ def _attach_target(topo, sc, prm, pre: _Prefilter, t_, i, s, owner):
         q = pre.qall[pre.qoff[a0]:pre.qoff[a1]]
         tp = np.repeat(pre.tpts[t_], pre.cnt[a0:a1])
     else:  # its chain was split meanwhile: queried again
-        near_t = sc.tree.query_ball_point(P[tip_pts], REPAIRS.attach * prm.link * float(h[e]) + LINKS.gap_noise * sc.noise)
+        near_t = sc.tree.query_ball_point(P[tip_pts], _attach_reach(sc, prm, float(h[e])))
         cnt_t = np.fromiter((len(x) for x in near_t), dtype=np.int64, count=len(near_t))
         if not cnt_t.sum():
             return None
@@ -834,15 +847,14 @@ def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> 
 def _tips_near(topo: Topology, sc: Scales, prm: RobustParams, pts: np.ndarray) -> set:
     """The free-end regions with a point of ``pts`` (m,) within the attach reach of one of
     their tip points (:func:`_tip`: the region's points and the chain's last point; the reach
-    of :func:`attach_dangling`)."""
+    :func:`_attach_reach` at that last point)."""
     from scipy.spatial import cKDTree
 
-    ends = [(c.ends[s], int(topo.end_ids(i, s)[-1])) for i, c in enumerate(topo.chains)
-            if topo.alive[i] and not c.closed for s in (0, 1) if topo.v[c.ends[s]] == 1]
+    ends = [(topo.chains[i].ends[s], int(topo.end_ids(i, s)[-1])) for i, s in _free_tips(topo)]
     if not ends or not len(pts):
         return set()
     tp = [np.r_[topo.regions[r], e].astype(np.int64) for r, e in ends]
-    reach = REPAIRS.attach * prm.link * sc.h[[e for _, e in ends]] + LINKS.gap_noise * sc.noise
+    reach = _attach_reach(sc, prm, sc.h[[e for _, e in ends]])
     found = cKDTree(topo.P[pts]).query_ball_point(topo.P[np.concatenate(tp)], np.repeat(reach, [len(x) for x in tp]))
     hit = np.fromiter((len(x) > 0 for x in found), dtype=bool, count=len(found))
     per = np.add.reduceat(hit, np.r_[0, np.cumsum([len(x) for x in tp])[:-1]])
