@@ -76,6 +76,61 @@ def test_branches_ending_nearer_the_other_point_do_not_split():
     assert best_pair(L._replace(tip=tip), (A + B) / 2, H) is None
 
 
+def _overrun_rail(partner=True):
+    """The ladder's T pair (A and B 4 h apart, rail along x, rungs up), the rail's half at A run
+    on past A: its tip 0.7 of the way to B, its end portion's centroid 1 h behind A. Without
+    ``partner`` the rail's other half (at B) is a second rung instead."""
+    far = [1, 0, 0] if partner else [0, 1, 0.3]
+    L = _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, far), (B, [0, 1, 0])], noise=0.1)
+    c, tip = L.c.copy(), L.tip.copy()
+    c[0] = A - np.array([1.0, 0, 0])
+    tip[0] = A + 0.7 * (B - A)
+    return L._replace(c=c, tip=tip)
+
+
+def test_a_rail_half_run_on_past_its_junction_is_judged_by_its_centroid():
+    # its tip lies nearer B, but the rail's two halves are one straight curve through A and B:
+    # the half is judged by its end portion's centroid, behind A
+    L = _overrun_rail()
+    assert np.linalg.norm(L.tip[0] - B) < np.linalg.norm(L.tip[0] - A)
+    pair = best_pair(L, (A + B) / 2, H)
+    assert pair is not None
+    mask, xa, xb = pair
+    assert mask[0] == mask[1] and mask[2] == mask[3] and mask[0] != mask[2]
+    pa, pb = (xa, xb) if not mask[0] else (xb, xa)
+    assert np.linalg.norm(pa - A) < 0.5 and np.linalg.norm(pb - B) < 0.5
+    # judged by its tip (as before): no split reads so
+    import curvenet.methods.robust.paired as module
+
+    judged_by_tips = module._through_halves
+    try:
+        module._through_halves = lambda u, along, second: np.zeros(along.shape, dtype=bool)
+        assert best_pair(L, (A + B) / 2, H) is None
+    finally:
+        module._through_halves = judged_by_tips
+
+
+def test_a_line_along_the_segment_without_its_other_half_is_judged_by_its_tip():
+    # the same run-on line, but nothing continues it at B: it may be a curve ending past its
+    # junction, so its tip (nearer B) decides, and the pair is not read
+    L = _overrun_rail(partner=False)
+    assert best_pair(L, (A + B) / 2, H) is None
+
+
+def test_through_halves_need_exactly_one_parallel_line_in_the_other_group():
+    u = np.array([[[1.0, 0, 0], [0, 1, 0], [-1, 0, 0], [0, 1, 0]]])
+    along = np.array([[True, False, True, False]])
+    # halves in the two groups: both judged by their centroids
+    assert paired._through_halves(u, along, np.array([[False, False, True, True]])).tolist() == \
+        [[True, False, True, False]]
+    # both halves in one group: no curve through both points
+    assert not paired._through_halves(u, along, np.array([[True, False, True, False]])).any()
+    # a third parallel line (strokes drawn over one another): judged by their tips
+    u3 = u.copy()
+    u3[0, 3] = [1.0, 0.05, 0]
+    assert not paired._through_halves(u3, along, np.array([[False, False, True, True]])).any()
+
+
 def test_meeting_point_of_parallel_lines_is_held_at_the_anchor():
     c = np.array([[0.0, 1, 0], [0, -1, 0]])
     u = np.array([[1.0, 0, 0], [1, 0, 0]])

@@ -802,3 +802,18 @@ def test_a_comb_pair_with_skew_teeth_is_split_at_low_noise(monkeypatch):
     monkeypatch.setattr(spanning, "meet_at_one_point", lambda *a: True)
     before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.8 and before["n_nodes_found"] < got["n_nodes_found"]
+
+
+def test_a_ladder_rail_run_on_past_its_junction_still_splits_the_pair(monkeypatch):
+    # the ladder kind at noise 0.2 h, sampling 4 (as the harness samples it): a rail's chain ran
+    # on past its junction two thirds of the way into the next 4 h segment, so its tip lay
+    # nearer the other junction and the pair stayed one node of valence 4 (curve F1 0.915).
+    # The rail's half is judged by its end portion's centroid (paired._through_halves): exact
+    from curvenet.methods.robust import paired
+
+    pts, truth = _sampled("ladder", "noise 0.2h", 4)
+    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    assert got["exact_topology"] and got["curve_f1"] == 1.0
+    monkeypatch.setattr(paired, "_through_halves", lambda u, along, second: np.zeros(along.shape, dtype=bool))
+    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    assert before["curve_f1"] < 0.95 and before["n_nodes_found"] < got["n_nodes_found"]

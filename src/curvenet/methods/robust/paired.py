@@ -22,7 +22,11 @@ noise an X crossing otherwise splits into two V's). The direction is read over t
 the two halves' end portions, 10-16 h on a street, not as the mean of the halves' own
 directions, which the noise tilts by several degrees each (7 December 2026: a street grid's
 junctions 4.6 h apart under noise 0.2 h were refused, the segment 19 degrees off that mean and
-13 degrees off the centroid line).
+13 degrees off the centroid line). Every branch must end nearer its own point than the other;
+a rail's half (a line along the segment whose one parallel line is in the other group) that
+ran on past its junction towards the next under noise is judged by its end portion's centroid
+instead of its tip (7 December 2026, late: the ladder kind at noise 0.2 h, its rails' chains running
+up to two thirds of the way into the next 3.5-4 h segment, two junctions merged per rung pair).
 
 The test is the converse of :func:`.repairs.merge_close_junctions` (branches aiming at one
 node make one junction): a line "meets" a point when the point lies within the strip of the
@@ -231,7 +235,9 @@ def best_pair(L: Lines, anchor: np.ndarray, h: float):
 
     None when all lines meet one point (:func:`meeting_point` of all), or when no split into two
     groups of two or more lines has every group's lines meet its point with the points over
-    ``PAIRED.sep * h`` apart, every branch's end nearer its own group's point and the summed
+    ``PAIRED.sep * h`` apart, every branch's end nearer its own group's point (a half of a
+    straight curve through both points, :func:`_through_halves`, by its end portion's centroid:
+    a rail that ran on past its junction towards the other under noise) and the summed
     squared distances of the lines to their points at most ``PAIRED.gain`` times those to the
     one point (curved branches of one junction miss it, but miss two points almost as much),
     and, when a line of each group runs along the segment (one straight curve through both
@@ -315,8 +321,13 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray, short: np.ndarray | 
     other = np.where(Bb[:, :, None], xa[:, None, :], xb[:, None, :])
     fl = Lines(Lr.c.reshape(-1, d), Lr.u.reshape(-1, d), Lr.tip.reshape(-1, d), Lr.lim.reshape(-1))
     good &= _meets_all(fl, own.reshape(-1, d)).reshape(R * S, m).all(axis=1)
-    # every branch ends nearer its own junction than the other one
-    good &= (np.linalg.norm(Lr.tip - own, axis=2) < np.linalg.norm(Lr.tip - other, axis=2)).all(axis=1)
+    # every branch ends nearer its own junction than the other one (a rail's half that ran on
+    # past its junction towards the other: by its end portion's centroid)
+    e = xb - xa
+    e = e / np.maximum(np.linalg.norm(e, axis=1), np.finfo(float).tiny)[:, None]
+    along = np.abs(np.einsum("nmi,ni->nm", Lr.u, e)) > PAIRED.parallel_cos
+    end = np.where(_through_halves(Lr.u, along, Bb)[:, :, None], Lr.c, Lr.tip)
+    good &= (np.linalg.norm(end - own, axis=2) < np.linalg.norm(end - other, axis=2)).all(axis=1)
     cost = _costs(Lr, own)
     good &= cost <= PAIRED.gain * np.repeat(cost1, S)
     good &= ~np.repeat(meets1, S)
@@ -324,9 +335,6 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray, short: np.ndarray | 
     # other branches crossing it at two places: junctions only when those are parallel (a
     # ladder's rungs, a comb's teeth); strokes crossing a curve at two angles a few spacings
     # apart are one junction drawn loosely (real sketches)
-    e = xb - xa
-    e = e / np.maximum(np.linalg.norm(e, axis=1), np.finfo(float).tiny)[:, None]
-    along = np.abs(np.einsum("nmi,ni->nm", Lr.u, e)) > PAIRED.parallel_cos
     through = (along.sum(axis=1) == 2) & ((along & Bb).sum(axis=1) == 1)
     first = np.argmax(~along, axis=1)
     v0 = Lr.u[np.arange(len(first)), first]
@@ -346,6 +354,33 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray, short: np.ndarray | 
     ok = np.isfinite(cost[np.arange(R), k])
     pick = np.arange(R) * S + k
     return np.where(ok, k, -1), xa[pick], xb[pick]
+
+
+def _through_halves(u: np.ndarray, along: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """Which lines are a half of one straight curve through both points of a split: along the
+    segment (``along``: within ``PAIRED.parallel_cos`` of its direction) and parallel to exactly
+    one other line, which is in the other group (a ladder's rail through two junctions). Such a half may
+    run on past its junction towards the other under noise (its tip then nearer the other
+    point), so :func:`best_pairs` judges its side by its end portion's centroid instead; a third
+    line parallel to them (strokes drawn over one another) leaves every line judged by its tip.
+
+    Parameters
+    ----------
+    u : (n, m, d) ndarray
+        Unit directions of m lines, per split.
+    along : (n, m) ndarray of bool
+        The lines along each split's segment.
+    second : (n, m) ndarray of bool
+        The lines of each split's second group.
+
+    Returns
+    -------
+    (n, m) ndarray of bool
+    """
+    par = np.abs(np.einsum("nmi,nki->nmk", u, u)) > PAIRED.parallel_cos
+    par &= ~np.eye(u.shape[1], dtype=bool)[None]
+    across = second[:, :, None] != second[:, None, :]
+    return along & (par.sum(axis=2) == 1) & (par & across).any(axis=2)
 
 
 def towards_tips(L: Lines) -> np.ndarray:
