@@ -19,3 +19,12 @@ def without_twin_pieces(monkeypatch):
     from curvenet.methods.robust import branched
 
     monkeypatch.setattr(branched, "BRANCHED", thresholds.BRANCHED._replace(twin_apart=float("inf")))
+
+
+def without_skew_pairs(monkeypatch):
+    """Strokes crossing a curve through two junction points, not parallel, are always one
+    junction drawn loosely in :func:`.paired.best_pairs`, as before it read two branches whose
+    lines pass apart (skew teeth of a comb) as two junctions (:func:`.paired.meet_loosely`)."""
+    from curvenet.methods.robust import paired
+
+    monkeypatch.setattr(paired, "meet_loosely", lambda *a: True)

@@ -205,6 +205,39 @@ def test_strokes_crossing_a_curve_loosely_are_one_junction():
     assert best_pair(rungs, (A + B) / 2, H) is not None
 
 
+def test_best_pair_reads_skew_teeth_as_two_junctions():
+    # a spine along x through A and B, a tooth at each, 45 degrees apart: in the spine's plane,
+    # the tooth at B leaning back to A's, their lines meet a spacing past A's tooth's tip
+    # (strokes drawn loosely into one point of the curve: one junction); that tooth tilted out
+    # of the plane instead, the lines pass apart (a 3D comb's teeth, the kinds' comb at noise
+    # 0.2 h sampling 6): two junctions, as spanning._straight_across reads them
+    r = 1.0 / np.sqrt(2.0)
+
+    def lines(tooth_b):
+        return _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, tooth_b), (B, [1, 0, 0])], noise=0.05)
+
+    assert best_pair(lines([-r, r, 0.0]), (A + B) / 2, H) is None
+    pair = best_pair(lines([0.0, r, r]), (A + B) / 2, H)
+    assert pair is not None
+    mask, xa, xb = pair
+    assert mask[0] == mask[1] and mask[2] == mask[3] and mask[0] != mask[2]
+
+
+def test_meet_loosely_needs_two_lines_with_a_direction():
+    from curvenet.methods.robust.paired import meet_loosely
+
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    skew = _lines([(A, [0, 1, 0]), (B, [0.0, c, s])])
+    assert not meet_loosely(skew, (A + B) / 2)
+    # a branch of a single point (direction 0) beside them has no line: the two decide
+    three = Lines(*(np.concatenate([f, f[:1]]) for f in skew))
+    three = three._replace(u=np.concatenate([skew.u, np.zeros((1, 3))]))
+    assert not meet_loosely(three, (A + B) / 2)
+    # one line with a direction (and one without) tells nothing: loose, as before
+    one = three._replace(u=np.concatenate([skew.u[:1], np.zeros((2, 3))]))
+    assert meet_loosely(one, (A + B) / 2)
+
+
 def _street_lines():
     """The lines of a street grid's two junctions 4.6 h apart under noise 0.2 h (the kinds'
     streets, sampling 0, in h about the region's centroid): a street along x through both (lines

@@ -7,7 +7,7 @@ from curvenet import bench, synth
 from curvenet.methods.robust import junctions, repairs, thresholds
 from curvenet.metrics import compare
 from curvenet.reconstruct import reconstruct
-from rule_switches import without_twin_pieces, without_vote_keep
+from rule_switches import without_skew_pairs, without_twin_pieces, without_vote_keep
 
 
 def _score(name, condition="clean"):
@@ -50,7 +50,9 @@ def _without_paired_split(monkeypatch):
 def test_noise_free_pairs_and_rows_are_read_from_the_spanning_tree(monkeypatch):
     # junctions 3-5h apart that the shell test leaves in one region on clean input: the ladder
     # 0.44 -> 0.72, the comb 0.65 -> 0.80 with split_multiple_junctions reading clean regions
-    # (both its readings off without: split_rows_again alone reads the ladder's rows too)
+    # (both its readings off without: split_rows_again alone reads the ladder's rows too; the
+    # comb's skew teeth, which paired.best_pairs now splits too, read as before)
+    without_skew_pairs(monkeypatch)
     with_split = {m: _score(m) for m in ("ladder", "comb")}
     _without_repairs(monkeypatch, "split_multiple_junctions", "split_rows_again")
     for m, got in with_split.items():
@@ -165,6 +167,7 @@ def test_a_single_sample_between_close_junctions_is_a_segment(monkeypatch):
     # segment: the chain's second end is the other junction (without: the comb's spine is cut)
     from curvenet.methods.robust import chains
 
+    without_skew_pairs(monkeypatch)  # (paired.best_pairs mends the comb's cut spine now too)
     now = _score("comb")
     monkeypatch.setattr(chains, "CHAINS", thresholds.CHAINS._replace(pair_points=0))
     cut = _score("comb")
@@ -371,6 +374,7 @@ def test_low_noise_is_read_as_noise_free_by_the_junction_stages(monkeypatch, nam
     from curvenet.methods.robust import estimate, params
     from curvenet.methods.robust.params import Estimates
 
+    without_skew_pairs(monkeypatch)  # (paired.best_pairs splits the comb's skew teeth either way)
     pts, truth = _sampled(name, "noise 0.1h", offset)
     h = synth.h_of(truth)
     est = estimate(pts)
@@ -530,7 +534,8 @@ def test_under_noise_a_candidate_holding_two_junctions_does_not_resolve_its_regi
     # candidate covers the two junctions 3h apart at x = 9h and 12h (another those at 21h and
     # 25h); resolving the region by it gives them one node each (curve F1 0.72). With the guard
     # the region stays whole and the later repairs part it (1.00, as before the separation ran
-    # under noise)
+    # under noise; paired.best_pairs, which reads skew teeth as two junctions since, read as before)
+    without_skew_pairs(monkeypatch)
     now = _seeded("comb", "noise 0.2h", (1,))
     monkeypatch.setattr(junctions, "_holding_several", lambda *a: np.zeros(0, dtype=np.int64))
     unguarded = _seeded("comb", "noise 0.2h", (1,))
@@ -798,8 +803,12 @@ def test_a_comb_pair_with_skew_teeth_is_split_at_low_noise(monkeypatch):
     pts, _ = synth.sample(truth, rng=bench.run_seed("comb", cond) + 3, **bench.EXTRA_CONDITIONS[cond])
     got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert got["exact_topology"] and got["curve_f1"] == 1.0
-    # the teeth's lines read as meeting: the pair is left whole, as before
-    monkeypatch.setattr(spanning, "meet_at_one_point", lambda *a: True)
+    # the teeth's lines read as meeting: the pair is left whole, as before (by the spanning
+    # tree's reading and by paired.best_pairs', which reads skew teeth so too)
+    from curvenet.methods.robust import paired
+
+    monkeypatch.setattr(spanning, "meet_loosely", lambda *a: True)
+    monkeypatch.setattr(paired, "meet_loosely", lambda *a: True)
     before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.8 and before["n_nodes_found"] < got["n_nodes_found"]
 
@@ -817,3 +826,19 @@ def test_a_ladder_rail_run_on_past_its_junction_still_splits_the_pair(monkeypatc
     monkeypatch.setattr(paired, "_through_halves", lambda u, along, second: np.zeros(along.shape, dtype=bool))
     before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.95 and before["n_nodes_found"] < got["n_nodes_found"]
+
+
+def test_a_comb_pair_with_skew_teeth_is_split_under_noise(monkeypatch):
+    # the comb kind at noise 0.2 h, sampling 6 (as the harness samples it): two teeth leaving the
+    # spine at two tilts, 4.9 h apart, read as strokes crossing the spine loosely (the teeth not
+    # parallel) by paired.best_pairs: one node of valence 4 (curve F1 0.865). Their lines pass
+    # 3.7 h apart (skew): two junctions, exact, as spanning._straight_across reads noise-free pairs
+    from curvenet.methods.robust import paired
+
+    pts, truth = _sampled("comb", "noise 0.2h", 6)
+    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    assert got["exact_topology"] and got["curve_f1"] == 1.0
+    monkeypatch.setattr(paired, "meet_loosely", lambda *a: True)
+    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    assert before["curve_f1"] < 0.9 and before["n_nodes_found"] < got["n_nodes_found"]
+

@@ -46,7 +46,7 @@ from .params import RobustParams, Scales
 from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
-__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "best_pair",
+__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "meet_loosely", "best_pair",
            "best_pairs", "short_branches", "straight_pairs", "towards_tips", "curve_directions",
            "meet_at_one_point_each", "region_stats"]
 
@@ -189,6 +189,32 @@ def meet_at_one_point_each(L: Lines, off: np.ndarray, anchors: np.ndarray) -> np
                      L.tip[rows].reshape(-1, L.c.shape[1]), L.lim[rows].reshape(-1))
         out[js] = _meets_all(flat, np.repeat(x, m, axis=0)).reshape(len(js), m).all(axis=1)
     return out
+
+
+def meet_loosely(L: Lines, anchor: np.ndarray) -> bool:
+    """Whether branches crossing a straight curve that runs through two junction points, not
+    all parallel, are strokes drawn loosely into one point of it (one junction, real sketches).
+
+    True unless they are two branches with a direction (a branch of a single point has none)
+    whose lines pass apart (:func:`meet_at_one_point`, held at ``anchor``: the middle of the
+    segment between the two points): skew lines in 3D are a comb's teeth leaving its spine at
+    two tilts, one junction each.
+
+    Parameters
+    ----------
+    L : Lines
+        The crossing branches' lines, m of them.
+    anchor : (d,) ndarray
+
+    Returns
+    -------
+    bool
+    """
+    known = np.linalg.norm(L.u, axis=1) > 0
+    if known.sum() != 2:
+        return True
+    ids = np.flatnonzero(known)
+    return meet_at_one_point(Lines(L.c[ids], L.u[ids], L.tip[ids], L.lim[ids]), anchor)
 
 
 def _meets_all(L: Lines, x: np.ndarray) -> np.ndarray:
@@ -341,7 +367,12 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray, short: np.ndarray | 
     par = (np.abs(np.einsum("nmi,ni->nm", Lr.u, v0)) > PAIRED.parallel_cos) | along
     if short is not None:
         par |= np.repeat(short, S, axis=0)
-    good &= ~through | par.all(axis=1)
+    loose = through & ~par.all(axis=1) & good
+    for q in np.flatnonzero(loose).tolist():  # (few)
+        rest = ~along[q]
+        loose[q] = meet_loosely(Lines(Lr.c[q, rest], Lr.u[q, rest], Lr.tip[q, rest], Lr.lim[q, rest]),
+                                0.5 * (xa[q] + xb[q]))
+    good &= ~loose
     # a straight curve with a half in each group (two lines facing each other, each through the
     # other's centroid) passes through both points: it must run along the segment (an X
     # crossing seen under noise splits into two V's whose points lie off that curve)

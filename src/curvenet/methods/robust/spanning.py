@@ -63,7 +63,7 @@ import numpy as np
 from ..emst import emst_edges_each
 from .chains import group_medians, points_apart, polylen
 from .graph import components
-from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point, meet_at_one_point_each, region_stats,
+from .paired import (Lines, branch_lines, curve_directions, meet_at_one_point_each, meet_loosely, region_stats,
                      straight_pairs, towards_tips)
 from .params import RobustParams, Scales
 from .thresholds import BRANCHED, NODES, PAIRED, SPANNING
@@ -680,7 +680,7 @@ def _straight_across(L, ends: list, plan: Plan) -> bool:
     all parallel (within ``PAIRED.parallel_cos``): strokes crossing one curve at two angles a
     few spacings apart, one junction drawn loosely (:func:`.paired.best_pairs` reads them so);
     but where those are two branches with a direction (a branch of a single point has none),
-    only when their lines meet (:func:`.paired.meet_at_one_point`, held near the segment's
+    only when their lines meet (:func:`.paired.meet_loosely`, held near the segment's
     middle): two lines that pass apart, skew in 3D, are the teeth of a comb whose spine runs
     along the segment, one junction each."""
     ca, cb = (plan.centres[k] for k in sorted(plan.ends))
@@ -701,14 +701,7 @@ def _straight_across(L, ends: list, plan: Plan) -> bool:
         rest = ~through.any(axis=1)
         u = L.u[rest]
         if len(u) >= 2 and np.any(np.abs(u @ u.T) <= PAIRED.parallel_cos):
-            # two branches with a direction (a branch of a single point has none): strokes
-            # drawn loosely into one point of the curve when their lines meet; skew lines (a
-            # 3D comb's teeth leaving its spine at two tilts) are two junctions
-            known = (u != 0).any(axis=1)
-            if known.sum() != 2:
-                return True
-            ids = np.flatnonzero(rest)[known]
-            return meet_at_one_point(Lines(L.c[ids], L.u[ids], L.tip[ids], L.lim[ids]), (ca + cb) / 2)
+            return meet_loosely(Lines(L.c[rest], u, L.tip[rest], L.lim[rest]), (ca + cb) / 2)
     return False
 
 
