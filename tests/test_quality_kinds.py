@@ -842,3 +842,17 @@ def test_a_comb_pair_with_skew_teeth_is_split_under_noise(monkeypatch):
     before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.9 and before["n_nodes_found"] < got["n_nodes_found"]
 
+
+def test_a_spur_off_a_tip_region_does_not_make_it_a_pass(monkeypatch):
+    # the neurites kind at noise 0.2 h, sampling 3: a branch's last 11 h were one region (its
+    # tip's flags) and a spur of one sample left it beside the branch's chain; read as a pass,
+    # the branch was joined out to its tip and back to the spur, its end placed 11 h short
+    # (curve F1 0.933). The spur is a stub (repairs._stub_beside): exact
+    from curvenet.methods.robust import repairs
+
+    pts, truth = _sampled("neurites", "noise 0.2h", 3)
+    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    assert got["exact_topology"] and got["curve_f1"] == 1.0
+    monkeypatch.setattr(repairs, "_stub_beside", lambda *a: False)
+    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    assert before["curve_f1"] < 0.95

@@ -669,6 +669,36 @@ def test_prune_spurs_takes_a_stub_into_its_pass_through_region_on_clean_input():
     assert set(stub.tolist()) <= set(topo.regions[J].tolist())
 
 
+def _tip_region_with_spur(spur_at):
+    """A curve's end read as a region of valence 2 under noise: the region holds the curve's last
+    10 h (its tip at x = 0), the curve's chain arrives at x = 11, and a spur of one sample without
+    tip points leaves the region at ``spur_at``."""
+    net = _Net()
+    T = net.region(_line((10, 0), (0, 0), 11))
+    net.chain(_line((11, 0), (30, 0), 20), (T, -1))
+    spur = net.chain([spur_at], (T, -1))
+    topo = net.topology()
+    assert topo.v[T] == 2
+    return topo, T, spur
+
+
+def test_prune_spurs_takes_a_stub_beside_the_other_branch_into_its_region_under_noise():
+    # the spur leaves beside the curve's chain, the region reaching 10 h beyond both: the region
+    # holds the curve's tip, and joined through it the curve would run out and back (the
+    # neurites kind at noise 0.2 h, sampling 3: a tip lost 11 h short); the spur joins it
+    topo, T, spur = _tip_region_with_spur((11, 1))
+    _run(R.prune_spurs, topo, noise=0.2)
+    assert not topo.alive[spur]
+    assert topo.v[T] == 1
+
+
+def test_prune_spurs_leaves_a_spur_on_the_far_side_of_its_region_under_noise():
+    # the spur leaves where the curve would run on (beyond the region's far end): a pass,
+    # left to join_through_pass_regions
+    topo, *_ = _tip_region_with_spur((-1, 0.5))
+    _assert_untouched(R.prune_spurs, topo, noise=0.2)
+
+
 @pytest.mark.parametrize("length, dropped", [(PRM.min_spur - 2 * EPS, True), (PRM.min_spur + 2 * EPS, False)])
 def test_prune_spurs_isolated_pieces(length, dropped):
     net = _Net()

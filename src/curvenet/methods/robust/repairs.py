@@ -348,6 +348,27 @@ def _no_curve_end(topo: Topology, sc: Scales, r: int) -> bool:
     return bool(sc.low) and topo.v[r] == 1 and not len(topo.regions[r])
 
 
+def _stub_beside(topo: Topology, i: int, s: int) -> bool:
+    """Whether chain ``i``, from the region of valence 2 at its side ``s`` to a free end without
+    tip points, is a stub at any noise: it leaves that region beside the region's other branch
+    (its end there nearer that branch's end than half the region's reach beyond it), so the
+    region holds a curve's end beyond them both, and a curve passing through would leave it
+    on the far side. Under noise a spur of a sample or two off a tip's region (a traced
+    neurite's end) made the region a pass: joined through it, the curve ran out to its tip and
+    back to the spur, and the tip was lost."""
+    r, far = topo.chains[i].ends[s], topo.chains[i].ends[1 - s]
+    if topo.v[far] != 1 or len(topo.regions[far]) or not len(topo.regions[r]):
+        return False
+    other = [(k, t) for k, t in topo.incident(r) if k != i]
+    if len(other) != 1:
+        return False
+    P = topo.P
+    a = P[int(topo.end_ids(*other[0])[-1])]
+    b = P[int(topo.end_ids(i, s)[-1])]
+    reach = float(np.max(np.linalg.norm(P[topo.regions[r]] - a, axis=1)))
+    return float(np.linalg.norm(b - a)) < 0.5 * reach
+
+
 def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: np.ndarray, gap: float,
                      tree, ids: np.ndarray, lab: np.ndarray) -> int:
     """The junction a stub (chain ``i`` from junction ``own`` to the free end ``r`` without tip
@@ -663,7 +684,9 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
     under twice that. On noise-free input also such a chain from a region of valence 2 to a free
     end without tip points (a stub: a noise-free curve's end is always flagged) joins that
     region, which is a free end again (a whole fork with two short branches in one region: the
-    hidden fork of :func:`~.junctions.hidden_fork`). Under noise a short chain from a junction to
+    hidden fork of :func:`~.junctions.hidden_fork`); at any noise so too when the stub leaves
+    that region beside its other branch (:func:`_stub_beside`: the region holds the curve's end
+    beyond both). Under noise a short chain from a junction to
     a free end stays when it is a twig all the same (:func:`_twig`): measured from the junction's
     node it reaches ``min_spur``, it holds ``UNEXPLAINED.min_samples`` samples or more with its
     foot in the junction (as stage 9 counts a branch's path, its explained end included; since
@@ -700,7 +723,8 @@ def prune_spurs(topo: Topology, sc: Scales, prm: RobustParams) -> None:
                 if free_a and free_b or v[a] >= NODES.junction_valence or v[b] >= NODES.junction_valence:
                     topo.drop(i)
                     changed = True
-                elif (v[a] == 2 and _no_curve_end(topo, sc, b)) or (v[b] == 2 and _no_curve_end(topo, sc, a)):
+                elif ((v[a] == 2 and (_no_curve_end(topo, sc, b) or _stub_beside(topo, i, 0)))
+                      or (v[b] == 2 and (_no_curve_end(topo, sc, a) or _stub_beside(topo, i, 1)))):
                     # a stub (see _no_curve_end): its points join the region, which is a free
                     # end again (and may show a hidden fork)
                     topo.absorb_chain(i, a if v[a] == 2 else b)
