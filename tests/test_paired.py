@@ -35,26 +35,27 @@ def _lines(junction_dirs, lim=1.0, noise=0.0, seed=0):
 A, B = np.zeros(3), np.array([4.0, 0, 0])
 
 
-def test_a_building_step_reads_as_two_junctions():
-    # the junctions A and B 4 h apart, joined along x: each has a wall and an edge up
-    L = _lines([(A, [0, 1, 0]), (A, [0, 0, 1]), (B, [0, -1, 0]), (B, [0, 0, 1])], noise=0.1)
-    pair = best_pair(L, (A + B) / 2, H)
-    assert pair is not None
-    mask, xa, xb = pair
-    assert mask.tolist() in ([False, False, True, True], [True, True, False, False])
-    pa, pb = (xa, xb) if not mask[0] else (xb, xa)
-    assert np.linalg.norm(pa - A) < 0.3 and np.linalg.norm(pb - B) < 0.3
-
-
-def test_a_ladder_rail_collinear_with_the_segment_reads_as_two_junctions():
-    # a T at each end: the rail runs on through A and B (collinear with A-B), the rungs leave up
-    L = _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, [1, 0, 0]), (B, [0, 1, 0])], noise=0.1)
+def _assert_split_at_a_and_b(L, tol):
+    """``best_pair`` of the lines ``L`` (two leaving A, then two leaving B) splits them so, its
+    points within ``tol`` h of A and B."""
     pair = best_pair(L, (A + B) / 2, H)
     assert pair is not None
     mask, xa, xb = pair
     assert mask[0] == mask[1] and mask[2] == mask[3] and mask[0] != mask[2]
     pa, pb = (xa, xb) if not mask[0] else (xb, xa)
-    assert np.linalg.norm(pa - A) < 0.5 and np.linalg.norm(pb - B) < 0.5
+    assert np.linalg.norm(pa - A) < tol and np.linalg.norm(pb - B) < tol
+
+
+def test_a_building_step_reads_as_two_junctions():
+    # the junctions A and B 4 h apart, joined along x: each has a wall and an edge up
+    L = _lines([(A, [0, 1, 0]), (A, [0, 0, 1]), (B, [0, -1, 0]), (B, [0, 0, 1])], noise=0.1)
+    _assert_split_at_a_and_b(L, 0.3)
+
+
+def test_a_ladder_rail_collinear_with_the_segment_reads_as_two_junctions():
+    # a T at each end: the rail runs on through A and B (collinear with A-B), the rungs leave up
+    L = _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, [1, 0, 0]), (B, [0, 1, 0])], noise=0.1)
+    _assert_split_at_a_and_b(L, 0.5)
 
 
 @pytest.mark.parametrize("angle", [40.0, 90.0])
@@ -88,26 +89,15 @@ def _overrun_rail(partner=True):
     return L._replace(c=c, tip=tip)
 
 
-def test_a_rail_half_run_on_past_its_junction_is_judged_by_its_centroid():
+def test_a_rail_half_run_on_past_its_junction_is_judged_by_its_centroid(monkeypatch):
     # its tip lies nearer B, but the rail's two halves are one straight curve through A and B:
     # the half is judged by its end portion's centroid, behind A
     L = _overrun_rail()
     assert np.linalg.norm(L.tip[0] - B) < np.linalg.norm(L.tip[0] - A)
-    pair = best_pair(L, (A + B) / 2, H)
-    assert pair is not None
-    mask, xa, xb = pair
-    assert mask[0] == mask[1] and mask[2] == mask[3] and mask[0] != mask[2]
-    pa, pb = (xa, xb) if not mask[0] else (xb, xa)
-    assert np.linalg.norm(pa - A) < 0.5 and np.linalg.norm(pb - B) < 0.5
+    _assert_split_at_a_and_b(L, 0.5)
     # judged by its tip (as before): no split reads so
-    import curvenet.methods.robust.paired as module
-
-    judged_by_tips = module._through_halves
-    try:
-        module._through_halves = lambda u, along, second: np.zeros(along.shape, dtype=bool)
-        assert best_pair(L, (A + B) / 2, H) is None
-    finally:
-        module._through_halves = judged_by_tips
+    monkeypatch.setattr(paired, "_through_halves", lambda u, along, second: np.zeros(along.shape, dtype=bool))
+    assert best_pair(L, (A + B) / 2, H) is None
 
 
 def test_a_line_along_the_segment_without_its_other_half_is_judged_by_its_tip():
@@ -217,10 +207,7 @@ def test_best_pair_reads_skew_teeth_as_two_junctions():
         return _lines([(A, [-1, 0, 0]), (A, [0, 1, 0]), (B, tooth_b), (B, [1, 0, 0])], noise=0.05)
 
     assert best_pair(lines([-r, r, 0.0]), (A + B) / 2, H) is None
-    pair = best_pair(lines([0.0, r, r]), (A + B) / 2, H)
-    assert pair is not None
-    mask, xa, xb = pair
-    assert mask[0] == mask[1] and mask[2] == mask[3] and mask[0] != mask[2]
+    _assert_split_at_a_and_b(lines([0.0, r, r]), 0.5)
 
 
 def test_meet_loosely_needs_two_lines_with_a_direction():

@@ -790,26 +790,32 @@ def test_a_tooth_wholly_inside_a_region_is_a_free_branch(monkeypatch):
 
 
 
+def _with_and_without(monkeypatch, name, condition, k, *off):
+    """Curve scores of sampling ``k`` of model ``name`` under ``condition`` (as
+    :func:`_sampled`), as the method runs and then with the rule switched off: ``off`` holds
+    ``(module, attribute, value)`` settings. Returns both ``compare`` dicts."""
+    pts, truth = _sampled(name, condition, k)
+    h = synth.h_of(truth)
+    now = compare(reconstruct(pts, method="robust"), truth, h=h)
+    for module, attr, value in off:
+        monkeypatch.setattr(module, attr, value)
+    return now, compare(reconstruct(pts, method="robust"), truth, h=h)
+
+
 def test_a_comb_pair_with_skew_teeth_is_split_at_low_noise(monkeypatch):
     # the comb kind at noise 0.1 h, sampling 3 (as the harness samples it): two teeth 4.2 h apart
     # on the spine, one tilted 30 degrees out of the other's plane, shared a region with a spur
     # of one sample; read as strokes drawn loosely into one point (the teeth not parallel),
     # the pair stayed one node of valence 4 (curve F1 0.72). Their lines pass apart (skew):
-    # two junctions, exact
-    from curvenet.methods.robust import spanning
+    # two junctions, exact. Without: the teeth's lines read as meeting, the pair left whole, as
+    # before (by the spanning tree's reading and by paired.best_pairs', which reads skew teeth
+    # so too)
+    from curvenet.methods.robust import paired, spanning
 
-    truth = synth.model("comb")
-    cond = "noise 0.1h"
-    pts, _ = synth.sample(truth, rng=bench.run_seed("comb", cond) + 3, **bench.EXTRA_CONDITIONS[cond])
-    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    got, before = _with_and_without(monkeypatch, "comb", "noise 0.1h", 3,
+                                    (spanning, "meet_loosely", lambda *a: True),
+                                    (paired, "meet_loosely", lambda *a: True))
     assert got["exact_topology"] and got["curve_f1"] == 1.0
-    # the teeth's lines read as meeting: the pair is left whole, as before (by the spanning
-    # tree's reading and by paired.best_pairs', which reads skew teeth so too)
-    from curvenet.methods.robust import paired
-
-    monkeypatch.setattr(spanning, "meet_loosely", lambda *a: True)
-    monkeypatch.setattr(paired, "meet_loosely", lambda *a: True)
-    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.8 and before["n_nodes_found"] < got["n_nodes_found"]
 
 
@@ -820,11 +826,9 @@ def test_a_ladder_rail_run_on_past_its_junction_still_splits_the_pair(monkeypatc
     # The rail's half is judged by its end portion's centroid (paired._through_halves): exact
     from curvenet.methods.robust import paired
 
-    pts, truth = _sampled("ladder", "noise 0.2h", 4)
-    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    by_tips = (paired, "_through_halves", lambda u, along, second: np.zeros(along.shape, dtype=bool))
+    got, before = _with_and_without(monkeypatch, "ladder", "noise 0.2h", 4, by_tips)
     assert got["exact_topology"] and got["curve_f1"] == 1.0
-    monkeypatch.setattr(paired, "_through_halves", lambda u, along, second: np.zeros(along.shape, dtype=bool))
-    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.95 and before["n_nodes_found"] < got["n_nodes_found"]
 
 
@@ -835,11 +839,9 @@ def test_a_comb_pair_with_skew_teeth_is_split_under_noise(monkeypatch):
     # 3.7 h apart (skew): two junctions, exact, as spanning._straight_across reads noise-free pairs
     from curvenet.methods.robust import paired
 
-    pts, truth = _sampled("comb", "noise 0.2h", 6)
-    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    got, before = _with_and_without(monkeypatch, "comb", "noise 0.2h", 6,
+                                    (paired, "meet_loosely", lambda *a: True))
     assert got["exact_topology"] and got["curve_f1"] == 1.0
-    monkeypatch.setattr(paired, "meet_loosely", lambda *a: True)
-    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.9 and before["n_nodes_found"] < got["n_nodes_found"]
 
 
@@ -848,11 +850,7 @@ def test_a_spur_off_a_tip_region_does_not_make_it_a_pass(monkeypatch):
     # tip's flags) and a spur of one sample left it beside the branch's chain; read as a pass,
     # the branch was joined out to its tip and back to the spur, its end placed 11 h short
     # (curve F1 0.933). The spur is a stub (repairs._stub_beside): exact
-    from curvenet.methods.robust import repairs
-
-    pts, truth = _sampled("neurites", "noise 0.2h", 3)
-    got = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
+    got, before = _with_and_without(monkeypatch, "neurites", "noise 0.2h", 3,
+                                    (repairs, "_stub_beside", lambda *a: False))
     assert got["exact_topology"] and got["curve_f1"] == 1.0
-    monkeypatch.setattr(repairs, "_stub_beside", lambda *a: False)
-    before = compare(reconstruct(pts, method="robust"), truth, h=synth.h_of(truth))
     assert before["curve_f1"] < 0.95

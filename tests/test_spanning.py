@@ -127,7 +127,6 @@ def test_straight_across_tells_an_x_from_a_comb_s_pair():
     assert case([150.0, 210.0, 30.0, 330.0], [0, 0, 1, 1], through=[1.5, 0.0])
 
 
-
 def test_straight_across_reads_skew_teeth_as_two_junctions():
     # a spine along x through junctions at (0, 0, 0) and (3, 0, 0), a tooth at each, 30 degrees
     # apart: in the spine's plane, both teeth's lines meet (strokes drawn loosely into one point
@@ -148,6 +147,7 @@ def test_straight_across_reads_skew_teeth_as_two_junctions():
     c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
     assert case([-s, c, 0.0])  # in the plane, leaning back to the first tooth: their lines meet
     assert not case([0.0, c, s])  # tilted out of the plane: skew lines, two junctions
+
 
 def test_branches_apart_tells_converging_curves_from_a_junction_s_branches():
     from curvenet.methods.robust.paired import Lines

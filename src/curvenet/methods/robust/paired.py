@@ -25,8 +25,9 @@ junctions 4.6 h apart under noise 0.2 h were refused, the segment 19 degrees off
 13 degrees off the centroid line). Every branch must end nearer its own point than the other;
 a rail's half (a line along the segment whose one parallel line is in the other group) that
 ran on past its junction towards the next under noise is judged by its end portion's centroid
-instead of its tip (7 December 2026, late: the ladder kind at noise 0.2 h, its rails' chains running
-up to two thirds of the way into the next 3.5-4 h segment, two junctions merged per rung pair).
+instead of its tip (7 December 2026, late: the ladder kind at noise 0.2 h, its rails' chains
+running up to two thirds of the way into the next 3.5-4 h segment, two junctions merged per rung
+pair).
 
 The test is the converse of :func:`.repairs.merge_close_junctions` (branches aiming at one
 node make one junction): a line "meets" a point when the point lies within the strip of the
@@ -46,8 +47,8 @@ from .params import RobustParams, Scales
 from .thresholds import ENDS, LINKS, NODES, PAIRED, REPAIRS
 from .topology import Topology
 
-__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "meet_loosely", "best_pair",
-           "best_pairs", "short_branches", "straight_pairs", "towards_tips", "curve_directions",
+__all__ = ["split_paired_junctions", "Lines", "branch_lines", "meeting_point", "meet_at_one_point", "meet_loosely",
+           "best_pair", "best_pairs", "short_branches", "straight_pairs", "towards_tips", "curve_directions",
            "meet_at_one_point_each", "region_stats"]
 
 
@@ -390,9 +391,9 @@ def best_pairs(L: Lines, anchor: np.ndarray, h: np.ndarray, short: np.ndarray | 
 def _through_halves(u: np.ndarray, along: np.ndarray, second: np.ndarray) -> np.ndarray:
     """Which lines are a half of one straight curve through both points of a split: along the
     segment (``along``: within ``PAIRED.parallel_cos`` of its direction) and parallel to exactly
-    one other line, which is in the other group (a ladder's rail through two junctions). Such a half may
-    run on past its junction towards the other under noise (its tip then nearer the other
-    point), so :func:`best_pairs` judges its side by its end portion's centroid instead; a third
+    one other line, which is in the other group (a ladder's rail through two junctions). Such a
+    half may run on past its junction towards the other under noise (its tip then nearer the
+    other point), so :func:`best_pairs` judges its side by its end portion's centroid instead; a third
     line parallel to them (strokes drawn over one another) leaves every line judged by its tip.
 
     Parameters

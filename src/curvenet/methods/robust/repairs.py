@@ -340,12 +340,18 @@ def tips_to_junctions(topo: Topology, sc: Scales, prm: RobustParams) -> None:
         topo.absorb(r, t)
 
 
+def _bare_end(topo: Topology, r: int) -> bool:
+    """Whether region ``r`` is a free end without tip points (valence 1, no points: the chain
+    touching it ends on no flagged sample)."""
+    return topo.v[r] == 1 and not len(topo.regions[r])
+
+
 def _no_curve_end(topo: Topology, sc: Scales, r: int) -> bool:
     """Whether the free end ``r`` is no curve's end: on noise-free input (and under low noise,
     ``NOISE.low``) the last points of a curve always see one side in their shells, so a curve's
     end is always flagged; a free end without tip points is a stub's, a piece of a region's own
     curve traced out of it. (Under noise a real tip can lose its flags: False there.)"""
-    return bool(sc.low) and topo.v[r] == 1 and not len(topo.regions[r])
+    return bool(sc.low) and _bare_end(topo, r)
 
 
 def _stub_beside(topo: Topology, i: int, s: int) -> bool:
@@ -357,7 +363,7 @@ def _stub_beside(topo: Topology, i: int, s: int) -> bool:
     neurite's end) made the region a pass: joined through it, the curve ran out to its tip and
     back to the spur, and the tip was lost."""
     r, far = topo.chains[i].ends[s], topo.chains[i].ends[1 - s]
-    if topo.v[far] != 1 or len(topo.regions[far]) or not len(topo.regions[r]):
+    if not _bare_end(topo, far) or not len(topo.regions[r]):
         return False
     other = [(k, t) for k, t in topo.incident(r) if k != i]
     if len(other) != 1:
@@ -384,7 +390,7 @@ def _linked_junction(topo: Topology, sc: Scales, i: int, r: int, own: int, tip: 
     of another junction's region is read as the link between them all the same (since 6
     December 2026: a building's 7 h edge between two corners under noise 0.2 h, whose samples
     but one the two regions took, was pruned and both corners lost)."""
-    if not (topo.v[r] == 1 and not len(topo.regions[r])):
+    if not _bare_end(topo, r):
         return -1
     near = np.asarray(tree.query_ball_point(tip, gap), dtype=np.int64)
     near = near[lab[near] != own]
