@@ -938,6 +938,47 @@ def test_the_hidden_branch_near_miss_sits_at_its_threshold(monkeypatch):
     _assert_untouched(R.join_through_pass_regions, topo)
 
 
+#: the spacing of a region where a curve folds back on itself: its samples lie twice over
+FOLD_H = 0.5
+
+
+def _folded_corner(run_len):
+    """:func:`_corner_with_hidden_branch` where the region's samples lie twice over: its run
+    from the corner sampled every ``FOLD_H`` out to ``run_len`` (the fold of a spike, out and
+    back), the regions' points at spacing ``FOLD_H`` for :func:`_run_folded` (the chains' 1)."""
+    net = _Net()
+    s = np.r_[np.arange(FOLD_H, run_len, FOLD_H), run_len]
+    C = net.region(np.r_[[[0.0, 0.0]], np.outer(s, [1, 1]) / np.sqrt(2)])
+    net.chain(_line((-8, 0), (-1, 0), 8), (-1, C))
+    net.chain(_line((0, -1), (0, -8), 8), (C, -1))
+    return net.topology(), C
+
+
+def _run_folded(repair, topo: Topology, noise: float = 0.0) -> Topology:
+    """:func:`_run` with the regions' points at spacing ``FOLD_H``."""
+    sc = _scales(topo, noise)
+    h = sc.h.copy()
+    h[np.concatenate(topo.regions)] = FOLD_H
+    repair(topo, dataclasses.replace(sc, h=h), PRM)
+    topo.check()
+    return topo
+
+
+def test_join_through_pass_regions_joins_a_fold_shorter_than_a_spur():
+    # a run beyond the shell fraction of the region's halved spacing, but under min_spur in
+    # the branches' own spacing: the fold of one curve (a spike out and back), no branch
+    assert NODES.swallow * PRM.shell_outer * FOLD_H < PRM.min_spur - EPS
+    topo, C = _folded_corner(PRM.min_spur - EPS)
+    _run_folded(R.join_through_pass_regions, topo)
+    assert topo.v[C] == 0 and sum(topo.alive) == 1
+
+
+def test_join_through_pass_regions_keeps_a_branch_of_a_spur_in_a_folded_region():
+    topo, C = _folded_corner(PRM.min_spur + EPS)
+    assert topo.v[C] == 2
+    _assert_untouched(R.join_through_pass_regions, topo, run=_run_folded)
+
+
 # ------------------------------------------------------------------------------ split_paired_junctions
 #: the noise of the cases below (h): the strip of a line is then max(width, strip_noise * noise)
 PAIR_NOISE = 0.2

@@ -665,6 +665,12 @@ def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):
     A region point far from the node (over ``NODES.swallow`` shell radii) in a direction no incident
     branch takes is the tip of a branch shorter than the shell radius (a free end in a sparse
     place): the region points along the segment from the node to it, without a gap, form it.
+    A branch is also at least ``min_spur`` long in the spacing of the incident branches' end
+    portions (as :func:`~.repairs.prune_spurs` measures a spur), not only in the region's: where
+    a curve folds back on itself (a traced neurite's spike, out and back) the region's samples
+    lie twice over and its spacing is about half the curve's (0.53-0.56 h measured), so a spike
+    2.8 h deep passed the shell fraction of the halved spacing as a branch (real-dev
+    nrn_ri05_s591, clean: spikes of 2.4 and 2.8 h, 30 nodes for 28; now exact).
     """
     h = sc.h
     if len(rid) < NODES.swallow_min:
@@ -672,11 +678,12 @@ def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):
     hl = float(np.median(h[rid]))
     noise = sc.noise
     hs = hl + SHELL.widen * noise
-    dirs = []
+    dirs, ends = [], []
     for ci, s in inc:
         c = live[ci]
         ids = c.ids if s == 1 else c.ids[::-1]
         E = end_portion(P, h, np.asarray(ids), span=NODES.fit_span)
+        ends.append(np.asarray(ids)[-len(E):])
         u = E.mean(axis=0) - x
         nu = np.linalg.norm(u)
         if nu > 0:
@@ -686,7 +693,9 @@ def swallowed_branches(P, sc: Scales, prm: RobustParams, live, inc, rid, x):
     X = P[rid] - x
     d = np.linalg.norm(X, axis=1)
     cosb = (X @ np.asarray(dirs).T).max(axis=1) / np.maximum(d, NUMERIC.tiny)
-    cand = np.flatnonzero((d > NODES.swallow * prm.shell_outer * hs) & (cosb < NODES.swallow_cos))
+    h_ends = float(np.median(h[np.concatenate(ends)]))  # the curves' spacing, not the region's
+    reach = max(NODES.swallow * prm.shell_outer * hs, prm.min_spur * h_ends)
+    cand = np.flatnonzero((d > reach) & (cosb < NODES.swallow_cos))
     if not len(cand):
         return []
     tip = cand[np.lexsort((np.arange(len(cand)), -d[cand]))[0]]
