@@ -44,3 +44,15 @@ def test_a_spike_whose_samples_lie_twice_is_no_branch(seed):
     # 2.7 h deep: beyond the shell fraction of the region's halved spacing, under min_spur in
     # the curve's own (junctions.swallowed_branches); before, a junction and a tip (4 nodes)
     assert _reconstructed(_spike(2.7, 120.0, 177.0), seed) == (2, 1)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_spike_whose_tip_joins_its_foot_leaves_no_node_of_valence_two(seed, monkeypatch):
+    # 2.6 h deep: its tip merged into the junction at its foot (tips_to_junctions), the loop
+    # absorbed by the last absorb_short_loops; join_through_pass_regions runs once more after it
+    assert _reconstructed(_spike(2.6, 132.0, 177.0), seed) == (2, 1)
+    from curvenet.methods.robust import repairs
+
+    assert repairs.ORDER[-1] is repairs.join_through_pass_regions
+    monkeypatch.setattr(repairs, "ORDER", repairs.ORDER[:-1])
+    assert _reconstructed(_spike(2.6, 132.0, 177.0), seed) == (3, 2)  # a node of valence 2

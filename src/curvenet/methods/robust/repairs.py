@@ -854,7 +854,10 @@ def join_through_pass_regions(topo: Topology, sc: Scales, prm: RobustParams) -> 
     one of the joined regions' points within their attach reach (:func:`_tips_near`) are then
     tried again by :func:`attach_dangling`, which takes chain points only: a T's stem that
     stopped short of its bar where the bar's samples were a pass region's (real-dev
-    nrn_Image001-005-01 at noise 0.2 h, 7 December 2026: 0.732 -> 0.857).
+    nrn_Image001-005-01 at noise 0.2 h, 7 December 2026: 0.732 -> 0.857). It runs again last
+    (:data:`ORDER`): the last :func:`absorb_short_loops` can leave a region of valence 2 (a spike
+    of a traced curve, its tip merged into the junction at its foot by :func:`tips_to_junctions`,
+    a loop that only then is short), which would otherwise be placed as a node of valence 2.
     """
     P = topo.P
     joined = []
@@ -1030,6 +1033,7 @@ ORDER = (
     split_paired_junctions,
     merge_close_junctions,  # (after the split: it merges back what it takes for one junction)
     absorb_short_loops,  # a short chain between two merged junctions is now a short loop
+    join_through_pass_regions,  # (a region whose loop it absorbed may be a pass now)
 )
 
 
