@@ -28,3 +28,12 @@ def without_skew_pairs(monkeypatch):
     from curvenet.methods.robust import paired
 
     monkeypatch.setattr(paired, "meet_loosely", lambda *a: True)
+
+
+def without_junction_crossings(monkeypatch):
+    """Only regions of valence 2 are crossed by a chain passing through them
+    (:func:`.repairs.cross_pass_regions`), as before it read a junction's region passed by a
+    chain as a crossing too (:func:`.repairs._may_cross`)."""
+    from curvenet.methods.robust import repairs
+
+    monkeypatch.setattr(repairs, "_may_cross", lambda topo, r, c, far: topo.v[r] == 2)

@@ -7,7 +7,7 @@ from curvenet import bench, synth
 from curvenet.methods.robust import junctions, repairs, thresholds
 from curvenet.metrics import compare
 from curvenet.reconstruct import reconstruct
-from rule_switches import without_skew_pairs, without_twin_pieces, without_vote_keep
+from rule_switches import without_junction_crossings, without_skew_pairs, without_twin_pieces, without_vote_keep
 
 
 def _score(name, condition="clean"):
@@ -763,9 +763,12 @@ def test_a_short_link_tells_no_crossing_angle(monkeypatch):
     street share a region. One of their branches is a 3.9 h link to the next crossing, shorter
     than the end portion a line is fitted on, so its line is bent by the turn there (30 degrees
     askew) and the pair read as strokes crossing a curve loosely (one junction). Such a branch
-    counts as parallel (:func:`.paired.short_branches`): curve F1 0.800, 0.644 without."""
+    counts as parallel (:func:`.paired.short_branches`): curve F1 0.800, 0.644 without. Measured
+    with junction crossings off (``cross_pass_regions`` reads a chain passing a junction there
+    since 8 December 2026: 0.852 with both rules)."""
     from curvenet.methods.robust import paired
 
+    without_junction_crossings(monkeypatch)
     truth = synth.model("streets")
     h = synth.h_of(truth)
     pts, _ = synth.sample(truth, rng=bench.run_seed("streets", "noise 0.2h") + 7, **bench.CONDITIONS["noise 0.2h"])
@@ -854,3 +857,16 @@ def test_a_spur_off_a_tip_region_does_not_make_it_a_pass(monkeypatch):
                                     (repairs, "_stub_beside", lambda *a: False))
     assert got["exact_topology"] and got["curve_f1"] == 1.0
     assert before["curve_f1"] < 0.95
+
+
+def test_an_outline_corner_passed_by_a_chain_is_crossed(monkeypatch):
+    # the outline kind at density x3, sampling 3 (as the harness samples it): chains ran past
+    # junctions of the wireframe without ending there (23 nodes of 26, 38 curves of 42, curve
+    # F1 0.875); read as crossings of those junctions' regions, the chains split there: exact
+    pts, truth = _sampled("outline", "density x3", 3)
+    h = synth.h_of(truth)
+    got = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert got["exact_topology"] and got["curve_f1"] == 1.0
+    without_junction_crossings(monkeypatch)
+    before = compare(reconstruct(pts, method="robust"), truth, h=h)
+    assert not before["exact_topology"] and before["curve_f1"] < 0.9

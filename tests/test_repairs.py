@@ -752,6 +752,40 @@ def test_cross_pass_regions_joins_a_chain_through_a_crossing(traced):
     assert len(topo.regions[X]) == 5
 
 
+def _junction_passed(along_down: bool):
+    """A junction region ``J`` at the origin (valence 3: chains leaving at 60, 120 and 270
+    degrees, the last to region ``B`` at (0, -9)) and a chain ``k`` along x through the origin
+    (linked graph: pairs within 1.5 h), its ends free or (``along_down``) its right end at
+    ``B``, as a chain that ran along the junction's way down would end."""
+    net = _Net()
+    J = net.region([[0.0, 1.0], [0.0, -1.0]])
+    B = net.region([[0.0, -9.0]])
+    for deg in (60, 120):
+        u = np.array([np.cos(np.radians(deg)), np.sin(np.radians(deg))])
+        net.chain(_line(2 * u, 8 * u, 7), (J, -1))
+    net.chain(_line((0, -2), (0, -8), 7), (J, B))
+    k = net.chain(_line((-8, 0), (8, 0), 17), (-1, B) if along_down else (-1, -1))
+    return net.topology(), J, k
+
+
+def test_cross_pass_regions_joins_a_chain_through_a_junction():
+    # five ways out, every two more than 45 degrees apart: the chain crosses the junction
+    topo, J, k = _junction_passed(False)
+    m = len(topo.chains[k].ids)
+    _run_near(R.cross_pass_regions, topo, noise=0.2)
+    assert topo.v[J] == 5
+    parts = [i for i, c in enumerate(topo.chains) if topo.alive[i] and J in c.ends and i not in (0, 1, 2)]
+    assert len(parts) == 2 and k in parts
+    assert sum(len(topo.chains[i].ids) for i in parts) == m - 3
+
+
+def test_cross_pass_regions_leaves_a_chain_ending_where_a_junction_chain_ends():
+    # the same ways out, but the passing chain ends at B, where the junction's way down ends:
+    # split, its part to B would run beside that chain
+    topo, J, k = _junction_passed(True)
+    _assert_untouched(R.cross_pass_regions, topo, noise=0.2, run=_run_near)
+
+
 def test_cross_pass_regions_leaves_a_curve_passing_beside_a_bend():
     # the region is a corner of one curve (down and right), another curve passes it straight
     # 1.2 h to the left: its way down lies along the corner's way down
